@@ -1,0 +1,93 @@
+//! The node pyramid's vocabulary, shared by the pyramid on disk, the procedural
+//! source and the chunked clipmap: which node is which, how big nodes are, and
+//! what a loaded node holds (Kühnert 4.5.3 and 4.5.6, Ulrich section 10).
+//!
+//! Level 0 is the finest; a node of level `lod` spans `node_size << lod`
+//! level-0 sample spacings per side (Kühnert eq. 4.8). Node `(x, y)` of level
+//! `lod` covers level-0 samples `[x * span, (x + 1) * span]` east and
+//! `[y * span, (y + 1) * span]` north, `span = node_size << lod`, sampled every
+//! `1 << lod` samples: `node_size + 1` posts per side, so neighbours share their
+//! edge posts. A border of `border` posts on every side repeats the
+//! neighbours' posts (extended at the edge of the data) for normals and
+//! seamless sampling.
+
+/// Names one node of the pyramid.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
+pub struct NodeId {
+    pub lod: u8,
+    pub x: u32,
+    pub y: u32,
+}
+
+impl NodeId {
+    pub fn new(lod: u8, x: u32, y: u32) -> Self {
+        NodeId { lod, x, y }
+    }
+
+    /// The node one level coarser that contains this one.
+    pub fn parent(self) -> Option<NodeId> {
+        (self.lod < u8::MAX).then(|| NodeId::new(self.lod + 1, self.x / 2, self.y / 2))
+    }
+}
+
+/// Sizes shared by every node of one pyramid.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct NodeLayout {
+    /// Number of levels (`lod_count`); level `levels - 1` is the root level.
+    pub levels: u8,
+    /// Cells per node side at every level (posts per side: `node_size + 1`).
+    pub node_size: u32,
+    /// Extra posts stored on each side of a node.
+    pub border: u32,
+    /// Level-0 samples of the data, east and north.
+    pub samples: [u32; 2],
+    /// Metres between level-0 samples, east and north, in the local frame.
+    pub spacing_m: [f64; 2],
+}
+
+impl NodeLayout {
+    /// Posts per stored node side, border included.
+    pub fn stored_side(&self) -> u32 {
+        self.node_size + 1 + 2 * self.border
+    }
+
+    /// Nodes per side at `lod`, east and north (covering every sample).
+    pub fn nodes_at(&self, lod: u8) -> [u32; 2] {
+        let span = (self.node_size as u64) << lod;
+        let count = |samples: u32| (samples.saturating_sub(1) as u64).div_ceil(span).max(1) as u32;
+        [count(self.samples[0]), count(self.samples[1])]
+    }
+}
+
+/// A node's stored content.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct NodeData {
+    /// `stored_side^2` heights in metres, row 0 southern, border included.
+    pub heights: Vec<f32>,
+    /// Lowest and highest height of the node's centre posts.
+    pub min: f32,
+    pub max: f32,
+    /// Ulrich's delta: the largest vertical distance, in metres, between the
+    /// node's surface (posts joined as triangles, each cell split from its
+    /// south-west to its north-east corner) and the level-0 samples it covers.
+    pub delta: f32,
+}
+
+/// Anything that can produce nodes: the memory-mapped pyramid, the procedural
+/// earth. Called from the loader thread.
+pub trait NodeSource: Send + Sync {
+    fn layout(&self) -> &NodeLayout;
+    /// Writes node `id` into `out`, reusing its buffers.
+    fn read_node(&self, id: NodeId, out: &mut NodeData) -> Result<(), NodeError>;
+}
+
+/// Why a node could not be produced.
+#[derive(Debug, thiserror::Error)]
+pub enum NodeError {
+    #[error("node {id:?} is outside the pyramid")]
+    OutOfRange { id: NodeId },
+    #[error("{path}: node {id:?}: {problem}")]
+    Corrupt { path: std::path::PathBuf, id: NodeId, problem: String },
+    #[error("{path}: {source}")]
+    Io { path: std::path::PathBuf, source: std::io::Error },
+}
