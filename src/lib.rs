@@ -7,9 +7,9 @@
 //! | module | owns |
 //! |---|---|
 //! | [`allocator`] | the contiguous two-pass buffer allocator: one address space, its staging copy, who holds which bytes |
-| [`geo`] | georeference conventions and the local metric frame |
-| [`dem`] | elevation importers (GeoTIFF, SRTM, DTED, ASCII grid) producing an [`dem::ElevationGrid`] |
-| [`node`] | the node pyramid's vocabulary: node ids, layout, node data, the `NodeSource` trait |
+//! | [`geo`] | georeference conventions and the local metric frame |
+//! | [`dem`] | elevation importers (GeoTIFF, SRTM, DTED, ASCII grid) producing an [`dem::ElevationGrid`] |
+//! | [`node`] | the node pyramid's vocabulary: node ids, layout, node data, the `NodeSource` trait |
 #![deny(unsafe_code)]
 
 pub mod allocator;
