@@ -39,6 +39,7 @@ mod frame;
 mod free_index;
 mod place;
 mod retire;
+pub mod worst_case;
 
 use block_list::{BlockList, BlockState, Slot, NIL};
 use free_index::FreeIndex;
