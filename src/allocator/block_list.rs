@@ -69,6 +69,11 @@ impl BlockList {
         BlockList { blocks, spare, head: 0, tail: 0, capacity }
     }
 
+    /// Blocks in the list.
+    pub fn len(&self) -> usize {
+        self.blocks.len() - self.spare.len()
+    }
+
     pub fn tail(&self) -> Slot {
         self.tail
     }
