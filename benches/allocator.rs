@@ -392,17 +392,19 @@ fn frames_in_flight(scale: &Scale) -> Vec<Value> {
             format!("{:.1}", s.mean.0),
             format!("{:.1}", s.peak.0),
             format!("{:.2}x", s.mean.0 / base_mean),
+            format!("{:.0}", s.ns_per_block),
         ]);
         rows.push(json!({
             "frames_in_flight": frames,
             "mean_workspace_s": s.mean.0,
             "peak_workspace_s": s.peak.0,
             "workspace_ratio_to_none": s.mean.0 / base_mean,
+            "ns_per_block": s.ns_per_block,
         }));
     }
     print_table(
         "Frames in flight (constant S, p = 10% per step): what holding released blocks back costs",
-        &["frames", "mean workspace [S]", "peak [S]", "vs 0 frames"],
+        &["frames", "mean workspace [S]", "peak [S]", "vs 0 frames", "ns/block"],
         &table,
     );
     rows
