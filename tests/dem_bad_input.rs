@@ -401,3 +401,61 @@ fn mosaic_of_files_that_do_not_fit_together() {
     let err = names_file(import_files(&[first, geographic.clone()]).unwrap_err(), &geographic);
     assert!(matches!(&err.problem, Problem::Mosaic(m) if m.contains("coordinate system")), "{err}");
 }
+
+// ------------------------------------------------------ random corruption
+
+/// A small valid file of each format, as bytes, with its file name.
+fn valid_files(dir: &TempDir) -> Vec<(&'static str, Vec<u8>)> {
+    let heights: Vec<i32> = (0..121 * 121).map(|k| k % 700 - 50).collect();
+    let dted = dted_bytes(SPEC, &heights);
+    let ascii = format!("{HEADER}1 2 3\n4 -9999 6.5\n").into_bytes();
+    let geo = GeoTags { nodata: Some("-32768".into()), ..GeoTags::geographic([40.0, 40.0], 0.001, false) };
+    let samples = Samples::I16((0..20 * 19).map(|k| (k % 97) as i16).collect());
+    let tiled = dir.path("tiled.tif");
+    write_tiff_tiles(&tiled, [20, 19], 16, &samples, TileCompression::Deflate, 2, &geo);
+    let stripped = dir.path("strips.tif");
+    let data: Vec<f32> = (0..20 * 19).map(|k| k as f32 * 0.5).collect();
+    write_tiff_strips::<colortype::Gray32Float>(
+        &stripped,
+        [20, 19],
+        &data,
+        Compression::Lzw,
+        Predictor::None,
+        3,
+        &geo,
+    );
+    vec![
+        ("x.dt0", dted),
+        ("x.asc", ascii),
+        ("tiled.tif", std::fs::read(tiled).unwrap()),
+        ("strips.tif", std::fs::read(stripped).unwrap()),
+    ]
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(200))]
+
+    /// Flipped bytes or a cut anywhere in a valid file never panic: the
+    /// import succeeds or fails with an error naming the file.
+    #[test]
+    fn corrupt_files_never_panic(
+        which in 0usize..4,
+        flips in proptest::collection::vec((proptest::prelude::any::<proptest::sample::Index>(), 1u8..=255), 0..4),
+        cut in proptest::option::of(proptest::prelude::any::<proptest::sample::Index>()),
+    ) {
+        let dir = TempDir::new("corrupt");
+        let (name, mut bytes) = valid_files(&dir).swap_remove(which);
+        for (at, mask) in flips {
+            let k = at.index(bytes.len());
+            bytes[k] ^= mask;
+        }
+        if let Some(cut) = cut {
+            bytes.truncate(cut.index(bytes.len()));
+        }
+        let path = dir.path(&format!("corrupt-{name}"));
+        std::fs::write(&path, &bytes).unwrap();
+        if let Err(err) = ridgeline::dem::import_file(&path) {
+            names_file(err, &path);
+        }
+    }
+}
