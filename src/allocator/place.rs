@@ -107,8 +107,11 @@ impl ContiguousAllocator {
         self.scratch.old.clear();
         self.scratch.placed.clear();
         let freeing = requests.len() as u64 * u64::from(self.config.frames_in_flight == 0);
+        // A treap update touches about log2 F nodes at random, a rebuild walks
+        // every listed block once in order, which costs a few times less per
+        // node: measured on the allocator bench, the crossover sits near 4.
         let per_update = (self.free.len() as u64 + 2).ilog2() as u64;
-        let bulk = freeing * per_update > self.blocks.len() as u64;
+        let bulk = 4 * freeing * per_update > self.blocks.len() as u64;
         for request in requests {
             let slot = self.owner[request.generator.0 as usize];
             let old = match slot {
