@@ -10,9 +10,11 @@
 //! | [`geo`] | georeference conventions and the local metric frame |
 //! | [`dem`] | elevation importers (GeoTIFF, SRTM, DTED, ASCII grid) producing an [`dem::ElevationGrid`] |
 //! | [`node`] | the node pyramid's vocabulary: node ids, layout, node data, the `NodeSource` trait |
+//! | [`pyramid`] | building the node pyramid from a grid (split, downsample, stitch, delta), its checksummed file, writing it atomically, opening it memory-mapped |
 #![deny(unsafe_code)]
 
 pub mod allocator;
 pub mod dem;
 pub mod geo;
 pub mod node;
+pub mod pyramid;
