@@ -19,7 +19,7 @@ fn height_in_triangle(a: DVec3, b: DVec3, c: DVec3, x: f64, y: f64) -> Option<f6
     let wb = ((c.y - a.y) * (x - c.x) + (a.x - c.x) * (y - c.y)) / det;
     let wc = 1.0 - wa - wb;
     let inside = [wa, wb, wc].iter().all(|w| *w >= -1e-12);
-    inside.then(|| wa * a.z + wb * b.z + wc * c.z)
+    inside.then_some(wa * a.z + wb * b.z + wc * c.z)
 }
 
 /// The largest vertical distance between the grid samples under node `id`
@@ -75,7 +75,8 @@ fn stored_delta_equals_brute_force_on_random_nodes() {
             pyramid.read_node(id, &mut node).expect("read");
             let brute = brute_force_delta(&grid, &node, id, node_size, border);
             let stored = node.delta;
-            assert!(stored as f64 >= brute, "case {case} {id:?}: stored {stored} below brute force {brute}");
+            // Two f64 formulations of one surface differ by ~1e-12 m at most.
+            assert!(stored as f64 >= brute - 1e-9, "case {case} {id:?}: stored {stored} below brute force {brute}");
             assert!(stored as f64 - brute <= ulp(stored), "case {case} {id:?}: stored {stored}, brute force {brute}");
             if lod == 0 {
                 assert_eq!(stored, 0.0, "level 0 passes through every sample");

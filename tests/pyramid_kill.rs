@@ -29,6 +29,16 @@ fn temporaries(dir: &Path) -> Vec<std::path::PathBuf> {
         .collect()
 }
 
+/// Kills the import if the test fails before it does.
+struct KillOnDrop(std::process::Child);
+
+impl Drop for KillOnDrop {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
 #[test]
 fn killing_an_import_midway_keeps_the_previous_cache() {
     let cache = scratch_dir("kill-import");
@@ -38,7 +48,8 @@ fn killing_an_import_midway_keeps_the_previous_cache() {
 
     // 4096^2 samples make a 104 MB pyramid: seconds of building, then a write
     // and flush far longer than the few milliseconds between polls.
-    let mut child = import(4096, &cache).spawn().expect("start the big import");
+    let mut child = KillOnDrop(import(4096, &cache).spawn().expect("start the big import"));
+    let child = &mut child.0;
     let started = Instant::now();
     while temporaries(&cache).is_empty() {
         if let Some(status) = child.try_wait().expect("poll import") {

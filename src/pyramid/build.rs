@@ -57,7 +57,7 @@ impl BuiltPyramid {
             return None;
         }
         let level = &self.levels[id.lod as usize];
-        let index = (id.y * self.info.layout.nodes_at(id.lod)[0] + id.x) as usize;
+        let index = id.y as usize * self.info.layout.nodes_at(id.lod)[0] as usize + id.x as usize;
         let posts = self.info.layout.stored_side() as usize;
         let posts = posts * posts;
         Some((&level.heights[index * posts..(index + 1) * posts], level.summaries[index]))
@@ -90,6 +90,7 @@ pub fn build(grid: &ElevationGrid, options: &BuildOptions, progress: &dyn Progre
         progress.phase(&format!("level {lod}: delta"), grid.height as u64);
         let deltas = level_deltas(grid, &raster, nodes, layout.span(lod), progress);
         node_summaries.iter_mut().zip(deltas).for_each(|(s, delta)| s.delta = delta);
+        debug_assert_eq!(heights.len(), node_summaries.len() * (layout.stored_side() as usize).pow(2));
         summaries.push(summarise_level(nodes, &node_summaries));
         levels.push(BuiltLevel { heights, summaries: node_summaries });
     }
@@ -159,14 +160,19 @@ fn cut_node(raster: &LevelRaster, layout: &NodeLayout, x: u32, y: u32, posts: &m
     let side = layout.stored_side() as usize;
     let border = layout.border as i64;
     let centre = border as usize..=border as usize + layout.node_size as usize;
-    let (k0, m0) = (x as i64 * layout.node_size as i64 - border, y as i64 * layout.node_size as i64 - border);
+    let first = |node: u32| node as i64 * layout.node_size as i64 - border;
+    let clamp = |index: i64, count: u32| index.clamp(0, count as i64 - 1) as u32;
+    let columns: Vec<usize> = (0..side as i64).map(|p| clamp(first(x) + p, raster.cols) as usize).collect();
     let mut summary = NodeSummary { min: f32::INFINITY, max: f32::NEG_INFINITY, delta: 0.0 };
-    for (q, row) in posts.chunks_exact_mut(side).enumerate() {
-        for (p, post) in row.iter_mut().enumerate() {
-            *post = raster.clamped(k0 + p as i64, m0 + q as i64);
-            if centre.contains(&p) && centre.contains(&q) {
-                summary.min = summary.min.min(*post);
-                summary.max = summary.max.max(*post);
+    for (q, out) in posts.chunks_exact_mut(side).enumerate() {
+        let row = raster.row(clamp(first(y) + q as i64, raster.rows));
+        for (post, &k) in out.iter_mut().zip(&columns) {
+            *post = row[k];
+        }
+        if centre.contains(&q) {
+            for &h in &out[centre.clone()] {
+                summary.min = summary.min.min(h);
+                summary.max = summary.max.max(h);
             }
         }
     }

@@ -59,23 +59,41 @@ pub(crate) fn level_deltas(
 }
 
 /// Vertical distance from each sample of level-0 row `j` to the level's surface.
+///
+/// Within one cell and one row the surface is linear in `fu` on each side of
+/// the diagonal, so each cell is two branch-free runs: samples west of the
+/// diagonal (`a < b`, north-west triangle) and the rest (south-east).
 fn row_distances(grid: &ElevationGrid, raster: &LevelRaster, j: u32, out: &mut [f64]) {
     let lod = raster.lod;
-    let mask = (1u32 << lod) - 1;
-    let inv_step = 1.0 / (1u64 << lod) as f64;
+    let step = 1usize << lod;
+    let inv_step = 1.0 / step as f64;
     let m = j >> lod;
     let south = raster.row(m);
     let north = raster.row((m + 1).min(raster.rows - 1));
-    let fv = (j & mask) as f64 * inv_step;
+    let b = (j as usize) & (step - 1);
+    let fv = b as f64 * inv_step;
     let last = raster.cols as usize - 1;
     let samples = &grid.heights[j as usize * grid.width as usize..][..grid.width as usize];
-    for (i, (&sample, distance)) in samples.iter().zip(out.iter_mut()).enumerate() {
-        let k = i >> lod;
+    for (k, (samples, out)) in samples.chunks(step).zip(out.chunks_mut(step)).enumerate() {
         let k1 = (k + 1).min(last);
-        let fu = (i as u32 & mask) as f64 * inv_step;
-        let surface =
-            cell_surface(south[k] as f64, south[k1] as f64, north[k] as f64, north[k1] as f64, fu, fv);
-        *distance = (sample as f64 - surface).abs();
+        let (h00, h10, h01, h11) = (south[k] as f64, south[k1] as f64, north[k] as f64, north[k1] as f64);
+        // cell_surface with fv fixed: base + fu * slope on each triangle.
+        let (north_west_base, north_west_slope) = (h00 + fv * (h01 - h00), h11 - h01);
+        let (south_east_base, south_east_slope) = (h00 + fv * (h11 - h10), h10 - h00);
+        let split = b.min(samples.len());
+        let (west, east) = samples.split_at(split);
+        let (out_west, out_east) = out.split_at_mut(split);
+        distances_to_line(west, 0, north_west_base, north_west_slope, inv_step, out_west);
+        distances_to_line(east, split, south_east_base, south_east_slope, inv_step, out_east);
+    }
+}
+
+/// `|sample - (base + fu * slope)|` for samples `first, first + 1, ...` of a
+/// cell, `fu = a / step`.
+#[inline]
+fn distances_to_line(samples: &[f32], first: usize, base: f64, slope: f64, inv_step: f64, out: &mut [f64]) {
+    for (a, (&sample, out)) in (first..).zip(samples.iter().zip(out)) {
+        *out = (sample as f64 - (base + a as f64 * inv_step * slope)).abs();
     }
 }
 

@@ -294,7 +294,7 @@ fn read_nodes(d: &mut Decoder, count: u64, header_len: u64, record_len: u64) -> 
 
 fn check_summary(s: &NodeSummary) -> Result<(), String> {
     let ordered = s.min.is_finite() && s.max.is_finite() && s.min <= s.max;
-    if !ordered || !(s.delta.is_finite() && s.delta >= 0.0) {
+    if !(ordered && s.delta.is_finite() && s.delta >= 0.0) {
         return Err(format!("bad bounds or delta {s:?}"));
     }
     Ok(())

@@ -33,13 +33,6 @@ impl<'a> LevelRaster<'a> {
         &self.heights[start..start + self.cols as usize]
     }
 
-    /// The post at `(k, m)`, indices past either edge clamped to it.
-    pub fn clamped(&self, k: i64, m: i64) -> f32 {
-        let k = k.clamp(0, self.cols as i64 - 1) as usize;
-        let m = m.clamp(0, self.rows as i64 - 1) as usize;
-        self.heights[m * self.cols as usize + k]
-    }
-
     /// Level `lod + 1`: every other post of this level (subsampling, see the
     /// module notes in [`super`]), rows in parallel.
     pub fn downsample(&self) -> LevelRaster<'static> {
@@ -52,6 +45,7 @@ impl<'a> LevelRaster<'a> {
                 *post = src[(2 * k).min(src.len() - 1)];
             }
         });
+        debug_assert_eq!(heights.len(), cols as usize * rows as usize);
         LevelRaster { lod: self.lod + 1, cols, rows, heights: Cow::Owned(heights) }
     }
 }
@@ -66,6 +60,12 @@ mod tests {
         ElevationGrid { width, height, heights, georef: GeoRef::local([1.0, 1.0]), voids_filled: 0 }
     }
 
+    /// The post at `(k, m)`, indices past either edge clamped to it.
+    fn clamped(raster: &LevelRaster, k: i64, m: i64) -> f32 {
+        let m = m.clamp(0, raster.rows as i64 - 1) as u32;
+        raster.row(m)[k.clamp(0, raster.cols as i64 - 1) as usize]
+    }
+
     #[test]
     fn every_post_of_every_level_is_the_clamped_level0_sample() {
         for (width, height) in [(1, 1), (2, 7), (10, 9), (33, 17), (64, 65)] {
@@ -78,7 +78,7 @@ mod tests {
                     for k in -2..raster.cols as i64 + 2 {
                         let i = (k * step).clamp(0, width as i64 - 1) as u32;
                         let j = (m * step).clamp(0, height as i64 - 1) as u32;
-                        assert_eq!(raster.clamped(k, m), grid.at(i, j), "lod {lod} post ({k}, {m})");
+                        assert_eq!(clamped(&raster, k, m), grid.at(i, j), "lod {lod} post ({k}, {m})");
                     }
                 }
                 raster = raster.downsample();

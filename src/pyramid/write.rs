@@ -20,7 +20,10 @@ const RECORDS_PER_BATCH: usize = 256;
 /// Writes `pyramid` to `path` atomically. The directory must exist.
 pub fn write_atomic(pyramid: &BuiltPyramid, path: &Path, progress: &dyn Progress) -> Result<(), PyramidError> {
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let name = path.file_name().ok_or_else(|| PyramidError::corrupt(path, "not a file path"))?;
+    let name = path.file_name().ok_or_else(|| {
+        let source = std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a file path");
+        PyramidError::Io { path: path.to_path_buf(), source }
+    })?;
     remove_stale_temporaries(dir, &name.to_string_lossy());
     let temporary = dir.join(format!("{}.tmp-{}", name.to_string_lossy(), std::process::id()));
     let written = write_file(pyramid, &temporary, progress).and_then(|()| {
