@@ -9,12 +9,20 @@
 //! | [`allocator`] | the contiguous two-pass buffer allocator: one address space, its staging copy, who holds which bytes |
 //! | [`geo`] | georeference conventions and the local metric frame |
 //! | [`dem`] | elevation importers (GeoTIFF, SRTM, DTED, ASCII grid) producing an [`dem::ElevationGrid`] |
+//! | [`camera`] | the viewer's position and attitude, projection, frustum, earth curvature |
+//! | [`lod`] | UDLOD tiling on the CPU: distance rings with Ulrich's bound, quadtree selection, morph |
+//! | [`tiles`] | per-tile height buffers: shared grid, vertex data, the tile cache on the allocator |
+//! | [`render`] | the GL-free half of drawing: draw lists, the backend trait, the counting null backend, the palette |
 //! | [`node`] | the node pyramid's vocabulary: node ids, layout, node data, the `NodeSource` trait |
 //! | [`pyramid`] | building the node pyramid from a grid (split, downsample, stitch, delta), its checksummed file, writing it atomically, opening it memory-mapped |
 #![deny(unsafe_code)]
 
 pub mod allocator;
+pub mod camera;
 pub mod dem;
 pub mod geo;
+pub mod lod;
 pub mod node;
 pub mod pyramid;
+pub mod render;
+pub mod tiles;

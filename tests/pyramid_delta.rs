@@ -55,36 +55,48 @@ fn ulp(value: f32) -> f64 {
     (f32::from_bits(value.to_bits() + 1) - value) as f64
 }
 
+/// Checks `samples` random nodes of the pyramid built from `grid`.
+fn check_random_nodes(grid: &ElevationGrid, options: BuildOptions, samples: usize, seed: u64, case: &str) {
+    let dir = scratch_dir(&format!("delta-{case}"));
+    let (_, path) = build_and_write(grid, options, &dir);
+    let pyramid = Pyramid::open(&path).expect("open");
+    let layout = *pyramid.layout();
+    let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+    let mut node = NodeData::default();
+    let mut coarse_with_error = 0;
+    for _ in 0..samples {
+        let lod = rng.random_range(0..layout.levels);
+        let [nx, ny] = layout.nodes_at(lod);
+        let id = NodeId::new(lod, rng.random_range(0..nx), rng.random_range(0..ny));
+        pyramid.read_node(id, &mut node).expect("read");
+        let brute = brute_force_delta(grid, &node, id, options.node_size, options.border);
+        let stored = node.delta;
+        // Two f64 formulations of one surface differ by ~1e-12 m at most.
+        assert!(stored as f64 >= brute - 1e-9, "{case} {id:?}: stored {stored} below brute force {brute}");
+        assert!(stored as f64 - brute <= ulp(stored), "{case} {id:?}: stored {stored}, brute force {brute}");
+        if lod == 0 {
+            assert_eq!(stored, 0.0, "level 0 passes through every sample");
+        } else {
+            coarse_with_error += (stored > 0.0) as u32;
+        }
+    }
+    assert!(coarse_with_error > 0 || layout.levels == 1, "{case}: no coarse node with an error was checked");
+}
+
+#[test]
+fn stored_delta_equals_brute_force_on_the_shipped_srtm_tile() {
+    let tile = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/dem/srtm3_n39e040_1000.tif");
+    let grid = ridgeline::dem::import_file(std::path::Path::new(tile)).expect("import the shipped tile");
+    check_random_nodes(&grid, BuildOptions::default(), 30, 0x5127, "srtm");
+}
+
 #[test]
 fn stored_delta_equals_brute_force_on_random_nodes() {
-    let dir = scratch_dir("delta-random-nodes");
-    let mut rng = rand::rngs::StdRng::seed_from_u64(0xD17A);
     // Sizes that do and do not fill the last node, odd and even node sizes.
     let cases = [(203, 157, 16, 2), (129, 129, 32, 1), (300, 61, 20, 3), (65, 400, 8, 2), (2, 2, 4, 1)];
     for (case, &(width, height, node_size, border)) in cases.iter().enumerate() {
         let grid = random_grid(width, height, case as u64);
-        let (_, path) = build_and_write(&grid, BuildOptions { node_size, border }, &dir);
-        let pyramid = Pyramid::open(&path).expect("open");
-        let layout = *pyramid.layout();
-        let mut node = NodeData::default();
-        let mut checked_coarse = 0;
-        for _ in 0..40 {
-            let lod = rng.random_range(0..layout.levels);
-            let [nx, ny] = layout.nodes_at(lod);
-            let id = NodeId::new(lod, rng.random_range(0..nx), rng.random_range(0..ny));
-            pyramid.read_node(id, &mut node).expect("read");
-            let brute = brute_force_delta(&grid, &node, id, node_size, border);
-            let stored = node.delta;
-            // Two f64 formulations of one surface differ by ~1e-12 m at most.
-            assert!(stored as f64 >= brute - 1e-9, "case {case} {id:?}: stored {stored} below brute force {brute}");
-            assert!(stored as f64 - brute <= ulp(stored), "case {case} {id:?}: stored {stored}, brute force {brute}");
-            if lod == 0 {
-                assert_eq!(stored, 0.0, "level 0 passes through every sample");
-            } else {
-                checked_coarse += (stored > 0.0) as u32;
-            }
-        }
-        assert!(checked_coarse > 0 || layout.levels == 1, "case {case}: no coarse node with an error was checked");
+        check_random_nodes(&grid, BuildOptions { node_size, border }, 40, case as u64, &format!("random-{case}"));
     }
 }
 

@@ -69,20 +69,9 @@ impl BlockList {
         BlockList { blocks, spare, head: 0, tail: 0, capacity }
     }
 
-    pub fn capacity(&self) -> u32 {
-        self.capacity
-    }
-
-    pub fn max_blocks(&self) -> usize {
-        self.blocks.len()
-    }
-
-    pub fn spare_slots(&self) -> usize {
-        self.spare.len()
-    }
-
-    pub fn head(&self) -> Slot {
-        self.head
+    /// Blocks in the list.
+    pub fn len(&self) -> usize {
+        self.blocks.len() - self.spare.len()
     }
 
     pub fn tail(&self) -> Slot {

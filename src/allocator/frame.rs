@@ -11,6 +11,15 @@ pub struct FramePlan<'a> {
     requests: &'a [Request],
 }
 
+impl std::fmt::Debug for FramePlan<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("FramePlan")
+            .field("requests", &self.requests.len())
+            .field("dirty_ranges", &self.dirty_ranges())
+            .finish()
+    }
+}
+
 impl<'a> FramePlan<'a> {
     pub(super) fn new(allocator: &'a mut ContiguousAllocator, requests: &'a [Request]) -> Self {
         FramePlan { allocator, requests }

@@ -16,36 +16,43 @@
 
 use super::block_list::{Slot, NIL};
 
-pub(crate) struct FreeIndex {
-    left: Vec<Slot>,
-    right: Vec<Slot>,
-    offset: Vec<u32>,
-    size: Vec<u32>,
-    max_size: Vec<u32>,
-    root: Slot,
-    len: usize,
+/// One node, kept together so that a step down the tree is one cache line.
+#[derive(Clone, Copy)]
+struct Node {
+    left: Slot,
+    right: Slot,
+    offset: u32,
+    size: u32,
+    max_size: u32,
+    priority: u32,
 }
 
-/// A well-mixed, fixed priority per slot (splitmix64 finaliser).
-fn priority(slot: Slot) -> u64 {
+pub(crate) struct FreeIndex {
+    nodes: Vec<Node>,
+    root: Slot,
+    len: usize,
+    /// Right spine while rebuilding; sized at construction.
+    spine: Vec<Slot>,
+}
+
+/// A well-mixed, fixed priority per slot (splitmix64 finaliser). Equal
+/// priorities are harmless: the heap order is "parent at least child".
+fn priority(slot: Slot) -> u32 {
     let mut z = (slot as u64).wrapping_add(0x9E37_79B9_7F4A_7C15);
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
+    ((z ^ (z >> 31)) >> 32) as u32
 }
 
 impl FreeIndex {
     pub fn new(max_blocks: u32) -> Self {
         let n = max_blocks as usize;
-        FreeIndex {
-            left: vec![NIL; n],
-            right: vec![NIL; n],
-            offset: vec![0; n],
-            size: vec![0; n],
-            max_size: vec![0; n],
-            root: NIL,
-            len: 0,
+        let empty = Node { left: NIL, right: NIL, offset: 0, size: 0, max_size: 0, priority: 0 };
+        let mut nodes = vec![empty; n];
+        for (slot, node) in nodes.iter_mut().enumerate() {
+            node.priority = priority(slot as Slot);
         }
+        FreeIndex { nodes, root: NIL, len: 0, spine: Vec::with_capacity(n) }
     }
 
     /// Number of free blocks indexed.
@@ -60,19 +67,14 @@ impl FreeIndex {
 
     /// Adds the free block `slot` at `[offset, offset + size)`. O(log F).
     pub fn insert(&mut self, slot: Slot, offset: u32, size: u32) {
-        let i = slot as usize;
-        self.left[i] = NIL;
-        self.right[i] = NIL;
-        self.offset[i] = offset;
-        self.size[i] = size;
-        self.max_size[i] = size;
+        self.reset(slot, offset, size);
         self.root = self.insert_at(self.root, slot);
         self.len += 1;
     }
 
     /// Removes the free block `slot`, which starts at the key it was given. O(log F).
     pub fn remove(&mut self, slot: Slot) {
-        let key = self.offset[slot as usize];
+        let key = self.node(slot).offset;
         self.root = self.remove_at(self.root, key);
         self.len -= 1;
     }
@@ -81,77 +83,125 @@ impl FreeIndex {
     /// blocks stays the same (it grew into a merged neighbour, or the allocator
     /// carved bytes off its front). O(log F).
     pub fn resize(&mut self, slot: Slot, offset: u32, size: u32) {
-        self.offset[slot as usize] = offset;
-        self.size[slot as usize] = size;
+        let node = self.node_mut(slot);
+        node.offset = offset;
+        node.size = size;
         self.refresh_path(self.root, offset);
+    }
+
+    /// Replaces the whole index with `blocks`, given in address order, in
+    /// O(F): the treap is built as a Cartesian tree along its right spine.
+    pub fn rebuild(&mut self, blocks: impl Iterator<Item = (Slot, u32, u32)>) {
+        let mut spine = std::mem::take(&mut self.spine);
+        spine.clear();
+        self.len = 0;
+        for (slot, offset, size) in blocks {
+            self.reset(slot, offset, size);
+            let priority = self.node(slot).priority;
+            let mut below = NIL;
+            while let Some(&top) = spine.last() {
+                if self.node(top).priority >= priority {
+                    break;
+                }
+                // `top`'s subtree is complete once it leaves the spine.
+                self.update(top);
+                below = top;
+                spine.pop();
+            }
+            self.node_mut(slot).left = below;
+            if let Some(&top) = spine.last() {
+                self.node_mut(top).right = slot;
+            }
+            spine.push(slot);
+            self.len += 1;
+        }
+        self.root = spine.first().copied().unwrap_or(NIL);
+        while let Some(top) = spine.pop() {
+            self.update(top);
+        }
+        self.spine = spine;
     }
 
     /// The free block at the lowest address holding at least `len` bytes. O(log F).
     pub fn first_fit(&self, len: u32) -> Option<Slot> {
-        let mut node = self.root;
-        if self.subtree_max(node) < len {
+        let mut slot = self.root;
+        if self.subtree_max(slot) < len {
             return None;
         }
         loop {
-            let i = node as usize;
-            if self.subtree_max(self.left[i]) >= len {
-                node = self.left[i];
-            } else if self.size[i] >= len {
-                return Some(node);
+            let node = self.node(slot);
+            if self.subtree_max(node.left) >= len {
+                slot = node.left;
+            } else if node.size >= len {
+                return Some(slot);
             } else {
                 // The subtree holds a fit and it is neither left nor here.
-                node = self.right[i];
+                slot = node.right;
             }
         }
     }
 
     /// The free block with the greatest offset not above `offset`. O(log F).
     pub fn at_or_below(&self, offset: u32) -> Option<Slot> {
-        let mut node = self.root;
+        let mut slot = self.root;
         let mut best = None;
-        while node != NIL {
-            let i = node as usize;
-            if self.offset[i] <= offset {
-                best = Some(node);
-                node = self.right[i];
+        while slot != NIL {
+            let node = self.node(slot);
+            if node.offset <= offset {
+                best = Some(slot);
+                slot = node.right;
             } else {
-                node = self.left[i];
+                slot = node.left;
             }
         }
         best
     }
 
-    fn subtree_max(&self, node: Slot) -> u32 {
-        if node == NIL {
+    fn node(&self, slot: Slot) -> &Node {
+        &self.nodes[slot as usize]
+    }
+
+    fn node_mut(&mut self, slot: Slot) -> &mut Node {
+        &mut self.nodes[slot as usize]
+    }
+
+    fn reset(&mut self, slot: Slot, offset: u32, size: u32) {
+        let node = self.node_mut(slot);
+        (node.left, node.right) = (NIL, NIL);
+        (node.offset, node.size, node.max_size) = (offset, size, size);
+    }
+
+    fn subtree_max(&self, slot: Slot) -> u32 {
+        if slot == NIL {
             0
         } else {
-            self.max_size[node as usize]
+            self.node(slot).max_size
         }
     }
 
-    fn update(&mut self, node: Slot) {
-        let i = node as usize;
-        let children = self.subtree_max(self.left[i]).max(self.subtree_max(self.right[i]));
-        self.max_size[i] = self.size[i].max(children);
+    fn update(&mut self, slot: Slot) {
+        let Node { left, right, size, .. } = *self.node(slot);
+        let children = self.subtree_max(left).max(self.subtree_max(right));
+        self.node_mut(slot).max_size = size.max(children);
     }
 
-    fn insert_at(&mut self, root: Slot, node: Slot) -> Slot {
+    fn insert_at(&mut self, root: Slot, slot: Slot) -> Slot {
         if root == NIL {
-            return node;
+            return slot;
         }
-        let key = self.offset[node as usize];
-        if priority(node) > priority(root) {
+        let key = self.node(slot).offset;
+        if self.node(slot).priority > self.node(root).priority {
             let (l, r) = self.split(root, key);
-            self.left[node as usize] = l;
-            self.right[node as usize] = r;
-            self.update(node);
-            return node;
+            let node = self.node_mut(slot);
+            (node.left, node.right) = (l, r);
+            self.update(slot);
+            return slot;
         }
-        let r = root as usize;
-        if key < self.offset[r] {
-            self.left[r] = self.insert_at(self.left[r], node);
+        let Node { left, right, offset, .. } = *self.node(root);
+        if key < offset {
+            self.node_mut(root).left = self.insert_at(left, slot);
         } else {
-            self.right[r] = self.insert_at(self.right[r], node);
+            self.node_mut(root).right = self.insert_at(right, slot);
         }
         self.update(root);
         root
@@ -159,14 +209,14 @@ impl FreeIndex {
 
     fn remove_at(&mut self, root: Slot, key: u32) -> Slot {
         debug_assert!(root != NIL, "free index: key {key} not found");
-        let r = root as usize;
-        if key == self.offset[r] {
-            return self.join(self.left[r], self.right[r]);
+        let Node { left, right, offset, .. } = *self.node(root);
+        if key == offset {
+            return self.join(left, right);
         }
-        if key < self.offset[r] {
-            self.left[r] = self.remove_at(self.left[r], key);
+        if key < offset {
+            self.node_mut(root).left = self.remove_at(left, key);
         } else {
-            self.right[r] = self.remove_at(self.right[r], key);
+            self.node_mut(root).right = self.remove_at(right, key);
         }
         self.update(root);
         root
@@ -174,11 +224,11 @@ impl FreeIndex {
 
     fn refresh_path(&mut self, root: Slot, key: u32) {
         debug_assert!(root != NIL, "free index: key {key} not found");
-        let r = root as usize;
-        if key < self.offset[r] {
-            self.refresh_path(self.left[r], key);
-        } else if key > self.offset[r] {
-            self.refresh_path(self.right[r], key);
+        let Node { left, right, offset, .. } = *self.node(root);
+        if key < offset {
+            self.refresh_path(left, key);
+        } else if key > offset {
+            self.refresh_path(right, key);
         }
         self.update(root);
     }
@@ -188,15 +238,15 @@ impl FreeIndex {
         if root == NIL {
             return (NIL, NIL);
         }
-        let r = root as usize;
-        if self.offset[r] < key {
-            let (l, rest) = self.split(self.right[r], key);
-            self.right[r] = l;
+        let Node { left, right, offset, .. } = *self.node(root);
+        if offset < key {
+            let (l, rest) = self.split(right, key);
+            self.node_mut(root).right = l;
             self.update(root);
             (root, rest)
         } else {
-            let (rest, g) = self.split(self.left[r], key);
-            self.left[r] = g;
+            let (rest, g) = self.split(left, key);
+            self.node_mut(root).left = g;
             self.update(root);
             (rest, root)
         }
@@ -210,14 +260,14 @@ impl FreeIndex {
         if b == NIL {
             return a;
         }
-        if priority(a) > priority(b) {
-            let ai = a as usize;
-            self.right[ai] = self.join(self.right[ai], b);
+        if self.node(a).priority > self.node(b).priority {
+            let right = self.node(a).right;
+            self.node_mut(a).right = self.join(right, b);
             self.update(a);
             a
         } else {
-            let bi = b as usize;
-            self.left[bi] = self.join(a, self.left[bi]);
+            let left = self.node(b).left;
+            self.node_mut(b).left = self.join(a, left);
             self.update(b);
             b
         }
@@ -227,16 +277,16 @@ impl FreeIndex {
     pub fn entries(&self) -> Vec<(Slot, u32, u32)> {
         let mut out = Vec::with_capacity(self.len);
         let mut stack = Vec::new();
-        let mut node = self.root;
-        while node != NIL || !stack.is_empty() {
-            while node != NIL {
-                stack.push(node);
-                node = self.left[node as usize];
+        let mut slot = self.root;
+        while slot != NIL || !stack.is_empty() {
+            while slot != NIL {
+                stack.push(slot);
+                slot = self.node(slot).left;
             }
             let top = stack.pop().expect("stack is non-empty here");
-            let i = top as usize;
-            out.push((top, self.offset[i], self.size[i]));
-            node = self.right[i];
+            let node = self.node(top);
+            out.push((top, node.offset, node.size));
+            slot = node.right;
         }
         out
     }
@@ -251,16 +301,14 @@ impl FreeIndex {
             return Err("free index keys out of order".into());
         }
         for &(slot, _, _) in &entries {
-            let i = slot as usize;
-            for child in [self.left[i], self.right[i]] {
-                if child != NIL && priority(child) > priority(slot) {
+            let node = self.node(slot);
+            for child in [node.left, node.right] {
+                if child != NIL && self.node(child).priority > node.priority {
                     return Err(format!("free index heap order broken at {slot}"));
                 }
             }
-            let expected = self.size[i]
-                .max(self.subtree_max(self.left[i]))
-                .max(self.subtree_max(self.right[i]));
-            if self.max_size[i] != expected {
+            let expected = node.size.max(self.subtree_max(node.left)).max(self.subtree_max(node.right));
+            if node.max_size != expected {
                 return Err(format!("free index max_size stale at {slot}"));
             }
         }

@@ -22,13 +22,13 @@
 //! |---|---|---|
 //! | `begin_frame` | O(E log F) | each expiring block merges with its neighbours in O(1) through the address-ordered list, then one index update |
 //! | validate | O(N) | generator stamps catch duplicates without a set |
-//! | release old blocks | O(N log F) | O(1) merge + one index update each |
+//! | release old blocks | O(min(N log F, B)) | O(1) merge each, then one index update each, or one O(B) rebuild of the index from the B listed blocks when that is cheaper |
 //! | sort by format | O(N log N) | in place, on a table sized at construction |
 //! | find a gap | O(log F) per piece | the free index is a treap keyed by address that keeps the largest size of each subtree |
 //! | place | O(1) per block + O(log F) per piece | blocks are linked in front of the gap, which shrinks once |
 //! | failure and rollback | O(N log F) | the placed blocks are freed and the old ones carved back exactly |
 //!
-//! So a call costs O(N log N + N log F); the paper's bound is
+//! So a call costs O(N log N + min(N log F, B)); the paper's bound is
 //! O(N) + O(N log N) + O(log M) on average with a linear worst case for the gap
 //! search, which the augmented index removes. No call allocates on the heap:
 //! every table is sized in [`ContiguousAllocator::new`].
@@ -39,6 +39,7 @@ mod frame;
 mod free_index;
 mod place;
 mod retire;
+pub mod worst_case;
 
 use block_list::{BlockList, BlockState, Slot, NIL};
 use free_index::FreeIndex;
@@ -107,6 +108,16 @@ pub struct AllocatorStats {
     pub largest_gap: u32,
     /// End of the highest block that is not free: the buffer size this state needs.
     pub workspace_end: u32,
+}
+
+/// What merging a freed block did to the list.
+struct Merge {
+    /// The record that now holds the merged free space.
+    keep: Slot,
+    /// `keep` was a free block already (and is in the index under its offset).
+    keep_was_free: bool,
+    /// A free neighbour folded into `keep`, or `NIL`.
+    absorbed: Slot,
 }
 
 /// The allocator: see the module documentation.
@@ -219,7 +230,7 @@ impl ContiguousAllocator {
             });
         }
         if had {
-            self.detach(generator);
+            self.detach(generator, false);
         }
         self.debug_check();
         Ok(had)
@@ -265,47 +276,66 @@ impl ContiguousAllocator {
 
     /// Takes a generator's live block away from it: freed now, or queued until
     /// its frames in flight have passed. The caller has checked queue room.
-    fn detach(&mut self, generator: GeneratorId) {
+    /// With `defer_index` the free index is left stale for a later rebuild.
+    fn detach(&mut self, generator: GeneratorId, defer_index: bool) {
         let slot = std::mem::replace(&mut self.owner[generator.0 as usize], NIL);
         debug_assert_ne!(slot, NIL);
         let size = self.blocks.get(slot).size as u64;
         self.live_blocks -= 1;
         self.live_bytes -= size;
-        if self.config.frames_in_flight == 0 {
-            self.free_block(slot);
-        } else {
+        if self.config.frames_in_flight > 0 {
             let until = self.frame + self.config.frames_in_flight as u64;
             self.blocks.get_mut(slot).state = BlockState::Retiring { until_frame: until };
             self.retiring.push(slot, until);
             self.retiring_bytes += size;
+        } else if defer_index {
+            self.merge_free(slot);
+        } else {
+            self.free_block(slot);
         }
     }
 
-    /// Turns a block into free space, merging it with free neighbours.
+    /// Turns a block into free space, merging it with free neighbours, and
+    /// tells the free index. O(log F).
     fn free_block(&mut self, slot: Slot) {
+        let merge = self.merge_free(slot);
+        if merge.absorbed != NIL {
+            self.free.remove(merge.absorbed);
+        }
+        let block = *self.blocks.get(merge.keep);
+        if merge.keep_was_free {
+            self.free.resize(merge.keep, block.offset, block.size);
+        } else {
+            self.free.insert(merge.keep, block.offset, block.size);
+        }
+    }
+
+    /// Marks `slot` free and merges it with free neighbours in the list only,
+    /// leaving the free index stale. O(1).
+    fn merge_free(&mut self, slot: Slot) -> Merge {
         let block = *self.blocks.get(slot);
         debug_assert_ne!(block.state, BlockState::Free);
         self.blocks.get_mut(slot).state = BlockState::Free;
-        let mut keep = slot;
-        let mut indexed = false;
+        let mut merge = Merge { keep: slot, keep_was_free: false, absorbed: NIL };
         if block.prev != NIL && self.blocks.get(block.prev).state == BlockState::Free {
             self.blocks.get_mut(block.prev).size += block.size;
             self.blocks.remove(slot);
-            keep = block.prev;
-            indexed = true;
+            merge.keep = block.prev;
+            merge.keep_was_free = true;
         }
         if block.next != NIL && self.blocks.get(block.next).state == BlockState::Free {
             let next_size = self.blocks.get(block.next).size;
-            self.free.remove(block.next);
             self.blocks.remove(block.next);
-            self.blocks.get_mut(keep).size += next_size;
+            self.blocks.get_mut(merge.keep).size += next_size;
+            merge.absorbed = block.next;
         }
-        let merged = *self.blocks.get(keep);
-        if indexed {
-            self.free.resize(keep, merged.offset, merged.size);
-        } else {
-            self.free.insert(keep, merged.offset, merged.size);
-        }
+        merge
+    }
+
+    /// Rebuilds the free index from the list, O(blocks), after bulk merges.
+    fn rebuild_free_index(&mut self) {
+        let free_blocks = self.blocks.iter().filter(|(_, b)| b.state == BlockState::Free);
+        self.free.rebuild(free_blocks.map(|(slot, b)| (slot, b.offset, b.size)));
     }
 
     /// Shrinks free block `gap` by `bytes` taken off its front, removing it when

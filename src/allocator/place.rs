@@ -100,10 +100,15 @@ impl ContiguousAllocator {
         Ok(())
     }
 
-    /// Frees (or retires) each requester's current block, remembering it for rollback.
+    /// Frees (or retires) each requester's current block, remembering it for
+    /// rollback. When many blocks go at once the free index is rebuilt from
+    /// the list afterwards instead of being updated block by block.
     fn release_old(&mut self, requests: &[Request]) {
         self.scratch.old.clear();
         self.scratch.placed.clear();
+        let freeing = requests.len() as u64 * u64::from(self.config.frames_in_flight == 0);
+        let per_update = (self.free.len() as u64 + 2).ilog2() as u64;
+        let bulk = freeing * per_update > self.blocks.len() as u64;
         for request in requests {
             let slot = self.owner[request.generator.0 as usize];
             let old = match slot {
@@ -116,8 +121,11 @@ impl ContiguousAllocator {
             self.scratch.old.push(old);
             self.scratch.placed.push(NIL);
             if slot != NIL {
-                self.detach(request.generator);
+                self.detach(request.generator, bulk);
             }
+        }
+        if bulk {
+            self.rebuild_free_index();
         }
     }
 

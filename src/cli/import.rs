@@ -59,13 +59,9 @@ pub fn run(args: &ImportArgs) -> Result<()> {
     Ok(())
 }
 
-/// Reads and mosaics the elevation files. The importers
-/// (`ridgeline::dem::import_files`) are being written on the `dem` branch;
-/// until it is merged this branch imports `--synthetic` grids only, and at the
-/// merge this body becomes `Ok(ridgeline::dem::import_files(files)?)`.
+/// Reads the elevation files into one grid (mosaicked, voids filled).
 fn read_dem_files(files: &[PathBuf]) -> Result<ElevationGrid> {
-    let first = files.first().map(|f| f.display().to_string()).unwrap_or_default();
-    anyhow::bail!("{first}: this build has no elevation importers yet (the dem module is not merged)")
+    Ok(ridgeline::dem::import_files(files)?)
 }
 
 /// The import's progress on a terminal bar (drawn only when stderr is a terminal).

@@ -1,8 +1,37 @@
 //! Elevation data as it comes in: importers for GeoTIFF, SRTM `.hgt`, DTED and
 //! ESRI ASCII grids, mosaicking several files into one grid, and void filling.
 //! Everything here is GL-free and produces an [`ElevationGrid`].
+//!
+//! | module | owns |
+//! |---|---|
+//! | [`format`](mod@format) | choosing the importer by extension or magic |
+//! | [`geotiff`], [`geotiff_georef`] | GeoTIFF rasters through the `tiff` crate |
+//! | [`hgt`] | SRTM `.hgt` tiles |
+//! | [`dted`] | DTED levels 0, 1, 2 |
+//! | [`ascii_grid`] | ESRI ASCII grids |
+//! | [`raw`] | the pre-fill grid with voids and the checks importers share |
+//! | [`mosaic`] | joining several files on one lattice |
+//! | [`voids`] | the documented void fill |
+//! | [`error`] | [`ImportError`]: the file and the problem |
+
+use std::path::{Path, PathBuf};
 
 use crate::geo::GeoRef;
+
+pub mod ascii_grid;
+pub mod dted;
+pub mod error;
+pub mod format;
+pub mod geotiff;
+pub mod geotiff_georef;
+pub mod hgt;
+pub mod mosaic;
+pub mod raw;
+pub mod voids;
+
+pub use error::{ImportError, Problem};
+pub use format::Format;
+pub use raw::RawGrid;
 
 /// A regular grid of heights in metres with its georeference.
 ///
@@ -25,4 +54,29 @@ impl ElevationGrid {
         debug_assert!(i < self.width && j < self.height);
         self.heights[(j as usize) * (self.width as usize) + i as usize]
     }
+}
+
+/// Reads one file of any supported format, voids still marked.
+pub fn read_raw(path: &Path) -> Result<RawGrid, ImportError> {
+    match format::detect(path)? {
+        Format::GeoTiff => geotiff::read(path),
+        Format::Hgt => hgt::read(path),
+        Format::Dted => dted::read(path),
+        Format::AsciiGrid => ascii_grid::read(path),
+    }
+}
+
+/// Imports one file and fills its voids.
+pub fn import_file(path: &Path) -> Result<ElevationGrid, ImportError> {
+    voids::fill(read_raw(path)?)
+}
+
+/// Imports several files (any mix of formats) as one mosaic and fills its
+/// voids, including the gaps between files. See [`mosaic`] for the rules.
+pub fn import_files(paths: &[PathBuf]) -> Result<ElevationGrid, ImportError> {
+    if paths.is_empty() {
+        return Err(ImportError::new(Path::new(""), Problem::NoInput));
+    }
+    let grids = paths.iter().map(|p| read_raw(p)).collect::<Result<Vec<_>, _>>()?;
+    voids::fill(mosaic::mosaic(grids)?)
 }

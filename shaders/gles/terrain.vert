@@ -1,0 +1,38 @@
+#version 100
+// Terrain tile vertex shader, GLSL ES 1.00. No texture reads: heights arrive
+// as attributes from the tile's own block of the vertex buffer (Polok), the
+// tile's placement as uniforms. Positions are relative to the camera.
+//
+// The morph mirrors src/lod/morph.rs line for line: the factor grows from 0 at
+// u_morph.x to 1 at u_morph.y with the vertex's distance to the camera,
+// measured with its unmorphed height.
+
+attribute vec3 a_grid;    // post i, post j, skirt flag (shared by all tiles)
+attribute vec2 a_height;  // this level's height, the parent level's height
+attribute vec4 a_normal;  // normal xy at this level, at the parent level
+
+uniform mat4 u_view_projection;
+uniform vec4 u_tile;      // south-west corner relative to the camera (xy), post spacing (zw)
+uniform vec4 u_morph;     // morph start, morph end, skirt depth, unused
+uniform vec4 u_frame;     // camera altitude, 1 / (2 R) or 0 for a flat earth, unused, unused
+
+varying vec3 v_normal;
+varying float v_relative_height;  // terrain height minus aircraft altitude
+varying float v_height;
+varying float v_distance;
+
+void main() {
+    vec2 position = u_tile.xy + a_grid.xy * u_tile.zw;
+    float altitude = u_frame.x;
+    float distance = length(vec3(position, a_height.x - altitude));
+    float morph = clamp((distance - u_morph.x) / (u_morph.y - u_morph.x), 0.0, 1.0);
+    float height = mix(a_height.x, a_height.y, morph);
+    float drop = dot(position, position) * u_frame.y;
+    float z = height - a_grid.z * u_morph.z - altitude - drop;
+    vec2 n = mix(a_normal.xy, a_normal.zw, morph);
+    v_normal = vec3(n, sqrt(max(1.0 - dot(n, n), 0.0)));
+    v_relative_height = height - altitude;
+    v_height = height;
+    v_distance = length(vec3(position, z));
+    gl_Position = u_view_projection * vec4(position, z, 1.0);
+}

@@ -1,0 +1,138 @@
+//! Per-frame refinement of the implicit quadtree: the thesis' Algorithm 1 run
+//! on the CPU with an explicit stack, culling each tile against the terrain's
+//! extent and the view frustum before deciding to split it.
+//!
+//! Both lists are allocated once, at `max_tiles`; a frame never allocates.
+//! When refining further would exceed `max_tiles`, the tile is kept whole:
+//! the view gets coarser, never a hole.
+
+use super::{LevelRanges, LodConfig, TileKey};
+use crate::camera::{curvature_drop, Frustum};
+use glam::DVec3;
+
+/// A tile chosen for this frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SelectedTile {
+    pub key: TileKey,
+    /// Distance from the camera to the tile's bounding box, metres.
+    pub distance: f64,
+}
+
+/// What the selector needs to know about the terrain.
+pub trait TileBounds {
+    /// Level-0 posts east and north (the terrain's extent).
+    fn samples(&self) -> [u32; 2];
+    /// Post spacing at level 0, metres east and north.
+    fn spacing_m(&self) -> [f64; 2];
+    /// Lowest and highest height any level-0 sample under `tile` may have.
+    fn height_bounds(&self, tile: TileKey, grid_size: u32) -> (f32, f32);
+}
+
+/// Refines the quadtree each frame into a list of tiles.
+pub struct TileSelector {
+    config: LodConfig,
+    stack: Vec<TileKey>,
+    selected: Vec<SelectedTile>,
+    /// Tiles dropped by the frustum in the last frame (for statistics).
+    culled: usize,
+}
+
+/// A view to select tiles for: camera position, frustum and rings.
+pub struct View<'a> {
+    pub eye: DVec3,
+    /// Frustum in camera-relative coordinates.
+    pub frustum: &'a Frustum,
+    pub ranges: &'a LevelRanges,
+    /// Apply the earth's curvature to bounding boxes.
+    pub curvature: bool,
+}
+
+impl TileSelector {
+    pub fn new(config: LodConfig) -> Self {
+        TileSelector {
+            config,
+            stack: Vec::with_capacity(config.max_tiles + 4),
+            selected: Vec::with_capacity(config.max_tiles),
+            culled: 0,
+        }
+    }
+
+    pub fn config(&self) -> &LodConfig {
+        &self.config
+    }
+
+    pub fn culled(&self) -> usize {
+        self.culled
+    }
+
+    /// Selects the tiles for `view` over `terrain`; the result is valid until
+    /// the next call.
+    pub fn select(&mut self, view: &View<'_>, terrain: &dyn TileBounds) -> &[SelectedTile] {
+        self.selected.clear();
+        self.stack.clear();
+        self.culled = 0;
+        let root = (view.ranges.levels() - 1) as u8;
+        let [nx, ny] = tiles_at(terrain.samples(), self.config.grid_size, root);
+        for y in (0..ny).rev() {
+            for x in (0..nx).rev() {
+                self.stack.push(TileKey::new(root, x, y));
+            }
+        }
+        while let Some(key) = self.stack.pop() {
+            let Some(distance) = self.visible_distance(key, view, terrain) else {
+                self.culled += 1;
+                continue;
+            };
+            // Children replace this tile on the stack; keep room for the worst case.
+            let room = self.selected.len() + self.stack.len() + 4 <= self.config.max_tiles;
+            if key.level > 0 && distance < view.ranges.split_distance(key.level) && room {
+                let [nx, ny] = tiles_at(terrain.samples(), self.config.grid_size, key.level - 1);
+                for child in key.children().into_iter().rev() {
+                    if child.x < nx && child.y < ny {
+                        self.stack.push(child);
+                    }
+                }
+            } else {
+                self.selected.push(SelectedTile { key, distance });
+            }
+        }
+        &self.selected
+    }
+
+    /// Distance to the tile's box, or `None` if the frustum excludes it.
+    fn visible_distance(&self, key: TileKey, view: &View<'_>, terrain: &dyn TileBounds) -> Option<f64> {
+        let (min, max) = tile_box(key, self.config.grid_size, terrain, view.eye);
+        let distance = box_distance(min, max);
+        let (mut lo, hi) = (min, max);
+        if view.curvature {
+            // The surface drops with horizontal distance; the box must reach the
+            // drop at its far corner.
+            let far = DVec3::new(min.x.abs().max(max.x.abs()), min.y.abs().max(max.y.abs()), 0.0).length();
+            lo.z -= curvature_drop(far);
+        }
+        view.frustum.intersects_box(lo.as_vec3(), hi.as_vec3()).then_some(distance)
+    }
+}
+
+/// Tiles per side at `level` that cover `samples` posts.
+pub fn tiles_at(samples: [u32; 2], grid_size: u32, level: u8) -> [u32; 2] {
+    let span = (grid_size as u64) << level;
+    let count = |n: u32| ((n.saturating_sub(1) as u64).div_ceil(span).max(1)) as u32;
+    [count(samples[0]), count(samples[1])]
+}
+
+/// The tile's bounding box relative to `eye`, in f64.
+pub fn tile_box(key: TileKey, grid_size: u32, terrain: &dyn TileBounds, eye: DVec3) -> (DVec3, DVec3) {
+    let [sx, sy] = terrain.spacing_m();
+    let span = ((grid_size as u64) << key.level) as f64;
+    let (lo_h, hi_h) = terrain.height_bounds(key, grid_size);
+    let min = DVec3::new(key.x as f64 * span * sx, key.y as f64 * span * sy, lo_h as f64);
+    let max = DVec3::new(min.x + span * sx, min.y + span * sy, hi_h as f64);
+    (min - eye, max - eye)
+}
+
+/// Distance from the origin to the box `[min, max]`.
+pub fn box_distance(min: DVec3, max: DVec3) -> f64 {
+    let nearest = DVec3::ZERO.clamp(min, max);
+    nearest.length()
+}

@@ -1,0 +1,326 @@
+//! Which tiles have vertex data in the GPU buffer, where, and from which
+//! level of data it was made.
+//!
+//! Each tile in use owns one block of the [`ContiguousAllocator`]; its
+//! generator id is the tile's slot in a fixed table. Per frame:
+//! 1. tiles the selection no longer uses give their blocks back;
+//! 2. tiles that are new, or whose best resident data is now finer than what
+//!    they were made from, announce their size (pass 1);
+//! 3. the run is placed and each such tile fills its bytes (pass 2);
+//! 4. the dirty ranges, one per run piece, are what the GPU must receive.
+//! A still camera with settled data announces nothing and uploads nothing.
+//! The root level's tiles are made once and never released, so whatever
+//! happens to the buffer there is always a coarse tile to draw.
+
+use super::grid::vertex_count;
+use super::vertex::{fill_tile, tile_bytes, tile_node, PostReader, TileVertex};
+use super::{best_resident, ResidentNodes};
+use crate::allocator::{AllocError, AllocatorConfig, ConfigError, ContiguousAllocator, GeneratorId, Request, VertexFormat};
+use crate::lod::select::tiles_at;
+use crate::lod::{SelectedTile, TileKey};
+use std::collections::HashMap;
+use std::ops::Range;
+
+/// Sizes fixed when the cache is built.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct TileCacheConfig {
+    pub grid_size: u32,
+    /// Bytes of the GPU vertex buffer (and its staging copy).
+    pub capacity_bytes: u32,
+    /// Tiles that may be resident at once, root tiles included.
+    pub max_tiles: u32,
+    /// Longest single transfer in bytes; `None` for one transfer per frame.
+    pub transfer_cap: Option<u32>,
+    pub frames_in_flight: u32,
+}
+
+/// A tile to draw: where its vertex data starts and what data made it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TileDraw {
+    pub key: TileKey,
+    pub byte_offset: u32,
+    /// Level of the node the heights came from (above `key.level` when only
+    /// coarser data was resident: best available).
+    pub source_level: u8,
+}
+
+/// What one frame of the cache did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct TileFrameStats {
+    pub tiles: usize,
+    pub generated: usize,
+    pub released: usize,
+    pub bytes_uploaded: u64,
+    pub transfers: usize,
+    pub allocator_used_bytes: u64,
+    pub allocator_workspace_bytes: u32,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum TileError {
+    #[error("tile cache configuration: {0}")]
+    Config(#[from] ConfigError),
+    #[error("grid size {grid} does not divide the node size {node}")]
+    Grid { grid: u32, node: u32 },
+    #[error("the root level needs {needed} tiles but the cache holds {max}")]
+    RootTooLarge { needed: usize, max: u32 },
+    #[error("no resident node covers tile {0:?}: the root level must stay resident")]
+    NoData(TileKey),
+    #[error("{selected} tiles selected, the cache holds {max}")]
+    TooManyTiles { selected: usize, max: u32 },
+    /// The GPU buffer cannot take this frame's new tiles; select coarser tiles
+    /// and call again (the tiles already resident are untouched).
+    #[error("GPU buffer full: {0}")]
+    BufferFull(AllocError),
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Resident {
+    key: TileKey,
+    source_level: u8,
+    last_frame: u64,
+    pinned: bool,
+}
+
+/// Pending generation of one tile this frame.
+#[derive(Clone, Copy)]
+struct Job {
+    slot: u32,
+    new: bool,
+}
+
+pub struct TileCache {
+    config: TileCacheConfig,
+    allocator: ContiguousAllocator,
+    slots: Vec<Option<Resident>>,
+    spare: Vec<u32>,
+    by_key: HashMap<TileKey, u32>,
+    frame: u64,
+    requests: Vec<Request>,
+    jobs: Vec<Job>,
+    draws: Vec<TileDraw>,
+    dirty: Vec<Range<u32>>,
+    vertices: Vec<TileVertex>,
+    stats: TileFrameStats,
+}
+
+impl TileCache {
+    /// Builds the cache and makes the root level's tiles from `nodes`.
+    pub fn new(config: TileCacheConfig, nodes: &dyn ResidentNodes) -> Result<Self, TileError> {
+        let layout = *nodes.layout();
+        if layout.node_size % config.grid_size != 0 {
+            return Err(TileError::Grid { grid: config.grid_size, node: layout.node_size });
+        }
+        let alloc_config = AllocatorConfig {
+            capacity: config.capacity_bytes,
+            max_generators: config.max_tiles,
+            alignment: 4,
+            transfer_cap: config.transfer_cap,
+            frames_in_flight: config.frames_in_flight,
+        };
+        let max = config.max_tiles as usize;
+        let mut cache = TileCache {
+            config,
+            allocator: ContiguousAllocator::new(alloc_config)?,
+            slots: vec![None; max],
+            spare: (0..config.max_tiles).rev().collect(),
+            by_key: HashMap::with_capacity(max),
+            frame: 0,
+            requests: Vec::with_capacity(max),
+            jobs: Vec::with_capacity(max),
+            draws: Vec::with_capacity(max),
+            dirty: Vec::with_capacity(max),
+            vertices: vec![TileVertex::default(); vertex_count(config.grid_size)],
+            stats: TileFrameStats::default(),
+        };
+        cache.make_root_tiles(nodes)?;
+        Ok(cache)
+    }
+
+    pub fn config(&self) -> &TileCacheConfig {
+        &self.config
+    }
+
+    /// Makes the tile list for `selected`: releases unused tiles, generates
+    /// new or improved ones, and lists the draws. On `BufferFull` nothing that
+    /// was resident before has changed except that unused tiles were released.
+    pub fn update(&mut self, selected: &[SelectedTile], nodes: &dyn ResidentNodes) -> Result<&[TileDraw], TileError> {
+        self.frame += 1;
+        self.allocator.begin_frame();
+        self.stats = TileFrameStats { tiles: selected.len(), ..TileFrameStats::default() };
+        self.dirty.clear();
+        // Unused tiles go first so that their slots and bytes can serve new ones.
+        for tile in selected {
+            if let Some(&slot) = self.by_key.get(&tile.key) {
+                self.slots[slot as usize].as_mut().expect("mapped slots are full").last_frame = self.frame;
+            }
+        }
+        self.release_unused();
+        self.mark_selected(selected, nodes)?;
+        if !self.requests.is_empty() {
+            self.generate(nodes)?;
+        }
+        self.list_draws(selected);
+        let stats = self.allocator.stats();
+        self.stats.allocator_used_bytes = stats.live_bytes;
+        self.stats.allocator_workspace_bytes = stats.workspace_end;
+        Ok(&self.draws)
+    }
+
+    /// The ranges of the staging copy the GPU must receive this frame.
+    pub fn dirty_ranges(&self) -> &[Range<u32>] {
+        &self.dirty
+    }
+
+    /// The staging copy (the GPU buffer mirrors it at the same offsets).
+    pub fn staging(&self) -> &[u8] {
+        self.allocator.staging()
+    }
+
+    pub fn stats(&self) -> TileFrameStats {
+        self.stats
+    }
+
+    /// Resident tiles (for statistics and tests).
+    pub fn resident_count(&self) -> usize {
+        self.by_key.len()
+    }
+
+    fn make_root_tiles(&mut self, nodes: &dyn ResidentNodes) -> Result<(), TileError> {
+        let layout = *nodes.layout();
+        let root = layout.levels - 1;
+        let [nx, ny] = tiles_at(layout.samples, self.config.grid_size, root);
+        let needed = (nx * ny) as usize;
+        if needed > self.config.max_tiles as usize {
+            return Err(TileError::RootTooLarge { needed, max: self.config.max_tiles });
+        }
+        let roots: Vec<SelectedTile> = (0..ny)
+            .flat_map(|y| (0..nx).map(move |x| SelectedTile { key: TileKey::new(root, x, y), distance: 0.0 }))
+            .collect();
+        self.update(&roots, nodes)?;
+        for slot in self.slots.iter_mut().flatten() {
+            slot.pinned = true;
+        }
+        Ok(())
+    }
+
+    /// Finds or reserves each selected tile's slot and queues the ones that
+    /// need vertex data (new, or finer data is resident now).
+    fn mark_selected(&mut self, selected: &[SelectedTile], nodes: &dyn ResidentNodes) -> Result<(), TileError> {
+        self.requests.clear();
+        self.jobs.clear();
+        if selected.len() > self.config.max_tiles as usize {
+            return Err(TileError::TooManyTiles { selected: selected.len(), max: self.config.max_tiles });
+        }
+        let layout = *nodes.layout();
+        let size = tile_bytes(self.config.grid_size);
+        for tile in selected {
+            let (node, _) = tile_node(tile.key, self.config.grid_size, layout.node_size);
+            let (source, _) = best_resident(nodes, node).ok_or(TileError::NoData(tile.key))?;
+            let (slot, new) = match self.by_key.get(&tile.key) {
+                Some(&slot) => (slot, false),
+                None => (self.reserve(tile.key, tile.key.level.max(source.lod))?, true),
+            };
+            let resident = self.slots[slot as usize].as_mut().expect("reserved");
+            resident.last_frame = self.frame;
+            if new || source.lod < resident.source_level {
+                self.requests.push(Request { generator: GeneratorId(slot), format: VertexFormat(0), size });
+                self.jobs.push(Job { slot, new });
+            }
+        }
+        Ok(())
+    }
+
+    fn reserve(&mut self, key: TileKey, source_level: u8) -> Result<u32, TileError> {
+        let slot = self.spare.pop().ok_or(TileError::TooManyTiles {
+            selected: self.by_key.len() + 1,
+            max: self.config.max_tiles,
+        })?;
+        self.slots[slot as usize] = Some(Resident { key, source_level, last_frame: 0, pinned: false });
+        self.by_key.insert(key, slot);
+        Ok(slot)
+    }
+
+    fn release_slot(&mut self, slot: u32) {
+        if let Some(resident) = self.slots[slot as usize].take() {
+            self.by_key.remove(&resident.key);
+            // A slot reserved this frame may not own a block yet.
+            self.allocator.release(GeneratorId(slot)).expect("slot ids are in range and retire room is sized");
+            self.spare.push(slot);
+        }
+    }
+
+    /// Tiles no view uses this frame give their blocks back.
+    fn release_unused(&mut self) {
+        for slot in 0..self.slots.len() as u32 {
+            let unused = matches!(self.slots[slot as usize], Some(r) if r.last_frame != self.frame && !r.pinned);
+            if unused {
+                self.release_slot(slot);
+                self.stats.released += 1;
+            }
+        }
+    }
+
+    /// Places the run, fills every queued tile's bytes, and keeps the dirty
+    /// ranges for the upload.
+    fn generate(&mut self, nodes: &dyn ResidentNodes) -> Result<(), TileError> {
+        let requests = std::mem::take(&mut self.requests);
+        let layout = *nodes.layout();
+        let grid_size = self.config.grid_size;
+        let (slots, vertices, dirty) = (&mut self.slots, &mut self.vertices, &mut self.dirty);
+        let outcome = self.allocator.allocate(&requests).map(|mut plan| {
+            let mut bytes_uploaded = 0u64;
+            plan.fill(|_, request, bytes| {
+                let resident = slots[request.generator.0 as usize].as_mut().expect("queued tiles are reserved");
+                let (node, _) = tile_node(resident.key, grid_size, layout.node_size);
+                let (source, data) = best_resident(nodes, node).expect("checked in mark_selected");
+                let reader = PostReader::new(&layout, resident.key, grid_size, source, data);
+                let scale = 2f64.powi(resident.key.level as i32);
+                let spacing = [layout.spacing_m[0] * scale, layout.spacing_m[1] * scale];
+                fill_tile(&reader, grid_size, spacing, vertices);
+                bytes.copy_from_slice(bytemuck::cast_slice(vertices));
+                resident.source_level = source.lod;
+                bytes_uploaded += bytes.len() as u64;
+            });
+            dirty.extend(plan.dirty_ranges().iter().cloned());
+            bytes_uploaded
+        });
+        let generated = requests.len();
+        self.requests = requests;
+        match outcome {
+            Ok(bytes_uploaded) => {
+                self.stats.generated = generated;
+                self.stats.transfers = self.dirty.len();
+                self.stats.bytes_uploaded = bytes_uploaded;
+                Ok(())
+            }
+            Err(error) => {
+                self.forget_new_jobs();
+                Err(TileError::BufferFull(error))
+            }
+        }
+    }
+
+    /// After a failed placement: tiles reserved this frame have no data, so
+    /// they are dropped; tiles that were only to be improved keep their data.
+    fn forget_new_jobs(&mut self) {
+        for k in 0..self.jobs.len() {
+            let job = self.jobs[k];
+            if job.new {
+                self.release_slot(job.slot);
+            }
+        }
+    }
+
+    fn list_draws(&mut self, selected: &[SelectedTile]) {
+        self.draws.clear();
+        for tile in selected {
+            let slot = self.by_key[&tile.key];
+            let resident = self.slots[slot as usize].expect("selected tiles are resident");
+            let range = self.allocator.block_range(GeneratorId(slot)).expect("resident tiles own a block");
+            self.draws.push(TileDraw { key: tile.key, byte_offset: range.start, source_level: resident.source_level });
+        }
+        // Memory order keeps the attribute pointer moving forward.
+        self.draws.sort_unstable_by_key(|d| d.byte_offset);
+    }
+}

@@ -1,0 +1,137 @@
+//! The mesh every tile shares: grid positions and indices, built once for a
+//! grid size (Polok: positions and indices are shared, only heights are per
+//! tile). Per-tile vertex data is indexed by the same vertex numbers.
+//!
+//! Vertex numbering: the `(g + 1)^2` posts row by row from the south-west
+//! corner (`i + j * (g + 1)`), then the skirt: for each edge (south, east,
+//! north, west) the `g + 1` posts along it, repeated with the skirt flag set so
+//! the shader lowers them by the tile's skirt depth (Ulrich section 11).
+//! Cells are split from their south-west to their north-east corner, the same
+//! diagonal the pyramid's delta is measured on.
+
+/// One shared vertex: its post coordinates in the tile and whether it is a
+/// skirt vertex (0 or 1), as `u16` so grids may have up to 256 cells a side.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GridVertex {
+    pub i: u16,
+    pub j: u16,
+    pub skirt: u16,
+    pub _pad: u16,
+}
+
+/// The shared mesh of one grid size.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TileGrid {
+    pub grid_size: u32,
+    pub vertices: Vec<GridVertex>,
+    /// Triangles, counter-clockwise seen from above.
+    pub indices: Vec<u16>,
+}
+
+impl TileGrid {
+    pub fn new(grid_size: u32) -> Self {
+        debug_assert!((1..=256).contains(&grid_size));
+        let g = grid_size;
+        let mut vertices = Vec::with_capacity(vertex_count(g));
+        for j in 0..=g {
+            for i in 0..=g {
+                vertices.push(GridVertex { i: i as u16, j: j as u16, skirt: 0, _pad: 0 });
+            }
+        }
+        for (i, j) in edge_posts(g) {
+            vertices.push(GridVertex { i: i as u16, j: j as u16, skirt: 1, _pad: 0 });
+        }
+        let mut indices = Vec::with_capacity(index_count(g));
+        let post = |i: u32, j: u32| (i + j * (g + 1)) as u16;
+        for j in 0..g {
+            for i in 0..g {
+                let (sw, se, nw, ne) = (post(i, j), post(i + 1, j), post(i, j + 1), post(i + 1, j + 1));
+                indices.extend_from_slice(&[sw, se, ne, sw, ne, nw]);
+            }
+        }
+        // Skirt quads hang below each edge, wound to face outward.
+        let skirt_base = (g + 1) * (g + 1);
+        for edge in 0..4 {
+            for k in 0..g {
+                let top0 = edge_post_index(g, edge, k);
+                let top1 = edge_post_index(g, edge, k + 1);
+                let low0 = (skirt_base + edge * (g + 1) + k) as u16;
+                let low1 = low0 + 1;
+                indices.extend_from_slice(&[top0, low0, low1, top0, low1, top1]);
+            }
+        }
+        debug_assert_eq!(vertices.len(), vertex_count(g));
+        debug_assert_eq!(indices.len(), index_count(g));
+        TileGrid { grid_size, vertices, indices }
+    }
+}
+
+/// Vertices per tile, skirt included.
+pub fn vertex_count(grid_size: u32) -> usize {
+    let side = grid_size as usize + 1;
+    side * side + 4 * side
+}
+
+/// Indices per tile: two triangles per cell and per skirt segment.
+pub fn index_count(grid_size: u32) -> usize {
+    let g = grid_size as usize;
+    6 * g * g + 4 * 6 * g
+}
+
+/// Triangles per tile (cells and skirts).
+pub fn triangle_count(grid_size: u32) -> usize {
+    index_count(grid_size) / 3
+}
+
+/// The posts along the four edges in skirt order: south west to east, east
+/// south to north, north east to west, west north to south (counter-clockwise
+/// around the tile, so every skirt quad faces outward).
+pub fn edge_posts(g: u32) -> impl Iterator<Item = (u32, u32)> {
+    (0..4).flat_map(move |edge| (0..=g).map(move |k| edge_post(g, edge, k)))
+}
+
+fn edge_post(g: u32, edge: u32, k: u32) -> (u32, u32) {
+    match edge {
+        0 => (k, 0),
+        1 => (g, k),
+        2 => (g - k, g),
+        _ => (0, g - k),
+    }
+}
+
+fn edge_post_index(g: u32, edge: u32, k: u32) -> u16 {
+    let (i, j) = edge_post(g, edge, k);
+    (i + j * (g + 1)) as u16
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_triangles_face_up_and_cover_each_cell_once() {
+        let grid = TileGrid::new(4);
+        let pos = |v: u16| {
+            let g = grid.vertices[v as usize];
+            (g.i as f64, g.j as f64)
+        };
+        let mut area = 0.0;
+        for tri in grid.indices[..6 * 16].chunks(3) {
+            let (a, b, c) = (pos(tri[0]), pos(tri[1]), pos(tri[2]));
+            let cross = (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0);
+            assert!(cross > 0.0, "counter-clockwise from above");
+            area += cross / 2.0;
+        }
+        assert_eq!(area, 16.0);
+        assert!(grid.indices.iter().all(|&i| (i as usize) < grid.vertices.len()));
+    }
+
+    #[test]
+    fn skirt_vertices_repeat_the_edge_posts() {
+        let grid = TileGrid::new(8);
+        let skirt = &grid.vertices[81..];
+        assert_eq!(skirt.len(), 36);
+        assert!(skirt.iter().all(|v| v.skirt == 1 && (v.i == 0 || v.j == 0 || v.i == 8 || v.j == 8)));
+    }
+}

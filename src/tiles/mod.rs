@@ -1,0 +1,37 @@
+//! Per-tile height buffers (Polok): the shared grid mesh, the vertex data each
+//! tile carries, and the cache that keeps tiles resident in the contiguous
+//! allocator, regenerating a tile only when it is new or its source data got
+//! finer, and uploading everything a frame changed in one batched transfer per
+//! run piece.
+
+pub mod cache;
+pub mod grid;
+pub mod vertex;
+
+pub use cache::{TileCache, TileCacheConfig, TileDraw, TileError, TileFrameStats};
+pub use grid::TileGrid;
+pub use vertex::TileVertex;
+
+use crate::node::{NodeData, NodeId, NodeLayout};
+
+/// Nodes the tiles can read: whatever is resident in the node atlas.
+pub trait ResidentNodes {
+    fn layout(&self) -> &NodeLayout;
+    /// The node's data if it is resident now.
+    fn resident(&self, id: NodeId) -> Option<&NodeData>;
+}
+
+/// The finest resident node that contains node `id`: itself or an ancestor.
+pub fn best_resident(nodes: &dyn ResidentNodes, id: NodeId) -> Option<(NodeId, &NodeData)> {
+    let levels = nodes.layout().levels;
+    let mut node = id;
+    loop {
+        if let Some(data) = nodes.resident(node) {
+            return Some((node, data));
+        }
+        if node.lod + 1 >= levels {
+            return None;
+        }
+        node = node.parent()?;
+    }
+}

@@ -1,0 +1,143 @@
+//! Per-tile vertex data, made on the CPU from the best resident node: each
+//! vertex's height, its morph target (the parent level's surface at the same
+//! place) and both normals. This is what replaces vertex texturing (Polok):
+//! heights reach the shader as attributes.
+
+use super::grid::{edge_posts, vertex_count};
+use crate::lod::TileKey;
+use crate::node::{NodeData, NodeId, NodeLayout};
+
+/// Twelve bytes per vertex.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct TileVertex {
+    /// Height of this level's post, metres.
+    pub height: f32,
+    /// Height of the parent level's surface here, metres.
+    pub target: f32,
+    /// Unit normals, x and y scaled to -127..127 (z is positive, derived):
+    /// this level's, then the parent level's.
+    pub normal: [i8; 4],
+}
+
+/// Byte size of one tile's vertex data for `grid_size`.
+pub fn tile_bytes(grid_size: u32) -> u32 {
+    (vertex_count(grid_size) * std::mem::size_of::<TileVertex>()) as u32
+}
+
+/// The node of the tile's own level that contains it, and the tile's first
+/// post inside that node's centre.
+pub fn tile_node(key: TileKey, grid_size: u32, node_size: u32) -> (NodeId, [u32; 2]) {
+    let per_node = node_size / grid_size;
+    let node = NodeId::new(key.level, key.x / per_node, key.y / per_node);
+    (node, [(key.x % per_node) * grid_size, (key.y % per_node) * grid_size])
+}
+
+/// Reads level-`level` posts around a tile from a node of that level or a
+/// coarser one (then the coarser surface is sampled: best available data).
+pub struct PostReader<'a> {
+    layout: &'a NodeLayout,
+    node: NodeId,
+    data: &'a NodeData,
+    /// The tile's south-west post in level-0 samples.
+    origin: [i64; 2],
+    /// Level-0 samples between the tile's posts.
+    stride: i64,
+}
+
+impl<'a> PostReader<'a> {
+    pub fn new(layout: &'a NodeLayout, key: TileKey, grid_size: u32, node: NodeId, data: &'a NodeData) -> Self {
+        let span = (grid_size as i64) << key.level;
+        let origin = [key.x as i64 * span, key.y as i64 * span];
+        PostReader { layout, node, data, origin, stride: 1 << key.level }
+    }
+
+    /// Height of the tile's post `(i, j)`; `i` and `j` may reach two posts
+    /// outside the tile (into the node's border).
+    pub fn post(&self, i: i64, j: i64) -> f32 {
+        let x = self.origin[0] + i * self.stride;
+        let y = self.origin[1] + j * self.stride;
+        let node_stride = 1i64 << self.node.lod;
+        let span = (self.layout.node_size as i64) << self.node.lod;
+        // Position in the node's posts (fractional when the node is coarser).
+        let fx = (x - self.node.x as i64 * span) as f64 / node_stride as f64;
+        let fy = (y - self.node.y as i64 * span) as f64 / node_stride as f64;
+        sample_node(self.layout, self.data, fx, fy)
+    }
+}
+
+/// The node's surface at post coordinates `(fx, fy)` (0 = the first centre
+/// post), interpolated on the triangles split from south-west to north-east.
+/// Coordinates beyond the stored border are clamped to it.
+pub fn sample_node(layout: &NodeLayout, data: &NodeData, fx: f64, fy: f64) -> f32 {
+    let side = layout.stored_side() as i64;
+    let border = layout.border as f64;
+    let max = (side - 1) as f64;
+    let gx = (fx + border).clamp(0.0, max);
+    let gy = (fy + border).clamp(0.0, max);
+    let (x0, y0) = ((gx.floor() as i64).min(side - 2), (gy.floor() as i64).min(side - 2));
+    let (tx, ty) = (gx - x0 as f64, gy - y0 as f64);
+    let h = |x: i64, y: i64| data.heights[(y * side + x) as usize] as f64;
+    let (sw, se, nw, ne) = (h(x0, y0), h(x0 + 1, y0), h(x0, y0 + 1), h(x0 + 1, y0 + 1));
+    let value = if tx >= ty {
+        // Lower-right triangle: sw, se, ne.
+        sw + tx * (se - sw) + ty * (ne - se)
+    } else {
+        // Upper-left triangle: sw, ne, nw.
+        sw + ty * (nw - sw) + tx * (ne - nw)
+    };
+    value as f32
+}
+
+/// Fills `out` (one tile's vertices, skirt included) from `reader`.
+/// `spacing_m` is the distance between the tile's posts, east and north.
+pub fn fill_tile(reader: &PostReader<'_>, grid_size: u32, spacing_m: [f64; 2], out: &mut [TileVertex]) {
+    let g = grid_size as i64;
+    debug_assert_eq!(out.len(), vertex_count(grid_size));
+    let h = |i: i64, j: i64| reader.post(i, j) as f64;
+    let normal = |i: i64, j: i64, step: i64| {
+        let dx = (h(i + step, j) - h(i - step, j)) / (2.0 * step as f64 * spacing_m[0]);
+        let dy = (h(i, j + step) - h(i, j - step)) / (2.0 * step as f64 * spacing_m[1]);
+        let inv = 1.0 / (dx * dx + dy * dy + 1.0).sqrt();
+        [-dx * inv, -dy * inv]
+    };
+    for j in 0..=g {
+        for i in 0..=g {
+            let own = normal(i, j, 1);
+            let (target, parent) = parent_surface(i, j, &h, &|i, j| normal(i, j, 2));
+            out[(i + j * (g + 1)) as usize] = TileVertex {
+                height: h(i, j) as f32,
+                target: target as f32,
+                normal: [quantize(own[0]), quantize(own[1]), quantize(parent[0]), quantize(parent[1])],
+            };
+        }
+    }
+    let posts = ((g + 1) * (g + 1)) as usize;
+    for (k, (i, j)) in edge_posts(grid_size).enumerate() {
+        out[posts + k] = out[(i + j * grid_size + j) as usize];
+    }
+}
+
+/// The parent level's height and normal at post `(i, j)`: its own post where
+/// `i` and `j` are even, else interpolated along the parent cell's edge or
+/// south-west to north-east diagonal, as the parent's triangles are.
+fn parent_surface(
+    i: i64,
+    j: i64,
+    h: &dyn Fn(i64, i64) -> f64,
+    n: &dyn Fn(i64, i64) -> [f64; 2],
+) -> (f64, [f64; 2]) {
+    let (a, b) = match (i % 2 == 1, j % 2 == 1) {
+        (false, false) => ((i, j), (i, j)),
+        (true, false) => ((i - 1, j), (i + 1, j)),
+        (false, true) => ((i, j - 1), (i, j + 1)),
+        (true, true) => ((i - 1, j - 1), (i + 1, j + 1)),
+    };
+    let (na, nb) = (n(a.0, a.1), n(b.0, b.1));
+    let height = (h(a.0, a.1) + h(b.0, b.1)) / 2.0;
+    (height, [(na[0] + nb[0]) / 2.0, (na[1] + nb[1]) / 2.0])
+}
+
+fn quantize(x: f64) -> i8 {
+    (x * 127.0).round().clamp(-127.0, 127.0) as i8
+}
