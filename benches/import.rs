@@ -6,12 +6,14 @@
 //! `cargo bench --bench import [-- --quick]` prints a table and writes
 //! `target/bench/import.json` and `target/bench/import.svg`.
 
+mod support;
+
 use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use plotters::prelude::*;
 use ridgeline::pyramid::{self, BuildOptions, Pyramid, Silent};
+use support::{print_table, BenchArgs, Panel, Series};
 
 /// One grid size's measurements, best of the repeats.
 #[derive(serde::Serialize)]
@@ -37,19 +39,19 @@ struct Row {
 }
 
 fn main() {
-    let quick = std::env::args().any(|a| a == "--quick");
+    let quick = BenchArgs::parse().quick;
     let (sizes, repeats): (&[u32], usize) = if quick { (&[1024, 2048], 2) } else { (&[1024, 2048, 4096, 8192], 3) };
-    let out_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/bench");
-    let scratch = out_dir.join("import-scratch");
-    std::fs::create_dir_all(&scratch).expect("create target/bench");
-    println!("import throughput, {} threads, best of {repeats} interleaved repeats{}", rayon::current_num_threads(), if quick { " (quick)" } else { "" });
+    let scratch = support::out_dir().join("import-scratch");
+    std::fs::create_dir_all(&scratch).expect("create the scratch directory");
+    let threads = rayon::current_num_threads();
     let rows: Vec<Row> = sizes.iter().map(|&size| measure(size, repeats, &scratch)).collect();
-    print_table(&rows);
-    let json = serde_json::json!({ "bench": "import", "quick": quick, "threads": rayon::current_num_threads(), "rows": rows });
-    std::fs::write(out_dir.join("import.json"), serde_json::to_string_pretty(&json).expect("json")).expect("write json");
-    plot(&rows, &out_dir.join("import.svg")).expect("write svg");
     std::fs::remove_dir_all(&scratch).ok();
-    println!("wrote {0}/import.json and {0}/import.svg", out_dir.display());
+    let title = format!("import, {threads} threads, best of {repeats} interleaved repeats{}", if quick { " (quick)" } else { "" });
+    print_rows(&title, &rows);
+    let report = serde_json::json!({ "bench": "import", "quick": quick, "threads": threads, "rows": rows });
+    let json = support::write_json("import", &report);
+    let svg = support::write_svg("import", &panels(&rows));
+    println!("\nwrote {} and {}", json.display(), svg.display());
 }
 
 fn measure(size: u32, repeats: usize, scratch: &Path) -> Row {
@@ -113,59 +115,57 @@ fn timed_value<T>(f: impl FnOnce() -> T) -> (Duration, T) {
     (start.elapsed(), value)
 }
 
-fn print_table(rows: &[Row]) {
-    println!(
-        "{:>6} {:>9} {:>10} | {:>9} {:>9} {:>9} {:>9} | {:>7} {:>7} {:>7} {:>7}",
-        "size", "input MB", "pyramid MB", "raw MB/s", "build", "write", "open", "build/", "write/", "import/", "open/"
-    );
-    println!("{:>6} {:>9} {:>10} | {:>39} | {:>31}", "", "", "", "MB of input heights per second", "time over raw read");
-    for r in rows {
-        println!(
-            "{:>6} {:>9.1} {:>10.1} | {:>9.0} {:>9.0} {:>9.0} {:>9.0} | {:>7.1} {:>7.1} {:>7.1} {:>7.1}",
-            r.size,
-            r.input_mb,
-            r.pyramid_mb,
-            r.raw_read_mb_s,
-            r.build_mb_s,
-            r.write_mb_s,
-            r.open_verify_mb_s,
-            r.build_over_raw,
-            r.write_over_raw,
-            r.import_over_raw,
-            r.open_verify_over_raw
-        );
-    }
+fn print_rows(title: &str, rows: &[Row]) {
+    let header = [
+        "size", "input MB", "pyramid MB", "raw MB/s", "build MB/s", "write MB/s", "open MB/s", "build/raw",
+        "write/raw", "import/raw", "open/raw",
+    ];
+    let cells: Vec<Vec<String>> = rows
+        .iter()
+        .map(|r| {
+            let mut cells = vec![r.size.to_string(), format!("{:.1}", r.input_mb), format!("{:.1}", r.pyramid_mb)];
+            let speeds = [r.raw_read_mb_s, r.build_mb_s, r.write_mb_s, r.open_verify_mb_s];
+            cells.extend(speeds.iter().map(|v| format!("{v:.0}")));
+            let ratios = [r.build_over_raw, r.write_over_raw, r.import_over_raw, r.open_verify_over_raw];
+            cells.extend(ratios.iter().map(|v| format!("{v:.1}")));
+            cells
+        })
+        .collect();
+    print_table(title, &header, &cells);
+    println!("  MB/s are megabytes of input heights per second; x/raw is the time of x over reading the input raw");
 }
 
-/// Time over raw read against input size, one line per step.
-fn plot(rows: &[Row], path: &Path) -> Result<(), Box<dyn std::error::Error>> {
-    let root = SVGBackend::new(path, (800, 480)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let x_max = rows.iter().map(|r| r.input_mb).fold(1.0, f64::max) * 1.1;
-    type Series = (&'static str, fn(&Row) -> f64, RGBColor);
-    let series: [Series; 4] = [
-        ("build / raw read", |r| r.build_over_raw, BLUE),
-        ("write / raw read", |r| r.write_over_raw, RED),
-        ("build + write / raw read", |r| r.import_over_raw, BLACK),
-        ("open + verify / raw read", |r| r.open_verify_over_raw, GREEN),
-    ];
-    let y_max = rows.iter().flat_map(|r| series.iter().map(move |s| (s.1)(r))).fold(1.0, f64::max) * 1.1;
-    let mut chart = ChartBuilder::on(&root)
-        .caption("pyramid import time relative to reading the input raw", ("sans-serif", 20))
-        .margin(15)
-        .x_label_area_size(40)
-        .y_label_area_size(50)
-        .build_cartesian_2d(0.0..x_max, 0.0..y_max)?;
-    chart.configure_mesh().x_desc("input heights (MB)").y_desc("time / raw read time").draw()?;
-    for (name, value, colour) in series {
-        let points: Vec<(f64, f64)> = rows.iter().map(|r| (r.input_mb, value(r))).collect();
-        chart
-            .draw_series(LineSeries::new(points.clone(), colour.stroke_width(2)))?
-            .label(name)
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
-        chart.draw_series(points.into_iter().map(|p| Circle::new(p, 3, colour.filled())))?;
-    }
-    chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
-    root.present()?;
-    Ok(())
+/// Throughput, and time over the raw read, against input size.
+fn panels(rows: &[Row]) -> [Panel; 2] {
+    let series = |label: &str, value: fn(&Row) -> f64| Series {
+        label: label.to_string(),
+        points: rows.iter().map(|r| (r.input_mb, value(r))).collect(),
+    };
+    [
+        Panel {
+            title: "import throughput".into(),
+            x_label: "input heights (MB)".into(),
+            y_label: "MB of input per second".into(),
+            log_x: true,
+            log_y: true,
+            series: vec![
+                series("raw read", |r| r.raw_read_mb_s),
+                series("build", |r| r.build_mb_s),
+                series("write (with fsync)", |r| r.write_mb_s),
+                series("open + verify", |r| r.open_verify_mb_s),
+            ],
+        },
+        Panel {
+            title: "time relative to reading the input raw".into(),
+            x_label: "input heights (MB)".into(),
+            y_label: "time / raw read time".into(),
+            log_x: true,
+            log_y: true,
+            series: vec![
+                series("build", |r| r.build_over_raw),
+                series("build + write", |r| r.import_over_raw),
+                series("open + verify", |r| r.open_verify_over_raw),
+            ],
+        },
+    ]
 }
