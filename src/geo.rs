@@ -38,3 +38,77 @@ impl GeoRef {
         GeoRef { crs: Crs::Local, origin: [0.0, 0.0], spacing }
     }
 }
+
+/// WGS 84 semi-major axis, metres.
+const WGS84_A: f64 = 6_378_137.0;
+/// WGS 84 first eccentricity squared.
+const WGS84_E2: f64 = 6.694_379_990_141_3e-3;
+
+/// The corners of a grid's posts in degrees (Geographic grids only).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct BoundsDeg {
+    pub west: f64,
+    pub south: f64,
+    pub east: f64,
+    pub north: f64,
+}
+
+impl GeoRef {
+    /// Metres between neighbouring samples, east and north, for a grid of
+    /// `samples` posts.
+    ///
+    /// Planar systems are taken to be in metres already. Geographic grids use
+    /// WGS 84 radii of curvature at the grid's centre latitude: north spacing
+    /// `M(φ)·Δφ`, east spacing `N(φ)·cos φ·Δλ` (angles in radians). The local
+    /// frame is thereby an equirectangular projection about the centre; over
+    /// a 1° tile at 40° N the true east spacing differs by under 0.4 % at the
+    /// tile's north and south edges.
+    pub fn spacing_m(&self, samples: [u32; 2]) -> [f64; 2] {
+        match self.crs {
+            Crs::Geographic => {
+                let centre_lat = self.origin[1] + self.spacing[1] * samples[1].saturating_sub(1) as f64 / 2.0;
+                let phi = centre_lat.clamp(-90.0, 90.0).to_radians();
+                let w = (1.0 - WGS84_E2 * phi.sin().powi(2)).sqrt();
+                let prime_vertical = WGS84_A / w;
+                let meridional = WGS84_A * (1.0 - WGS84_E2) / (w * w * w);
+                [
+                    prime_vertical * phi.cos() * self.spacing[0].to_radians(),
+                    meridional * self.spacing[1].to_radians(),
+                ]
+            }
+            Crs::Projected { .. } | Crs::Local => self.spacing,
+        }
+    }
+
+    /// The outermost posts of a grid of `samples` posts, in degrees, where the
+    /// grid is geographic; `None` for planar systems (no inverse projection).
+    pub fn bounds_deg(&self, samples: [u32; 2]) -> Option<BoundsDeg> {
+        match self.crs {
+            Crs::Geographic => Some(BoundsDeg {
+                west: self.origin[0],
+                south: self.origin[1],
+                east: self.origin[0] + self.spacing[0] * samples[0].saturating_sub(1) as f64,
+                north: self.origin[1] + self.spacing[1] * samples[1].saturating_sub(1) as f64,
+            }),
+            Crs::Projected { .. } | Crs::Local => None,
+        }
+    }
+
+    /// Why this georeference cannot describe a grid, if it cannot: spacing
+    /// must be positive and finite, the origin finite, latitudes on the earth.
+    pub fn problem(&self, samples: [u32; 2]) -> Option<String> {
+        let finite = self.origin.iter().chain(&self.spacing).all(|v| v.is_finite());
+        if !finite {
+            return Some(format!("georeference is not finite: {self:?}"));
+        }
+        if self.spacing.iter().any(|&s| s <= 0.0) {
+            return Some(format!("sample spacing must be positive: {:?}", self.spacing));
+        }
+        if let Some(b) = self.bounds_deg(samples) {
+            if b.south < -90.0 || b.north > 90.0 {
+                return Some(format!("latitudes {}..{} leave [-90, 90]", b.south, b.north));
+            }
+        }
+        None
+    }
+}

@@ -14,6 +14,7 @@
 //! | [`tiles`] | per-tile height buffers: shared grid, vertex data, the tile cache on the allocator |
 //! | [`render`] | the GL-free half of drawing: draw lists, the backend trait, the counting null backend, the palette |
 //! | [`node`] | the node pyramid's vocabulary: node ids, layout, node data, the `NodeSource` trait |
+//! | [`pyramid`] | building the node pyramid from a grid (split, downsample, stitch, delta), its checksummed file, writing it atomically, opening it memory-mapped |
 #![deny(unsafe_code)]
 
 pub mod allocator;
@@ -22,5 +23,6 @@ pub mod dem;
 pub mod geo;
 pub mod lod;
 pub mod node;
+pub mod pyramid;
 pub mod render;
 pub mod tiles;

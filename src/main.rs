@@ -1,5 +1,7 @@
 //! The `ridgeline` command line.
 
+mod cli;
+
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 
@@ -15,6 +17,10 @@ struct Cli {
 enum Command {
     /// Fly the built-in approach over the built-in terrain (the main job).
     Fly,
+    /// Build a node pyramid cache from elevation files.
+    Import(cli::import::ImportArgs),
+    /// Describe a node pyramid cache.
+    Info(cli::info::InfoArgs),
 }
 
 fn main() -> Result<()> {
@@ -23,6 +29,8 @@ fn main() -> Result<()> {
         Command::Fly => {
             println!("ridgeline: the renderer is not built yet; the allocator is (cargo bench --bench allocator).");
         }
+        Command::Import(args) => cli::import::run(&args)?,
+        Command::Info(args) => cli::info::run(&args)?,
     }
     Ok(())
 }

@@ -57,6 +57,56 @@ impl NodeLayout {
         let count = |samples: u32| (samples.saturating_sub(1) as u64).div_ceil(span).max(1) as u32;
         [count(self.samples[0]), count(self.samples[1])]
     }
+
+    /// Level-0 sample spacings spanned by one node of `lod` (Kühnert eq. 4.8).
+    pub fn span(&self, lod: u8) -> u64 {
+        (self.node_size as u64) << lod
+    }
+
+    /// Levels needed so that the root level is a single node covering every
+    /// sample: level `l` exists while level `l - 1` still needs more than one
+    /// node per side.
+    pub fn levels_for(samples: [u32; 2], node_size: u32) -> u8 {
+        debug_assert!(node_size > 0, "a node has at least one cell per side");
+        let node_size = node_size.max(1) as u64;
+        let cells = samples[0].max(samples[1]).saturating_sub(1) as u64;
+        let mut levels = 1u8;
+        while (node_size << (levels - 1)) < cells {
+            levels += 1;
+        }
+        levels
+    }
+
+    /// Nodes in the whole pyramid.
+    pub fn node_count(&self) -> u64 {
+        (0..self.levels).map(|lod| self.nodes_at_count(lod)).sum()
+    }
+
+    /// Nodes at one level.
+    pub fn nodes_at_count(&self, lod: u8) -> u64 {
+        let [x, y] = self.nodes_at(lod);
+        x as u64 * y as u64
+    }
+
+    /// Whether `id` names a node of this pyramid.
+    pub fn contains(&self, id: NodeId) -> bool {
+        if id.lod >= self.levels {
+            return false;
+        }
+        let [x, y] = self.nodes_at(id.lod);
+        id.x < x && id.y < y
+    }
+
+    /// The position of `id` when nodes are listed level by level (finest
+    /// first), row by row (south first) within a level.
+    pub fn node_index(&self, id: NodeId) -> Option<u64> {
+        if !self.contains(id) {
+            return None;
+        }
+        let before: u64 = (0..id.lod).map(|lod| self.nodes_at_count(lod)).sum();
+        let [x_count, _] = self.nodes_at(id.lod);
+        Some(before + id.y as u64 * x_count as u64 + id.x as u64)
+    }
 }
 
 /// A node's stored content.

@@ -1,0 +1,134 @@
+//! `ridgeline info cache/NAME [--json]`: opens and verifies a pyramid cache and
+//! describes it, for people or (with `--json`) for scripts.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Result;
+use ridgeline::geo::Crs;
+use ridgeline::pyramid::{format::VERSION, LevelSummary, Pyramid};
+
+#[derive(clap::Args)]
+pub struct InfoArgs {
+    /// Cache directory (or its pyramid.rlp file).
+    pub cache: PathBuf,
+    /// Print one JSON object instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// What `--json` prints.
+#[derive(serde::Serialize)]
+struct Summary<'a> {
+    path: &'a Path,
+    format_version: u32,
+    file_bytes: u64,
+    levels: u8,
+    node_size: u32,
+    border: u32,
+    node_count: u64,
+    /// Level-0 samples, east and north.
+    samples: [u32; 2],
+    spacing_m: [f64; 2],
+    /// Distance from the first to the last sample, east and north.
+    extent: Extent,
+    georef: Georef,
+    delta_per_level: Vec<f32>,
+    height_min: f32,
+    height_max: f32,
+    voids_filled: u64,
+    level_details: &'a [LevelSummary],
+}
+
+#[derive(serde::Serialize)]
+struct Extent {
+    east_m: f64,
+    north_m: f64,
+}
+
+#[derive(serde::Serialize)]
+struct Georef {
+    crs: Crs,
+    origin: [f64; 2],
+    spacing: [f64; 2],
+    /// Degrees, where the grid is geographic; null otherwise.
+    west: Option<f64>,
+    south: Option<f64>,
+    east: Option<f64>,
+    north: Option<f64>,
+}
+
+pub fn run(args: &InfoArgs) -> Result<()> {
+    let pyramid = Pyramid::open(&args.cache)?;
+    let summary = summarise(&pyramid);
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&summary)?);
+    } else {
+        print_table(&summary);
+    }
+    Ok(())
+}
+
+fn summarise(pyramid: &Pyramid) -> Summary<'_> {
+    let info = pyramid.info();
+    let layout = &info.layout;
+    let bounds = info.georef.bounds_deg(layout.samples);
+    let extent = |axis: usize| (layout.samples[axis] - 1) as f64 * layout.spacing_m[axis];
+    Summary {
+        path: pyramid.path(),
+        format_version: VERSION,
+        file_bytes: pyramid.file_len(),
+        levels: layout.levels,
+        node_size: layout.node_size,
+        border: layout.border,
+        node_count: layout.node_count(),
+        samples: layout.samples,
+        spacing_m: layout.spacing_m,
+        extent: Extent { east_m: extent(0), north_m: extent(1) },
+        georef: Georef {
+            crs: info.georef.crs,
+            origin: info.georef.origin,
+            spacing: info.georef.spacing,
+            west: bounds.map(|b| b.west),
+            south: bounds.map(|b| b.south),
+            east: bounds.map(|b| b.east),
+            north: bounds.map(|b| b.north),
+        },
+        delta_per_level: info.levels.iter().map(|l| l.delta_max).collect(),
+        height_min: info.stats.height_min,
+        height_max: info.stats.height_max,
+        voids_filled: info.stats.voids_filled,
+        level_details: &info.levels,
+    }
+}
+
+fn print_table(s: &Summary) {
+    println!("{} (format {}, {:.1} MB, all checksums verified)", s.path.display(), s.format_version, s.file_bytes as f64 / 1e6);
+    println!(
+        "samples   {} x {}, {:.2} x {:.2} m apart, extent {:.2} x {:.2} km",
+        s.samples[0],
+        s.samples[1],
+        s.spacing_m[0],
+        s.spacing_m[1],
+        s.extent.east_m / 1e3,
+        s.extent.north_m / 1e3
+    );
+    println!("georef    {}", describe_georef(&s.georef));
+    println!("nodes     {} cells + {} border posts, {} levels, {} nodes", s.node_size, s.border, s.levels, s.node_count);
+    println!("heights   {:.1} .. {:.1} m, {} voids filled", s.height_min, s.height_max, s.voids_filled);
+    println!("level  nodes        delta max (m)  heights (m)");
+    for (lod, level) in s.level_details.iter().enumerate() {
+        let nodes = format!("{} x {}", level.nodes[0], level.nodes[1]);
+        println!("{lod:>5}  {nodes:<11}  {:>13.3}  {:.1} .. {:.1}", level.delta_max, level.height_min, level.height_max);
+    }
+}
+
+fn describe_georef(g: &Georef) -> String {
+    match (g.crs, g.west, g.south, g.east, g.north) {
+        (Crs::Geographic, Some(west), Some(south), Some(east), Some(north)) => {
+            format!("WGS 84 longitude {west:.5}..{east:.5}, latitude {south:.5}..{north:.5}")
+        }
+        (Crs::Projected { epsg: Some(code) }, ..) => format!("EPSG:{code}, origin {:?}", g.origin),
+        (Crs::Projected { epsg: None }, ..) => format!("projected (unknown EPSG), origin {:?}", g.origin),
+        _ => "local frame, no georeference".to_string(),
+    }
+}

@@ -1,0 +1,96 @@
+//! `ridgeline import` and `ridgeline info` as a user runs them.
+
+mod pyramid_common;
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use pyramid_common::scratch_dir;
+use ridgeline::pyramid::FILE_NAME;
+
+fn ridgeline(args: &[&str], cache: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_ridgeline")).args(args).arg(cache).output().expect("run ridgeline")
+}
+
+#[test]
+fn info_json_describes_an_imported_cache() {
+    let cache = scratch_dir("cli-info");
+    let imported = ridgeline(&["import", "--synthetic", "257", "--node-size", "32", "--border", "1", "--out"], &cache);
+    assert!(imported.status.success(), "{}", String::from_utf8_lossy(&imported.stderr));
+    let info = ridgeline(&["info", "--json"], &cache);
+    assert!(info.status.success(), "{}", String::from_utf8_lossy(&info.stderr));
+    let json: serde_json::Value = serde_json::from_slice(&info.stdout).expect("info --json prints JSON");
+    assert_eq!(json["levels"], 4, "256 cells need 32 << 3");
+    assert_eq!(json["node_size"], 32);
+    assert_eq!(json["samples"], serde_json::json!([257, 257]));
+    assert_eq!(json["extent"]["east_m"], 256.0 * 90.0);
+    assert!(json["georef"]["west"].is_null(), "a local grid has no degrees");
+    let deltas = json["delta_per_level"].as_array().expect("deltas");
+    assert_eq!(deltas.len(), 4);
+    assert_eq!(deltas[0], 0.0);
+    assert!(deltas[1..].iter().all(|d| d.as_f64().expect("number") > 0.0));
+    let (lo, hi) = (json["height_min"].as_f64().expect("min"), json["height_max"].as_f64().expect("max"));
+    assert!(lo < hi);
+    assert_eq!(json["voids_filled"], 0);
+
+    let table = ridgeline(&["info"], &cache);
+    let text = String::from_utf8_lossy(&table.stdout);
+    assert!(table.status.success() && text.contains("257 x 257") && text.contains("4 levels"), "{text}");
+}
+
+#[test]
+fn info_refuses_a_damaged_cache_naming_the_file() {
+    let cache = scratch_dir("cli-damaged");
+    assert!(ridgeline(&["import", "--synthetic", "100", "--out"], &cache).status.success());
+    let path = cache.join(FILE_NAME);
+    let mut bytes = std::fs::read(&path).expect("read");
+    let middle = bytes.len() / 2;
+    bytes[middle] ^= 0x10;
+    std::fs::write(&path, bytes).expect("damage");
+    let info = ridgeline(&["info"], &cache);
+    let stderr = String::from_utf8_lossy(&info.stderr);
+    assert!(!info.status.success());
+    assert!(stderr.contains(&path.display().to_string()) && stderr.contains("damaged"), "{stderr}");
+}
+
+#[test]
+fn import_refuses_absurd_sizes_before_allocating() {
+    let cache = scratch_dir("cli-absurd");
+    let out = ridgeline(&["import", "--synthetic", "4000000000", "--out"], &cache);
+    assert!(!out.status.success());
+    let out = ridgeline(&["import", "--synthetic", "100", "--node-size", "0", "--out"], &cache);
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("node size"));
+}
+
+#[test]
+fn importing_the_shipped_srtm_tile_records_where_it_is() {
+    let cache = scratch_dir("cli-srtm");
+    let tile = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/dem/srtm3_n39e040_1000.tif");
+    let imported = ridgeline(&["import", tile, "--out"], &cache);
+    assert!(imported.status.success(), "{}", String::from_utf8_lossy(&imported.stderr));
+    let info = ridgeline(&["info", "--json"], &cache);
+    let json: serde_json::Value = serde_json::from_slice(&info.stdout).expect("info --json prints JSON");
+    assert_eq!(json["samples"], serde_json::json!([1000, 1000]));
+    assert_eq!(json["levels"], 5, "999 cells need 64 << 4");
+    let degrees = |key: &str| json["georef"][key].as_f64().expect("geographic bounds");
+    // Posts from 40 E + half a 3" cell to 40.8333 E - half a cell (see assets/dem/README.md).
+    let half_cell = 0.5 / 1200.0;
+    assert!((degrees("west") - (40.0 + half_cell)).abs() < 1e-9);
+    assert!((degrees("north") - (40.0 - half_cell)).abs() < 1e-9);
+    assert!((degrees("east") - (40.0 + 999.5 / 1200.0)).abs() < 1e-9);
+    assert!((degrees("south") - (40.0 - 999.5 / 1200.0)).abs() < 1e-9);
+    // A 3" cell is about 71.6 m east-west and 92.5 m north-south at 39.6 N.
+    let spacing = json["spacing_m"].as_array().expect("spacing");
+    assert!((spacing[0].as_f64().expect("east") - 71.6).abs() < 0.1);
+    assert!((spacing[1].as_f64().expect("north") - 92.5).abs() < 0.1);
+    assert_eq!((json["height_min"].as_f64(), json["height_max"].as_f64()), (Some(1111.0), Some(3270.0)));
+}
+
+#[test]
+fn importing_a_missing_file_names_it() {
+    let cache = scratch_dir("cli-missing");
+    let out = ridgeline(&["import", "no/such/tile.hgt", "--out"], &cache);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no/such/tile.hgt"));
+    assert!(!cache.join(FILE_NAME).exists());
+}

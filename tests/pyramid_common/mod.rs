@@ -1,0 +1,41 @@
+//! Helpers shared by the pyramid tests: random grids and scratch directories.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+
+use rand::{Rng, SeedableRng};
+use ridgeline::dem::ElevationGrid;
+use ridgeline::geo::{Crs, GeoRef};
+use ridgeline::pyramid::{self, BuildOptions, BuiltPyramid, Silent};
+
+/// A fresh, empty scratch directory for one test.
+pub fn scratch_dir(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create scratch dir");
+    dir
+}
+
+/// A rough random terrain: a random walk in both directions plus noise, so
+/// coarse levels have real errors, with a geographic georeference.
+pub fn random_grid(width: u32, height: u32, seed: u64) -> ElevationGrid {
+    let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+    let mut heights = vec![0.0f32; width as usize * height as usize];
+    for j in 0..height as usize {
+        for i in 0..width as usize {
+            let west = if i > 0 { heights[j * width as usize + i - 1] } else { 500.0 };
+            let south = if j > 0 { heights[(j - 1) * width as usize + i] } else { west };
+            heights[j * width as usize + i] = 0.5 * (west + south) + rng.random_range(-40.0..40.0);
+        }
+    }
+    let georef = GeoRef { crs: Crs::Geographic, origin: [7.5, 45.9], spacing: [1.0 / 1200.0; 2] };
+    ElevationGrid { width, height, heights, georef, voids_filled: 3 }
+}
+
+/// Builds `grid` and writes it to `dir/pyramid.rlp`.
+pub fn build_and_write(grid: &ElevationGrid, options: BuildOptions, dir: &std::path::Path) -> (BuiltPyramid, PathBuf) {
+    let built = pyramid::build(grid, &options, &Silent).expect("build");
+    let path = dir.join(pyramid::FILE_NAME);
+    pyramid::write_atomic(&built, &path, &Silent).expect("write");
+    (built, path)
+}
