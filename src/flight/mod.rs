@@ -1,0 +1,23 @@
+//! Camera paths for `fly`: the `--path` CSV format, interpolation between its
+//! rows, evenly spaced frame times for headless runs, and the latitude/longitude
+//! mapping the CSV's `lat,lon` form uses. GL-free.
+//!
+//! | module | owns |
+//! |---|---|
+//! | [`pose`] | [`Pose`]: one instant's position and attitude, blending two of them |
+//! | [`path`] | [`FlightPath`]: waypoints at increasing times, sampling, frame times |
+//! | [`columns`] | the path's quantities, their header names and accepted ranges |
+//! | [`csv`] | reading and writing the CSV format, [`PathError`] |
+//! | [`geographic`] | the equirectangular longitude/latitude to local metres mapping |
+
+pub mod columns;
+pub mod csv;
+pub mod geographic;
+pub mod path;
+pub mod pose;
+
+pub use columns::{Column, ValueProblem};
+pub use csv::{PathError, PathProblem};
+pub use geographic::{geographic_spacing_m, geographic_to_local, local_to_geographic, Equirectangular, LatLon};
+pub use path::{FlightPath, InvalidPath, Waypoint};
+pub use pose::Pose;
