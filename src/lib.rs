@@ -13,6 +13,7 @@
 //! | [`lod`] | UDLOD tiling on the CPU: distance rings with Ulrich's bound, quadtree selection, morph |
 //! | [`tiles`] | per-tile height buffers: shared grid, vertex data, the tile cache on the allocator |
 //! | [`render`] | the GL-free half of drawing: draw lists, the backend trait, the counting null backend, the palette |
+//! | [`flight`] | camera paths for `fly`: the `--path` CSV, interpolation, frame times, the built-in approach |
 //! | [`node`] | the node pyramid's vocabulary: node ids, layout, node data, the `NodeSource` trait |
 //! | [`pyramid`] | building the node pyramid from a grid (split, downsample, stitch, delta), its checksummed file, writing it atomically, opening it memory-mapped |
 #![deny(unsafe_code)]
@@ -20,6 +21,7 @@
 pub mod allocator;
 pub mod camera;
 pub mod dem;
+pub mod flight;
 pub mod geo;
 pub mod lod;
 pub mod node;

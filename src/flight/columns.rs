@@ -1,0 +1,121 @@
+//! The quantities a camera path row holds, their names in a CSV header and the
+//! ranges Ridgeline accepts for them. Path construction and the CSV reader both
+//! check values here, so a programmatic path and a file obey the same rules.
+
+/// One column of a camera path.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Column {
+    Time,
+    X,
+    Y,
+    Lat,
+    Lon,
+    Altitude,
+    Heading,
+    Pitch,
+    Roll,
+}
+
+/// Why a value cannot be used.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ValueProblem {
+    #[error("the cell is empty")]
+    Empty,
+    #[error("`{0}` is not a number")]
+    NotANumber(String),
+    /// The value as written (or printed, for a value that came from code).
+    #[error("`{0}` is not a finite number")]
+    NotFinite(String),
+    #[error("{value} is outside [{min}, {max}] {unit}{why}")]
+    OutOfRange { value: f64, min: f64, max: f64, unit: &'static str, why: &'static str },
+}
+
+impl Column {
+    /// Every column, in the order a written CSV uses (x,y form first).
+    pub const ALL: [Column; 9] = [
+        Column::Time,
+        Column::X,
+        Column::Y,
+        Column::Lat,
+        Column::Lon,
+        Column::Altitude,
+        Column::Heading,
+        Column::Pitch,
+        Column::Roll,
+    ];
+
+    /// The header name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Column::Time => "t",
+            Column::X => "x",
+            Column::Y => "y",
+            Column::Lat => "lat",
+            Column::Lon => "lon",
+            Column::Altitude => "alt",
+            Column::Heading => "heading",
+            Column::Pitch => "pitch",
+            Column::Roll => "roll",
+        }
+    }
+
+    /// The column a header name (already trimmed, any case) stands for.
+    pub fn from_name(name: &str) -> Option<Column> {
+        Column::ALL.into_iter().find(|column| column.name().eq_ignore_ascii_case(name))
+    }
+
+    /// Inclusive accepted range, unit and the reason for the bounds.
+    fn range(self) -> (f64, f64, &'static str, &'static str) {
+        match self {
+            // Differences of times this size are still exact to nanoseconds.
+            Column::Time => (-1e7, 1e7, "seconds", ""),
+            Column::X | Column::Y => (-2.5e7, 2.5e7, "metres", " (farther is off the earth)"),
+            Column::Lat => (-90.0, 90.0, "degrees", ""),
+            Column::Lon => (-180.0, 180.0, "degrees", ""),
+            Column::Altitude => (-11_000.0, 100_000.0, "metres", " (the deepest ocean to the edge of space)"),
+            Column::Heading => (-360.0, 360.0, "degrees", ""),
+            Column::Pitch => (-90.0, 90.0, "degrees", ""),
+            Column::Roll => (-180.0, 180.0, "degrees", ""),
+        }
+    }
+
+    /// Accepts `value` for this column or says why not.
+    pub fn check(self, value: f64) -> Result<f64, ValueProblem> {
+        if !value.is_finite() {
+            return Err(ValueProblem::NotFinite(value.to_string()));
+        }
+        let (min, max, unit, why) = self.range();
+        if value < min || value > max {
+            return Err(ValueProblem::OutOfRange { value, min, max, unit, why });
+        }
+        Ok(value)
+    }
+
+    /// Reads one CSV cell (surrounding whitespace allowed) as this column's value.
+    pub fn parse(self, cell: &str) -> Result<f64, ValueProblem> {
+        let text = cell.trim();
+        if text.is_empty() {
+            return Err(ValueProblem::Empty);
+        }
+        let value: f64 = text.parse().map_err(|_| ValueProblem::NotANumber(text.to_string()))?;
+        // Name the cell as written: `1e400` overflows to inf.
+        self.check(value).map_err(|problem| match problem {
+            ValueProblem::NotFinite(_) => ValueProblem::NotFinite(text.to_string()),
+            other => other,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The CSV reader indexes a value array by `column as usize`.
+    #[test]
+    fn discriminants_are_positions_in_all() {
+        for (index, column) in Column::ALL.into_iter().enumerate() {
+            assert_eq!(column as usize, index);
+            assert_eq!(Column::from_name(&column.name().to_uppercase()), Some(column));
+        }
+    }
+}

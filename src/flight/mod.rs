@@ -1,0 +1,27 @@
+//! Camera paths for `fly`: the `--path` CSV format, interpolation between its
+//! rows, evenly spaced frame times for headless runs, the built-in approach
+//! flown when no path is given, and the latitude/longitude mapping the CSV's
+//! `lat,lon` form uses. GL-free.
+//!
+//! | module | owns |
+//! |---|---|
+//! | [`pose`] | [`Pose`]: one instant's position and attitude, blending two of them |
+//! | [`path`] | [`FlightPath`]: waypoints at increasing times, sampling, frame times |
+//! | [`columns`] | the path's quantities, their header names and accepted ranges |
+//! | [`csv`] | reading and writing the CSV format, [`PathError`] |
+//! | [`approach`] | the built-in approach |
+//! | [`geographic`] | the equirectangular longitude/latitude to local metres mapping |
+
+pub mod approach;
+pub mod columns;
+pub mod csv;
+pub mod geographic;
+pub mod path;
+pub mod pose;
+
+pub use approach::{builtin_approach, builtin_approach_csv};
+pub use columns::{Column, ValueProblem};
+pub use csv::{PathError, PathProblem};
+pub use geographic::{geographic_spacing_m, geographic_to_local, local_to_geographic, Equirectangular, LatLon};
+pub use path::{FlightPath, InvalidPath, Waypoint};
+pub use pose::Pose;

@@ -1,0 +1,119 @@
+//! A camera path: poses at strictly increasing times, sampled by interpolation.
+
+use glam::DVec3;
+
+use super::columns::{Column, ValueProblem};
+use super::pose::{normalize_heading, Pose};
+
+/// A pose at a time (seconds).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Waypoint {
+    pub t: f64,
+    pub pose: Pose,
+}
+
+/// Poses at strictly increasing times; at least one.
+///
+/// Invariants (checked by [`FlightPath::new`] and the CSV reader): every value
+/// is finite and inside its [`Column`]'s range, and `t` strictly increases.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FlightPath {
+    waypoints: Vec<Waypoint>,
+}
+
+/// Why waypoints do not make a path.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum InvalidPath {
+    #[error("a camera path needs at least one waypoint")]
+    Empty,
+    #[error("waypoint {index}, `{}`: {problem}", column.name())]
+    Value { index: usize, column: Column, problem: ValueProblem },
+    #[error("waypoint {index}: time {t} s does not come after the previous {previous} s")]
+    TimeNotIncreasing { index: usize, t: f64, previous: f64 },
+}
+
+impl FlightPath {
+    /// A path through `waypoints`, refusing NaN, infinities, values outside
+    /// their column's range and times that do not strictly increase.
+    pub fn new(waypoints: Vec<Waypoint>) -> Result<Self, InvalidPath> {
+        if waypoints.is_empty() {
+            return Err(InvalidPath::Empty);
+        }
+        for (index, waypoint) in waypoints.iter().enumerate() {
+            for (column, value) in waypoint_values(waypoint) {
+                column.check(value).map_err(|problem| InvalidPath::Value { index, column, problem })?;
+            }
+        }
+        for (index, pair) in waypoints.windows(2).enumerate() {
+            if pair[1].t <= pair[0].t {
+                return Err(InvalidPath::TimeNotIncreasing { index: index + 1, t: pair[1].t, previous: pair[0].t });
+            }
+        }
+        Ok(FlightPath { waypoints })
+    }
+
+    /// For readers that have checked every value themselves.
+    pub(super) fn from_checked(waypoints: Vec<Waypoint>) -> Self {
+        debug_assert!(!waypoints.is_empty());
+        debug_assert!(waypoints.windows(2).all(|pair| pair[0].t < pair[1].t));
+        debug_assert!(waypoints.iter().all(|w| waypoint_values(w).iter().all(|(_, v)| v.is_finite())));
+        FlightPath { waypoints }
+    }
+
+    pub fn waypoints(&self) -> &[Waypoint] {
+        &self.waypoints
+    }
+
+    pub fn start_time(&self) -> f64 {
+        self.waypoints[0].t
+    }
+
+    pub fn end_time(&self) -> f64 {
+        self.waypoints[self.waypoints.len() - 1].t
+    }
+
+    pub fn duration(&self) -> f64 {
+        self.end_time() - self.start_time()
+    }
+
+    /// The pose at time `t`, interpolated between the waypoints around it (see
+    /// [`Pose::lerp`]). Times before the first or after the last waypoint give
+    /// that waypoint's pose; a NaN time gives the first.
+    pub fn sample(&self, t: f64) -> Pose {
+        let t = if t.is_nan() { self.start_time() } else { t.clamp(self.start_time(), self.end_time()) };
+        // First waypoint strictly after t; 0 is impossible once t is clamped.
+        let after = self.waypoints.partition_point(|w| w.t <= t);
+        let Some(next) = self.waypoints.get(after) else {
+            return with_normalized_heading(self.waypoints[after - 1].pose);
+        };
+        let previous = &self.waypoints[after - 1];
+        let s = (t - previous.t) / (next.t - previous.t);
+        previous.pose.lerp(&next.pose, s)
+    }
+
+    /// `n` evenly spaced times from the first waypoint's to the last's, both
+    /// included (one frame: the first time; none: nothing).
+    pub fn frame_times(&self, n: u32) -> impl Iterator<Item = f64> + use<> {
+        let (start, end) = (self.start_time(), self.end_time());
+        let last = n.saturating_sub(1).max(1) as f64;
+        (0..n).map(move |k| if k as f64 == last { end } else { start + (end - start) * (k as f64 / last) })
+    }
+}
+
+fn with_normalized_heading(pose: Pose) -> Pose {
+    Pose { heading_deg: normalize_heading(pose.heading_deg), ..pose }
+}
+
+/// The waypoint's values with the column that bounds each.
+fn waypoint_values(waypoint: &Waypoint) -> [(Column, f64); 7] {
+    let Pose { position: DVec3 { x, y, z }, heading_deg, pitch_deg, roll_deg } = waypoint.pose;
+    [
+        (Column::Time, waypoint.t),
+        (Column::X, x),
+        (Column::Y, y),
+        (Column::Altitude, z),
+        (Column::Heading, heading_deg),
+        (Column::Pitch, pitch_deg),
+        (Column::Roll, roll_deg),
+    ]
+}
