@@ -44,6 +44,21 @@ const WGS84_A: f64 = 6_378_137.0;
 /// WGS 84 first eccentricity squared.
 const WGS84_E2: f64 = 6.694_379_990_141_3e-3;
 
+/// Metres per degree of longitude and of latitude at `latitude_deg` on the
+/// WGS 84 ellipsoid: `N(phi) cos(phi)` and `M(phi)` per radian. The local frame
+/// of a geographic grid is the equirectangular projection with these scales at
+/// the grid's centre latitude; everything that turns degrees into local
+/// metres (the pyramid's spacing, flight paths given in latitude and
+/// longitude) goes through this one function.
+pub fn metres_per_degree(latitude_deg: f64) -> [f64; 2] {
+    let phi = latitude_deg.clamp(-90.0, 90.0).to_radians();
+    let w = (1.0 - WGS84_E2 * phi.sin().powi(2)).sqrt();
+    let prime_vertical = WGS84_A / w;
+    let meridional = WGS84_A * (1.0 - WGS84_E2) / (w * w * w);
+    let per_radian = std::f64::consts::PI / 180.0;
+    [prime_vertical * phi.cos() * per_radian, meridional * per_radian]
+}
+
 /// The corners of a grid's posts in degrees (Geographic grids only).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct BoundsDeg {
@@ -66,18 +81,19 @@ impl GeoRef {
     pub fn spacing_m(&self, samples: [u32; 2]) -> [f64; 2] {
         match self.crs {
             Crs::Geographic => {
-                let centre_lat = self.origin[1] + self.spacing[1] * samples[1].saturating_sub(1) as f64 / 2.0;
-                let phi = centre_lat.clamp(-90.0, 90.0).to_radians();
-                let w = (1.0 - WGS84_E2 * phi.sin().powi(2)).sqrt();
-                let prime_vertical = WGS84_A / w;
-                let meridional = WGS84_A * (1.0 - WGS84_E2) / (w * w * w);
-                [
-                    prime_vertical * phi.cos() * self.spacing[0].to_radians(),
-                    meridional * self.spacing[1].to_radians(),
-                ]
+                let per_degree = metres_per_degree(self.centre_latitude(samples));
+                [per_degree[0] * self.spacing[0], per_degree[1] * self.spacing[1]]
             }
             Crs::Projected { .. } | Crs::Local => self.spacing,
         }
+    }
+
+    /// Latitude halfway between the southern and northern rows (degrees;
+    /// meaningful for geographic grids only), kept 0.1 degree off the poles so
+    /// that the east scale stays above zero.
+    pub fn centre_latitude(&self, samples: [u32; 2]) -> f64 {
+        let centre = self.origin[1] + self.spacing[1] * samples[1].saturating_sub(1) as f64 / 2.0;
+        centre.clamp(-89.9, 89.9)
     }
 
     /// The outermost posts of a grid of `samples` posts, in degrees, where the

@@ -6,9 +6,9 @@ use std::path::Path;
 
 use glam::{DVec2, DVec3};
 use proptest::prelude::*;
-use ridgeline::flight::geographic::METRES_PER_DEGREE;
+use ridgeline::geo::metres_per_degree;
 use ridgeline::flight::{
-    geographic_spacing_m, geographic_to_local, local_to_geographic, FlightPath, PathProblem, Pose, Waypoint,
+    geographic_to_local, local_to_geographic, FlightPath, PathProblem, Pose, Waypoint,
 };
 use ridgeline::geo::{Crs, GeoRef};
 
@@ -56,10 +56,10 @@ fn lat_lon_header_maps_through_the_equirectangular_frame() {
     let expected = geographic_to_local(&georef, EXTENT, 39.5, 40.25);
     assert_eq!(path.waypoints()[0].pose.position, expected.extend(2000.0));
     assert_eq!(path.waypoints()[1].pose.position, DVec3::new(0.0, 0.0, 2000.0), "the SW sample is the origin");
-    // Centre latitude of this grid is 39.5: half a degree north is M/2 metres, a quarter degree east cos(39.5) M/4.
-    let centre = 39.5_f64.to_radians().cos();
-    assert!((expected.y - METRES_PER_DEGREE / 2.0).abs() < 1e-6);
-    assert!((expected.x - centre * METRES_PER_DEGREE / 4.0).abs() < 1e-6);
+    // Centre latitude of this grid is 39.5: half a degree north, a quarter degree east.
+    let [east, north] = metres_per_degree(39.5);
+    assert!((expected.y - north / 2.0).abs() < 1e-6);
+    assert!((expected.x - east / 4.0).abs() < 1e-6);
 }
 
 /// Every refused input, with the words its message must hold besides the file.
@@ -211,7 +211,7 @@ proptest! {
 #[test]
 fn samples_land_on_the_spacing_the_pyramid_uses() {
     let georef = geographic();
-    let spacing_m = geographic_spacing_m(&georef, EXTENT);
+    let spacing_m = georef.spacing_m(EXTENT);
     for (i, j) in [(0u32, 0u32), (1, 0), (0, 1), (600, 600), (1200, 37), (5, 1200)] {
         let lon = georef.origin[0] + i as f64 * georef.spacing[0];
         let lat = georef.origin[1] + j as f64 * georef.spacing[1];
@@ -219,15 +219,15 @@ fn samples_land_on_the_spacing_the_pyramid_uses() {
         let expected = DVec2::new(i as f64 * spacing_m[0], j as f64 * spacing_m[1]);
         assert!((local - expected).length() < 1e-6, "sample ({i}, {j}): {local} vs {expected}");
     }
-    // Three arc-seconds are 92.66 m north on the mean-radius sphere, and cos(39.5) of that east.
-    assert!((spacing_m[1] - 92.66).abs() < 0.01 && (spacing_m[0] - 71.50).abs() < 0.01, "{spacing_m:?}");
+    // Three arc-seconds at 39.5 N on WGS 84: 92.52 m north, 71.68 m east.
+    assert!((spacing_m[1] - 92.52).abs() < 0.01 && (spacing_m[0] - 71.68).abs() < 0.01, "{spacing_m:?}");
 }
 
 #[test]
 fn longitudes_across_the_antimeridian_stay_neighbours() {
     let georef = GeoRef { crs: Crs::Geographic, origin: [179.5, 0.0], spacing: [1.0 / 1200.0, 1.0 / 1200.0] };
     let local = geographic_to_local(&georef, [1201, 1], 0.0, -179.75);
-    assert!((local.x - 0.75 * METRES_PER_DEGREE).abs() < 1e-6, "{local}");
+    assert!((local.x - 0.75 * metres_per_degree(0.0)[0]).abs() < 1e-6, "{local}");
     let back = local_to_geographic(&georef, [1201, 1], local);
     assert!((back.lon + 179.75).abs() < 1e-9, "{back:?}");
 }

@@ -22,6 +22,6 @@ pub mod pose;
 pub use approach::{builtin_approach, builtin_approach_csv};
 pub use columns::{Column, ValueProblem};
 pub use csv::{PathError, PathProblem};
-pub use geographic::{geographic_spacing_m, geographic_to_local, local_to_geographic, Equirectangular, LatLon};
+pub use geographic::{geographic_to_local, local_to_geographic, Equirectangular, LatLon};
 pub use path::{FlightPath, InvalidPath, Waypoint};
 pub use pose::Pose;
