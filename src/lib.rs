@@ -14,12 +14,15 @@
 //! | [`tiles`] | per-tile height buffers: shared grid, vertex data, the tile cache on the allocator |
 //! | [`render`] | the GL-free half of drawing: draw lists, the backend trait, the counting null backend, the palette |
 //! | [`flight`] | camera paths for `fly`: the `--path` CSV, interpolation, frame times, the built-in approach |
+//! | [`scene`] | one frame of the display, GL-free: rings, selection, tile uploads, draw list, stage times |
+//! | [`dataset`] | which terrain a run uses; the built-in SRTM tile, built into `cache/` on first use |
 //! | [`node`] | the node pyramid's vocabulary: node ids, layout, node data, the `NodeSource` trait |
 //! | [`pyramid`] | building the node pyramid from a grid (split, downsample, stitch, delta), its checksummed file, writing it atomically, opening it memory-mapped |
 #![deny(unsafe_code)]
 
 pub mod allocator;
 pub mod camera;
+pub mod dataset;
 pub mod dem;
 pub mod flight;
 pub mod geo;
@@ -27,4 +30,5 @@ pub mod lod;
 pub mod node;
 pub mod pyramid;
 pub mod render;
+pub mod scene;
 pub mod tiles;

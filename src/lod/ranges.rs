@@ -39,9 +39,18 @@ pub struct RingInputs<'a> {
 
 impl LevelRanges {
     pub fn new(config: &LodConfig, inputs: RingInputs<'_>) -> Self {
+        let mut ranges = LevelRanges { split: Vec::with_capacity(inputs.delta_per_level.len() + 1), morph_range: 0.0 };
+        ranges.update(config, inputs);
+        ranges
+    }
+
+    /// Recomputes the rings in place (no allocation once sized).
+    pub fn update(&mut self, config: &LodConfig, inputs: RingInputs<'_>) {
         let levels = inputs.delta_per_level.len();
         let keep = 1.0 - config.morph_range;
-        let mut split = vec![0.0; levels + 1];
+        let split = &mut self.split;
+        split.clear();
+        split.resize(levels + 1, 0.0);
         for level in 1..=levels {
             let size = inputs.tile_size_m * (1u64 << level.min(62)) as f64;
             let kuehnert = config.view_distance * size;
@@ -53,7 +62,7 @@ impl LevelRanges {
             let consistent = if below == 0 { 0.0 } else { (split[below] + diagonal) / keep };
             split[level] = kuehnert.max(ulrich).max(consistent);
         }
-        LevelRanges { split, morph_range: config.morph_range }
+        self.morph_range = config.morph_range;
     }
 
     /// Levels covered (the root level is `levels() - 1`).

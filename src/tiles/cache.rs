@@ -167,6 +167,11 @@ impl TileCache {
         Ok(&self.draws)
     }
 
+    /// The draws of the last successful update, in memory order.
+    pub fn draws(&self) -> &[TileDraw] {
+        &self.draws
+    }
+
     /// The ranges of the staging copy the GPU must receive this frame.
     pub fn dirty_ranges(&self) -> &[Range<u32>] {
         &self.dirty

@@ -1,0 +1,238 @@
+//! One frame of the display, GL-free: the rings for the current camera, the
+//! tile selection, the tile cache's uploads and the draw list, with the time
+//! each stage took. A renderer backend consumes the result.
+//!
+//! When the GPU buffer cannot take a frame's new tiles, the frame is selected
+//! again with rings half as wide (coarser tiles), down to the root level,
+//! whose tiles are always resident: the picture gets coarser, never a hole.
+
+mod terrain;
+
+pub use terrain::{PreloadedTerrain, TerrainData};
+
+use crate::camera::{Camera, CameraError, Frustum, EARTH_RADIUS_M};
+use crate::lod::ranges::RingInputs;
+use crate::lod::select::View;
+use crate::lod::{LevelRanges, LodConfig, LodError, TileSelector};
+use crate::render::draw_list::TileGeometry;
+use crate::render::{palette, DrawList, FrameUniforms};
+use crate::tiles::{grid, TileCache, TileCacheConfig, TileError};
+use std::time::Instant;
+
+/// Everything fixed for a run of the display.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SceneConfig {
+    pub lod: LodConfig,
+    /// GPU vertex buffer for tile heights, bytes.
+    pub buffer_bytes: u32,
+    pub transfer_cap: Option<u32>,
+    pub frames_in_flight: u32,
+    pub curvature: bool,
+    pub warning_above_m: f32,
+    pub caution_below_m: f32,
+}
+
+impl Default for SceneConfig {
+    fn default() -> Self {
+        SceneConfig {
+            lod: LodConfig::default(),
+            buffer_bytes: 32 << 20,
+            transfer_cap: None,
+            frames_in_flight: 0,
+            curvature: true,
+            warning_above_m: palette::DEFAULT_WARNING_ABOVE_M,
+            caution_below_m: palette::DEFAULT_CAUTION_BELOW_M,
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error(transparent)]
+    Camera(#[from] CameraError),
+    #[error("tiling: {0}")]
+    Lod(#[from] LodError),
+    #[error("tiles: {0}")]
+    Tiles(#[from] TileError),
+}
+
+/// CPU time of each stage of a frame, milliseconds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct StageTimes {
+    pub select_ms: f64,
+    pub tiles_ms: f64,
+    pub draw_list_ms: f64,
+}
+
+/// What a frame drew and what it cost.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct FrameReport {
+    pub tiles: usize,
+    pub culled: usize,
+    pub triangles: u64,
+    pub bytes_uploaded: u64,
+    pub transfers: usize,
+    pub generated: usize,
+    pub allocator_used_bytes: u64,
+    pub allocator_workspace_bytes: u32,
+    /// Times the selection was coarsened because the buffer was full.
+    pub coarsened: u32,
+    pub cpu_ms: StageTimes,
+}
+
+/// The per-frame state of the display.
+pub struct Scene {
+    config: SceneConfig,
+    selector: TileSelector,
+    cache: TileCache,
+    ranges: LevelRanges,
+    draw_list: DrawList,
+    deltas: Vec<f64>,
+    height_range_m: f64,
+}
+
+impl Scene {
+    pub fn new(config: SceneConfig, terrain: &dyn TerrainData) -> Result<Self, SceneError> {
+        let layout = *terrain.layout();
+        config.lod.validate(layout.node_size)?;
+        let cache_config = TileCacheConfig {
+            grid_size: config.lod.grid_size,
+            capacity_bytes: config.buffer_bytes,
+            max_tiles: config.lod.max_tiles as u32 + root_tiles(terrain, config.lod.grid_size),
+            transfer_cap: config.transfer_cap,
+            frames_in_flight: config.frames_in_flight,
+        };
+        let deltas = terrain.delta_per_level();
+        let (lo, hi) = terrain.height_range();
+        let mut draw_list = DrawList::with_capacity(cache_config.max_tiles as usize);
+        draw_list.indices_per_tile = grid::index_count(config.lod.grid_size) as u32;
+        Ok(Scene {
+            config,
+            selector: TileSelector::new(config.lod),
+            cache: TileCache::new(cache_config, terrain)?,
+            ranges: LevelRanges::new(&config.lod, RingInputs {
+                tile_size_m: 1.0,
+                delta_per_level: &deltas,
+                height_range_m: 0.0,
+                perspective_scale: 1.0,
+            }),
+            draw_list,
+            height_range_m: (hi - lo) as f64,
+            deltas,
+        })
+    }
+
+    pub fn config(&self) -> &SceneConfig {
+        &self.config
+    }
+
+    /// The last frame's draw list.
+    pub fn draw_list(&self) -> &DrawList {
+        &self.draw_list
+    }
+
+    /// The ranges the GPU buffer must receive this frame, and the staging copy.
+    pub fn uploads(&self) -> (&[u8], &[std::ops::Range<u32>]) {
+        (self.cache.staging(), self.cache.dirty_ranges())
+    }
+
+    pub fn ranges(&self) -> &LevelRanges {
+        &self.ranges
+    }
+
+    /// Prepares one frame for `camera`.
+    pub fn frame(&mut self, camera: &Camera, terrain: &dyn TerrainData) -> Result<FrameReport, SceneError> {
+        camera.validate()?;
+        let layout = *terrain.layout();
+        let grid_size = self.config.lod.grid_size;
+        let tile_size_m = grid_size as f64 * layout.spacing_m[0].max(layout.spacing_m[1]);
+        let (near, far) = clip_planes(camera, terrain);
+        let view_projection = camera.projection(near, far) * camera.view();
+        let frustum = Frustum::from_view_projection(view_projection);
+        let mut report = FrameReport::default();
+        let mut lod = self.config.lod;
+        loop {
+            let start = Instant::now();
+            let inputs = RingInputs {
+                tile_size_m,
+                delta_per_level: &self.deltas,
+                height_range_m: self.height_range_m,
+                perspective_scale: camera.perspective_scale(),
+            };
+            self.ranges.update(&lod, inputs);
+            let view = View { eye: camera.position, frustum: &frustum, ranges: &self.ranges, curvature: self.config.curvature };
+            let selected = self.selector.select(&view, terrain);
+            let selected_at = Instant::now();
+            report.cpu_ms.select_ms += ms(start, selected_at);
+            let outcome = self.cache.update(selected, terrain);
+            report.cpu_ms.tiles_ms += ms(selected_at, Instant::now());
+            match outcome {
+                Ok(_) => break,
+                Err(TileError::BufferFull(_)) if lod.view_distance > 1.0 || lod.tau_px < 1e6 => {
+                    // Coarser: half the rings (Ulrich's rule through tau, Kühnert's through distance).
+                    lod.view_distance = (lod.view_distance / 2.0).max(1.0);
+                    lod.tau_px *= 2.0;
+                    report.coarsened += 1;
+                }
+                Err(error) => return Err(error.into()),
+            }
+        }
+        let start = Instant::now();
+        let uniforms = self.frame_uniforms(camera, view_projection, far);
+        let geometry = TileGeometry { grid_size, spacing_m: layout.spacing_m, delta_per_level: &self.deltas };
+        let draws = self.cache.draws();
+        self.draw_list.build(camera, uniforms, draws, &self.ranges, geometry);
+        report.cpu_ms.draw_list_ms = ms(start, Instant::now());
+        let stats = self.cache.stats();
+        report.tiles = self.draw_list.tiles.len();
+        report.culled = self.selector.culled();
+        report.triangles = report.tiles as u64 * grid::triangle_count(grid_size) as u64;
+        report.bytes_uploaded = stats.bytes_uploaded;
+        report.transfers = stats.transfers;
+        report.generated = stats.generated;
+        report.allocator_used_bytes = stats.allocator_used_bytes;
+        report.allocator_workspace_bytes = stats.allocator_workspace_bytes;
+        Ok(report)
+    }
+
+    fn frame_uniforms(&self, camera: &Camera, view_projection: glam::Mat4, far: f32) -> FrameUniforms {
+        FrameUniforms {
+            view_projection,
+            camera_altitude: camera.position.z,
+            sun_direction: palette::sun_direction(),
+            curvature: self.config.curvature,
+            warning_above_m: self.config.warning_above_m,
+            caution_below_m: self.config.caution_below_m,
+            tint_range_m: [0.0, 0.0],
+            viewport: camera.viewport,
+            fog_distance_m: far,
+        }
+    }
+}
+
+fn ms(from: Instant, to: Instant) -> f64 {
+    (to - from).as_secs_f64() * 1e3
+}
+
+fn root_tiles(terrain: &dyn TerrainData, grid_size: u32) -> u32 {
+    let layout = terrain.layout();
+    let [nx, ny] = crate::lod::select::tiles_at(layout.samples, grid_size, layout.levels - 1);
+    nx * ny
+}
+
+/// Near and far planes: near shrinks as the aircraft nears the terrain (never
+/// below half a metre), far reaches the farthest corner of the data or the
+/// horizon, whichever is nearer.
+pub fn clip_planes(camera: &Camera, terrain: &dyn TerrainData) -> (f32, f32) {
+    let layout = terrain.layout();
+    let (lo, hi) = terrain.height_range();
+    let above = (camera.position.z - hi as f64).max(camera.position.z - lo as f64).abs();
+    let clearance = (camera.position.z - hi as f64).max(1.0);
+    let near = (clearance * 0.25).clamp(0.5, 50.0);
+    let extent = glam::DVec2::new(layout.samples[0] as f64 * layout.spacing_m[0], layout.samples[1] as f64 * layout.spacing_m[1]);
+    let eye = camera.position.truncate();
+    let corners = [glam::DVec2::ZERO, glam::DVec2::new(extent.x, 0.0), glam::DVec2::new(0.0, extent.y), extent];
+    let data_far = corners.iter().map(|c| c.distance(eye)).fold(0.0, f64::max) + above;
+    let horizon = (2.0 * EARTH_RADIUS_M * above.max(1.0)).sqrt() + 200_000.0;
+    (near as f32, data_far.min(horizon).max(near * 10.0) as f32)
+}

@@ -1,0 +1,98 @@
+//! What the scene reads terrain through: resident nodes for the tiles, height
+//! bounds for culling, and the pyramid's per-level error. The clipmap serves
+//! it while flying; [`PreloadedTerrain`] holds every node of a small pyramid
+//! (tests, ground truth).
+
+use crate::lod::select::TileBounds;
+use crate::lod::TileKey;
+use crate::node::{NodeData, NodeError, NodeId, NodeLayout, NodeSource};
+use crate::tiles::vertex::tile_node;
+use crate::tiles::{best_resident, ResidentNodes};
+use std::collections::HashMap;
+
+/// Terrain as the scene sees it.
+pub trait TerrainData: ResidentNodes + TileBounds {
+    /// Largest geometric error of each level, metres (level 0 first).
+    fn delta_per_level(&self) -> Vec<f64>;
+    /// Lowest and highest height of the data, metres.
+    fn height_range(&self) -> (f32, f32);
+}
+
+/// Height bounds of a tile from the finest resident node that covers it:
+/// every level-0 sample under a node lies within its posts' range widened by
+/// its delta.
+pub fn node_height_bounds(nodes: &dyn ResidentNodes, tile: TileKey, grid_size: u32, fallback: (f32, f32)) -> (f32, f32) {
+    let (node, _) = tile_node(tile, grid_size, nodes.layout().node_size);
+    match best_resident(nodes, node) {
+        Some((_, data)) => (data.min - data.delta, data.max + data.delta),
+        None => fallback,
+    }
+}
+
+/// Every node of a source, read once and kept.
+pub struct PreloadedTerrain {
+    layout: NodeLayout,
+    nodes: HashMap<NodeId, NodeData>,
+    deltas: Vec<f64>,
+    range: (f32, f32),
+}
+
+impl PreloadedTerrain {
+    /// Reads all nodes of `source` (meant for pyramids of a few thousand nodes).
+    pub fn load(source: &dyn NodeSource) -> Result<Self, NodeError> {
+        let layout = *source.layout();
+        let mut nodes = HashMap::new();
+        let mut deltas = vec![0.0f64; layout.levels as usize];
+        let mut range = (f32::INFINITY, f32::NEG_INFINITY);
+        for lod in 0..layout.levels {
+            let [nx, ny] = layout.nodes_at(lod);
+            for y in 0..ny {
+                for x in 0..nx {
+                    let id = NodeId::new(lod, x, y);
+                    let mut data = NodeData::default();
+                    source.read_node(id, &mut data)?;
+                    deltas[lod as usize] = deltas[lod as usize].max(data.delta as f64);
+                    if lod == 0 {
+                        range = (range.0.min(data.min), range.1.max(data.max));
+                    }
+                    nodes.insert(id, data);
+                }
+            }
+        }
+        Ok(PreloadedTerrain { layout, nodes, deltas, range })
+    }
+}
+
+impl ResidentNodes for PreloadedTerrain {
+    fn layout(&self) -> &NodeLayout {
+        &self.layout
+    }
+
+    fn resident(&self, id: NodeId) -> Option<&NodeData> {
+        self.nodes.get(&id)
+    }
+}
+
+impl TileBounds for PreloadedTerrain {
+    fn samples(&self) -> [u32; 2] {
+        self.layout.samples
+    }
+
+    fn spacing_m(&self) -> [f64; 2] {
+        self.layout.spacing_m
+    }
+
+    fn height_bounds(&self, tile: TileKey, grid_size: u32) -> (f32, f32) {
+        node_height_bounds(self, tile, grid_size, self.range)
+    }
+}
+
+impl TerrainData for PreloadedTerrain {
+    fn delta_per_level(&self) -> Vec<f64> {
+        self.deltas.clone()
+    }
+
+    fn height_range(&self) -> (f32, f32) {
+        self.range
+    }
+}

@@ -1,0 +1,60 @@
+//! The null backend counts what a scripted flight would cost a GPU: uploads
+//! happen only when tiles change, a still camera uploads nothing, every tile
+//! is one draw call, and a buffer too small for the view coarsens the tiles
+//! instead of failing or leaving holes.
+
+mod scene_common;
+
+use ridgeline::render::{NullBackend, RenderBackend};
+use ridgeline::scene::{Scene, SceneConfig};
+use scene_common::{camera, terrain};
+
+fn run_frame(scene: &mut Scene, backend: &mut NullBackend, cam: &ridgeline::camera::Camera) -> ridgeline::scene::FrameReport {
+    let report = scene.frame(cam, terrain()).unwrap();
+    let (staging, ranges) = scene.uploads();
+    backend.upload(staging, ranges);
+    backend.draw(scene.draw_list());
+    report
+}
+
+#[test]
+fn scripted_flight_counts_and_a_still_camera_uploads_nothing() {
+    let config = SceneConfig::default();
+    let mut scene = Scene::new(config, terrain()).unwrap();
+    let mut backend = NullBackend::new(config.buffer_bytes);
+    let mut uploaded = 0;
+    for k in 0..20 {
+        let cam = camera(10_000.0 + 1_500.0 * k as f64, 20_000.0, 3_500.0, 60.0, -6.0);
+        let report = run_frame(&mut scene, &mut backend, &cam);
+        let counts = backend.take();
+        assert_eq!(counts.draw_calls as usize, report.tiles, "one draw call per tile");
+        assert_eq!(counts.bytes_uploaded, report.bytes_uploaded);
+        assert!(counts.upload_calls as usize <= 1, "one transfer per frame without a cap");
+        assert_eq!(counts.triangles, report.triangles);
+        uploaded += counts.bytes_uploaded;
+    }
+    assert!(uploaded > 0, "moving uploads new tiles");
+    let still = camera(40_000.0, 20_000.0, 3_500.0, 60.0, -6.0);
+    run_frame(&mut scene, &mut backend, &still);
+    backend.take();
+    for _ in 0..5 {
+        let report = run_frame(&mut scene, &mut backend, &still);
+        let counts = backend.take();
+        assert_eq!((counts.bytes_uploaded, counts.upload_calls, report.generated), (0, 0, 0), "a still camera uploads nothing");
+        assert!(counts.draw_calls > 0);
+    }
+}
+
+#[test]
+fn a_small_buffer_coarsens_instead_of_failing() {
+    let roomy = SceneConfig::default();
+    let tight = SceneConfig { buffer_bytes: 1 << 20, ..roomy };
+    let cam = camera(30_000.0, 30_000.0, 2_600.0, 10.0, -10.0);
+    let mut full = Scene::new(roomy, terrain()).unwrap();
+    let wanted = full.frame(&cam, terrain()).unwrap();
+    let mut scene = Scene::new(tight, terrain()).unwrap();
+    let report = scene.frame(&cam, terrain()).unwrap();
+    assert!(report.coarsened > 0, "1 MB cannot hold {} tiles", wanted.tiles);
+    assert!(report.tiles > 0 && report.tiles < wanted.tiles);
+    assert!(report.allocator_used_bytes <= 1 << 20);
+}
