@@ -12,8 +12,8 @@ use scene_common::{camera, terrain};
 fn run_frame(scene: &mut Scene, backend: &mut NullBackend, cam: &ridgeline::camera::Camera) -> ridgeline::scene::FrameReport {
     let report = scene.frame(cam, terrain()).unwrap();
     let (staging, ranges) = scene.uploads();
-    backend.upload(staging, ranges);
-    backend.draw(scene.draw_list());
+    backend.upload(staging, ranges).unwrap();
+    backend.draw(scene.draw_list()).unwrap();
     report
 }
 

@@ -15,9 +15,10 @@ use std::ops::Range;
 /// What a renderer does with a frame's data. Implemented by the GL layer and
 /// by the counting null backend.
 pub trait RenderBackend {
+    type Error: std::error::Error;
     /// Copies `ranges` of `staging` into the GPU vertex buffer at the same
     /// offsets: one transfer per range.
-    fn upload(&mut self, staging: &[u8], ranges: &[Range<u32>]);
+    fn upload(&mut self, staging: &[u8], ranges: &[Range<u32>]) -> Result<(), Self::Error>;
     /// Clears, draws the sky and the terrain tiles of `list`.
-    fn draw(&mut self, list: &DrawList);
+    fn draw(&mut self, list: &DrawList) -> Result<(), Self::Error>;
 }

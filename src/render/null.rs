@@ -40,15 +40,18 @@ impl NullBackend {
 }
 
 impl RenderBackend for NullBackend {
-    fn upload(&mut self, staging: &[u8], ranges: &[Range<u32>]) {
+    type Error = std::convert::Infallible;
+
+    fn upload(&mut self, staging: &[u8], ranges: &[Range<u32>]) -> Result<(), Self::Error> {
         for range in ranges {
             assert!(range.end <= self.capacity && range.end as usize <= staging.len(), "upload past the buffer");
             self.counts.upload_calls += 1;
             self.counts.bytes_uploaded += (range.end - range.start) as u64;
         }
+        Ok(())
     }
 
-    fn draw(&mut self, list: &DrawList) {
+    fn draw(&mut self, list: &DrawList) -> Result<(), Self::Error> {
         self.counts.frames += 1;
         // The GL backend writes three per-tile uniforms (origin with spacing,
         // morph range, skirt depth) and points the tile's attributes at its bytes.
@@ -62,5 +65,6 @@ impl RenderBackend for NullBackend {
             }
             self.counts.triangles += list.indices_per_tile as u64 / 3;
         }
+        Ok(())
     }
 }
