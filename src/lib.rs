@@ -10,9 +10,13 @@
 //! | [`geo`] | georeference conventions and the local metric frame |
 //! | [`dem`] | elevation importers (GeoTIFF, SRTM, DTED, ASCII grid) producing an [`dem::ElevationGrid`] |
 //! | [`node`] | the node pyramid's vocabulary: node ids, layout, node data, the `NodeSource` trait |
+//! | [`procedural`] | a deterministic earth-sized `NodeSource` computed on demand, for scale tests |
+//! | [`clipmap`] | the chunked clipmap: node atlas, clipped quadtrees per view, loader, height queries |
 #![deny(unsafe_code)]
 
 pub mod allocator;
+pub mod clipmap;
 pub mod dem;
 pub mod geo;
 pub mod node;
+pub mod procedural;
