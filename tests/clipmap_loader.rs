@@ -75,6 +75,7 @@ fn a_moving_camera_with_the_thread_keeps_every_invariant() {
         check_frame(&clipmap, &before, &stats).unwrap();
         loaded += stats.applied;
         for (view, at) in [(pfd, primary), (overview, map)] {
+            check_entries(&clipmap, view).unwrap();
             check_height(&clipmap, view, at.truncate()).unwrap();
             check_lookup(&clipmap, view, at.truncate() + DVec2::new(frame as f64, 500.0)).unwrap();
         }

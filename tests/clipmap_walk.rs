@@ -53,6 +53,7 @@ fn probe_points(clipmap: &Clipmap, view: ViewId, salt: u64) -> Vec<DVec2> {
 
 fn check_views(clipmap: &Clipmap, views: &[ViewId], salt: u64) -> Result<(), String> {
     for &view in views {
+        check_entries(clipmap, view)?;
         for point in probe_points(clipmap, view, salt) {
             check_height(clipmap, view, point)?;
             check_lookup(clipmap, view, point)?;

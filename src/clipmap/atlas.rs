@@ -8,8 +8,7 @@
 //! whole node, the id -> slot map has room for twice the slots (so removals'
 //! tombstones never make it grow), and the LRU list is intrusive.
 
-use std::collections::HashMap;
-
+use super::hash::{node_map, NodeMap};
 use super::lru::SlotList;
 use crate::node::{NodeData, NodeId, NodeLayout};
 
@@ -48,16 +47,17 @@ pub(crate) struct Insertion {
 #[derive(Debug)]
 pub struct NodeAtlas {
     slots: Vec<Slot>,
-    index: HashMap<NodeId, u32>,
+    index: NodeMap<u32>,
     free: Vec<u32>,
     unused: SlotList,
-    /// Highest level of a node inserted or evicted since the last
-    /// [`NodeAtlas::take_changed_lod`].
-    changed_lod: Option<u8>,
+    /// Nodes inserted or evicted since the last [`NodeAtlas::clear_changes`].
+    changes: Vec<NodeId>,
 }
 
 impl NodeAtlas {
-    pub(crate) fn new(slot_count: u32, layout: &NodeLayout) -> Self {
+    /// An atlas of `slot_count` empty slots; `changes_per_frame` sizes the
+    /// change list (two per insertion: the node and the one it evicts).
+    pub(crate) fn new(slot_count: u32, layout: &NodeLayout, changes_per_frame: usize) -> Self {
         let slots = (0..slot_count)
             .map(|_| Slot {
                 node: None,
@@ -68,10 +68,10 @@ impl NodeAtlas {
             .collect();
         NodeAtlas {
             slots,
-            index: HashMap::with_capacity(2 * slot_count as usize),
+            index: node_map(2 * slot_count as usize),
             free: (0..slot_count).rev().collect(),
             unused: SlotList::new(slot_count),
-            changed_lod: None,
+            changes: Vec::with_capacity(changes_per_frame),
         }
     }
 
@@ -155,24 +155,30 @@ impl NodeAtlas {
         let evicted = entry.node.replace(id);
         if let Some(old) = evicted {
             self.index.remove(&old);
-            self.note_change(old.lod);
+            self.changes.push(old);
         }
         let entry = &mut self.slots[slot as usize];
         std::mem::swap(&mut entry.data, data);
         entry.state = state;
         entry.last_used = frame;
         self.index.insert(id, slot);
-        self.note_change(id.lod);
+        self.changes.push(id);
         Some(Insertion { slot, evicted })
     }
 
-    fn note_change(&mut self, lod: u8) {
-        self.changed_lod = Some(self.changed_lod.map_or(lod, |l| l.max(lod)));
+    /// Orders the changes coarsest first (so refreshing their footprints in
+    /// this order reads fresh parents).
+    pub(crate) fn sort_changes(&mut self) {
+        self.changes.sort_unstable_by(|a, b| b.lod.cmp(&a.lod).then(a.cmp(b)));
     }
 
-    /// The highest level whose residency changed since the last call.
-    pub(crate) fn take_changed_lod(&mut self) -> Option<u8> {
-        self.changed_lod.take()
+    /// Nodes whose residency changed since the last clear.
+    pub(crate) fn changes(&self) -> &[NodeId] {
+        &self.changes
+    }
+
+    pub(crate) fn clear_changes(&mut self) {
+        self.changes.clear();
     }
 
     /// Checks the invariants, naming the first one broken.
@@ -224,7 +230,7 @@ mod tests {
 
     #[test]
     fn reuses_empty_slots_then_the_least_recently_used() {
-        let mut atlas = NodeAtlas::new(4, &layout());
+        let mut atlas = NodeAtlas::new(4, &layout(), 8);
         let root = NodeId::new(3, 0, 0);
         let ids: Vec<NodeId> = (0..5).map(|x| NodeId::new(0, x, 0)).collect();
         atlas.insert(root, &mut node(9.0), SlotState::Pinned, 0).unwrap();
@@ -252,7 +258,12 @@ mod tests {
         assert_eq!(second.evicted, Some(ids[0]));
         assert_eq!(atlas.insert(ids[1], &mut node(1.0), SlotState::Used, 3), None);
         assert_eq!(atlas.data(atlas.slot_of(root).unwrap()).heights[0], 9.0);
-        assert_eq!((atlas.resident_count(), atlas.take_changed_lod(), atlas.take_changed_lod()), (4, Some(3), None));
+        assert_eq!(atlas.resident_count(), 4);
+        let (n0, n1, n3, n4) = (ids[0], ids[1], ids[3], ids[4]);
+        atlas.sort_changes();
+        assert_eq!(atlas.changes()[..], [root, n0, n0, n1, n1, ids[2], n3, n4]);
+        atlas.clear_changes();
+        assert!(atlas.changes().is_empty());
         atlas.check().unwrap();
     }
 }

@@ -9,12 +9,12 @@
 //! one inline, so in-flight loads never exceed it and the result channel,
 //! sized to the pool, never blocks the loader.
 
-use std::collections::HashSet;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver, SyncSender, TryRecvError, TrySendError};
 use std::sync::Arc;
 use std::thread::JoinHandle;
 
+use super::hash::{node_set, NodeSet};
 use crate::node::{NodeData, NodeError, NodeId, NodeLayout, NodeSource};
 
 /// Where nodes are produced.
@@ -50,7 +50,7 @@ struct Worker {
 pub(crate) struct Loader {
     source: Arc<dyn NodeSource>,
     spare: Vec<NodeData>,
-    in_flight: HashSet<NodeId>,
+    in_flight: NodeSet,
     worker: Option<Worker>,
     pool: usize,
 }
@@ -65,7 +65,7 @@ impl Loader {
         Ok(Loader {
             source,
             spare: (0..pool).map(|_| NodeData::with_capacity(&layout)).collect(),
-            in_flight: HashSet::with_capacity(2 * pool),
+            in_flight: node_set(2 * pool),
             worker,
             pool,
         })

@@ -18,11 +18,11 @@
 //! node it would like is not there yet.
 
 mod atlas;
+mod hash;
 mod loader;
 mod lru;
 mod quadtree;
 
-use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
 
 use glam::{DVec2, DVec3};
@@ -31,6 +31,7 @@ pub use atlas::{NodeAtlas, SlotState};
 pub use loader::LoaderMode;
 pub use quadtree::{ClippedQuadtree, Entry};
 
+use hash::{node_map, node_set, NodeMap, NodeSet};
 use loader::{Loaded, Loader};
 use crate::node::{NodeData, NodeError, NodeId, NodeLayout, NodeSource};
 
@@ -49,7 +50,7 @@ pub struct ClipmapConfig {
 /// the leaf node size, scaled by the level).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ViewConfig {
-    /// Entries per side of each layer (`node_count`), at least 4.
+    /// Entries per side of each layer (`node_count`), 4 to 256.
     pub node_count: u32,
     /// Lookups use layer `l` up to `view_distance` node sizes of level `l`.
     pub view_distance: f64,
@@ -73,13 +74,15 @@ pub struct ViewId(usize);
 /// Why a clipmap or a view cannot be built or updated.
 #[derive(Debug, thiserror::Error)]
 pub enum ClipmapError {
+    #[error("clipmap: the node source has no levels")]
+    NoLevels,
     #[error("clipmap: {slots} atlas slots cannot hold the {roots} root nodes and one more")]
     TooFewSlots { slots: u32, roots: u64 },
     #[error("clipmap: the load budget must be at least one node per frame")]
     ZeroBudget,
     #[error("clipmap: the loader queue must hold at least one request")]
     ZeroQueue,
-    #[error("clipmap: node_count {0} must be between 4 and 1024")]
+    #[error("clipmap: node_count {0} must be between 4 and 256")]
     NodeCount(u32),
     #[error("clipmap: need 0 < view_distance {view} <= load_distance {load} <= {max} for node_count {node_count}")]
     Distances { view: f64, load: f64, max: f64, node_count: u32 },
@@ -130,7 +133,7 @@ pub struct UpdateStats {
     pub wanted: u32,
     /// Wanted nodes not resident after step 2.
     pub missing: u32,
-    /// Requests queued for the loader thread this frame.
+    /// Requests queued for the loader thread this frame (0 when inline).
     pub requested: u32,
     /// Loads copied into the atlas this frame (at most the budget).
     pub applied: u32,
@@ -160,12 +163,10 @@ pub struct Clipmap {
     views: Vec<ClippedQuadtree>,
     loader: Loader,
     /// This frame's union of wanted nodes, with the nearest view's distance.
-    wanted: HashMap<NodeId, f64>,
+    wanted: NodeMap<f64>,
     candidates: Vec<Candidate>,
-    /// Per view, the highest layer whose window moved this frame.
-    moved: Vec<Option<u8>>,
     /// Nodes whose load failed; never requested again.
-    failed: HashSet<NodeId>,
+    failed: NodeSet,
     last_error: Option<NodeError>,
     frame: u64,
 }
@@ -174,7 +175,7 @@ impl Clipmap {
     /// Builds the atlas, loads and pins the root level, starts the loader.
     pub fn new(source: Arc<dyn NodeSource>, config: ClipmapConfig) -> Result<Self, ClipmapError> {
         let layout = *source.layout();
-        let top = layout.levels - 1;
+        let top = layout.levels.checked_sub(1).ok_or(ClipmapError::NoLevels)?;
         let [rx, ry] = layout.nodes_at(top);
         let roots = rx as u64 * ry as u64;
         if (config.atlas_slots as u64) <= roots {
@@ -186,7 +187,8 @@ impl Clipmap {
         if config.loader == (LoaderMode::Thread { queue: 0 }) {
             return Err(ClipmapError::ZeroQueue);
         }
-        let mut atlas = NodeAtlas::new(config.atlas_slots, &layout);
+        let changes = 2 * config.budget as usize + roots as usize;
+        let mut atlas = NodeAtlas::new(config.atlas_slots, &layout, changes);
         let mut buffer = NodeData::with_capacity(&layout);
         for y in 0..ry {
             for x in 0..rx {
@@ -195,6 +197,7 @@ impl Clipmap {
                 atlas.insert(id, &mut buffer, SlotState::Pinned, 0).expect("slots were counted");
             }
         }
+        atlas.clear_changes(); // no view yet; each new view refreshes fully
         let loader = Loader::new(source.clone(), config.loader).map_err(ClipmapError::Spawn)?;
         Ok(Clipmap {
             source,
@@ -203,10 +206,9 @@ impl Clipmap {
             atlas,
             views: Vec::new(),
             loader,
-            wanted: HashMap::new(),
+            wanted: node_map(0),
             candidates: Vec::new(),
-            moved: Vec::new(),
-            failed: HashSet::new(),
+            failed: node_set(0),
             last_error: None,
             frame: 0,
         })
@@ -218,10 +220,13 @@ impl Clipmap {
         validate_view(config)?;
         check_position(position)?;
         let mut view = ClippedQuadtree::new(config, &self.layout, position);
-        view.refresh(&self.layout, &self.atlas, self.layout.levels - 1);
+        view.refresh_all(&self.layout, &self.atlas);
         self.views.push(view);
+        let id = ViewId(self.views.len() - 1);
+        let ground = self.ground_under(id);
+        self.views[id.0].set_ground(ground);
         self.reserve_wanted();
-        Ok(ViewId(self.views.len() - 1))
+        Ok(id)
     }
 
     /// Moves a view; takes effect at the next [`Clipmap::update`].
@@ -240,7 +245,6 @@ impl Clipmap {
         let most: usize = self.views.iter().map(per_view).sum();
         self.wanted.reserve(most.saturating_sub(self.wanted.len()));
         self.candidates.reserve(most.saturating_sub(self.candidates.len()));
-        self.moved.reserve(self.views.len());
     }
 
     /// One frame of the four-step update (see the module docs).
@@ -250,14 +254,11 @@ impl Clipmap {
         self.collect_wanted();
         self.compare_with_atlas(&mut stats);
         self.load(&mut stats)?;
-        let changed = self.atlas.take_changed_lod();
-        for (view, &moved) in self.views.iter_mut().zip(&self.moved) {
-            // Layers above both the highest moved window and the highest
-            // changed level keep their entries.
-            if let Some(top) = moved.max(changed) {
-                view.refresh(&self.layout, &self.atlas, top);
-            }
+        self.atlas.sort_changes();
+        for view in &mut self.views {
+            view.refresh_changes(&self.layout, &self.atlas, self.atlas.changes());
         }
+        self.atlas.clear_changes();
         stats.in_flight = self.loader.in_flight();
         debug_assert_eq!(self.atlas.check(), Ok(()));
         Ok(stats)
@@ -266,13 +267,13 @@ impl Clipmap {
     /// Step 1: recentres every view and gathers the union of wanted nodes.
     fn collect_wanted(&mut self) {
         self.wanted.clear();
-        self.moved.clear();
         for index in 0..self.views.len() {
             let ground = self.ground_under(ViewId(index));
             let view = &mut self.views[index];
-            self.moved.push(view.recenter(&self.layout));
+            view.set_ground(ground);
+            view.recenter(&self.layout);
             let wanted = &mut self.wanted;
-            view.collect_wanted(&self.layout, ground, |id, distance| {
+            view.collect_wanted(&self.layout, |id, distance| {
                 wanted.entry(id).and_modify(|d| *d = d.min(distance)).or_insert(distance);
             });
         }
@@ -383,11 +384,12 @@ impl Clipmap {
 
     /// The layer a lookup at `point` should use for rendering (eq. 4.9): the
     /// finest whose view radius holds the 3D distance from the viewer,
-    /// heights approximated by the ground under the viewer.
+    /// heights approximated by the ground under the viewer at the last
+    /// update.
     pub fn quadtree_lod(&self, view: ViewId, point: DVec2) -> u8 {
         let quadtree = &self.views[view.0];
         let p = quadtree.position();
-        let dz = p.z - self.ground_under(view);
+        let dz = p.z - quadtree.ground_m();
         let distance = (point.distance_squared(p.truncate()) + dz * dz).sqrt();
         (0..self.layout.levels)
             .find(|&lod| distance < quadtree.view_radius_m(&self.layout, lod))
@@ -460,7 +462,7 @@ impl Clipmap {
 
 fn validate_view(config: ViewConfig) -> Result<(), ClipmapError> {
     let ViewConfig { node_count, view_distance, load_distance } = config;
-    if !(4..=1024).contains(&node_count) {
+    if !(4..=256).contains(&node_count) {
         return Err(ClipmapError::NodeCount(node_count));
     }
     let max = ViewConfig::max_load_distance(node_count);

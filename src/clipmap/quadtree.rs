@@ -33,8 +33,12 @@ const COORD_LIMIT: f64 = (1u64 << 52) as f64;
 pub struct ClippedQuadtree {
     config: ViewConfig,
     position: DVec3,
+    /// Terrain height under the viewer when the frame began (Kühnert 4.5.2).
+    ground_m: f64,
     /// Per layer, node coordinates of the window's south-west node.
     origins: Vec<[i64; 2]>,
+    /// Per layer, the origin the entries were last refreshed for.
+    refreshed: Vec<[i64; 2]>,
     /// `lod_count * node_count^2` entries, layer-major, toroidal inside a layer.
     entries: Vec<Entry>,
 }
@@ -46,7 +50,9 @@ impl ClippedQuadtree {
         let mut tree = ClippedQuadtree {
             config,
             position,
+            ground_m: 0.0,
             origins: vec![[0, 0]; layers],
+            refreshed: vec![[0, 0]; layers],
             entries: vec![Entry::NONE; layers * n * n],
         };
         tree.recenter(layout);
@@ -63,6 +69,15 @@ impl ClippedQuadtree {
 
     pub(crate) fn set_position(&mut self, position: DVec3) {
         self.position = position;
+    }
+
+    /// The terrain height under the viewer used for this frame's distances.
+    pub fn ground_m(&self) -> f64 {
+        self.ground_m
+    }
+
+    pub(crate) fn set_ground(&mut self, ground_m: f64) {
+        self.ground_m = ground_m;
     }
 
     /// Node coordinates of the south-west node of layer `lod`'s window.
@@ -100,30 +115,24 @@ impl ClippedQuadtree {
     }
 
     /// Centres every layer's window under the viewer, aligned to the layer's
-    /// node size; returns the highest layer whose window moved.
-    pub(crate) fn recenter(&mut self, layout: &NodeLayout) -> Option<u8> {
+    /// node size. Entries follow in [`Self::refresh_changes`].
+    pub(crate) fn recenter(&mut self, layout: &NodeLayout) {
         let half = self.config.node_count as f64 / 2.0;
-        let mut moved = None;
         for lod in 0..layout.levels {
             let [w, h] = layout.node_size_m(lod);
             let corner = |p: f64, side: f64| (p / side + 0.5 - half).floor().clamp(-COORD_LIMIT, COORD_LIMIT) as i64;
-            let origin = [corner(self.position.x, w), corner(self.position.y, h)];
-            if self.origins[lod as usize] != origin {
-                self.origins[lod as usize] = origin;
-                moved = Some(lod);
-            }
+            self.origins[lod as usize] = [corner(self.position.x, w), corner(self.position.y, h)];
         }
-        moved
     }
 
     /// Step 1 of the update: calls `want(node, distance_m)` for every node
     /// within its layer's load radius of the viewer, measured in 3D from the
     /// viewer to the nearest point of the node's footprint raised to
-    /// `ground_m`, the height under the viewer (Kühnert 4.5.2). A wanted
+    /// [`Self::ground_m`], the height under the viewer (Kühnert 4.5.2). A wanted
     /// node's parent is always wanted too (its footprint is nearer and its
     /// radius twice as large), and every wanted node lies in its window.
-    pub(crate) fn collect_wanted(&self, layout: &NodeLayout, ground_m: f64, mut want: impl FnMut(NodeId, f64)) {
-        let dz = self.position.z - ground_m;
+    pub(crate) fn collect_wanted(&self, layout: &NodeLayout, mut want: impl FnMut(NodeId, f64)) {
+        let dz = self.position.z - self.ground_m;
         for lod in 0..layout.levels {
             let radius = self.load_radius_m(layout, lod);
             if dz.abs() >= radius {
@@ -149,21 +158,66 @@ impl ClippedQuadtree {
         }
     }
 
-    /// Step 4 of the update: re-points the entries of layers `0..=top` to
-    /// the best resident node, coarsest layer first so each entry can fall
-    /// back on its parent's entry.
-    pub(crate) fn refresh(&mut self, layout: &NodeLayout, atlas: &NodeAtlas, top: u8) {
+    /// Points every entry at the best resident node, coarsest layer first
+    /// so each entry can fall back on its parent's entry.
+    pub(crate) fn refresh_all(&mut self, layout: &NodeLayout, atlas: &NodeAtlas) {
         let n = self.config.node_count as i64;
-        for lod in (0..=top.min(layout.levels - 1)).rev() {
+        for lod in (0..layout.levels).rev() {
             let [ox, oy] = self.origins[lod as usize];
-            let [nx, ny] = layout.nodes_at(lod);
-            for y in oy..oy + n {
-                for x in ox..ox + n {
-                    let inside = (0..nx as i64).contains(&x) && (0..ny as i64).contains(&y);
-                    let entry = if inside { self.best_entry(atlas, lod, x, y) } else { Entry::NONE };
-                    let index = self.entry_index(lod, x, y);
-                    self.entries[index] = entry;
+            self.refresh_nodes(layout, atlas, lod, ox..ox + n, oy..oy + n, |_, _| true);
+            self.refreshed[lod as usize] = self.origins[lod as usize];
+        }
+    }
+
+    /// Step 4 of the update, incrementally: thanks to toroidal addressing
+    /// only the nodes that entered a moved window are new, and only entries
+    /// inside the footprint of a node inserted into or evicted from the
+    /// atlas (`changes`, coarsest first) can name a different node.
+    pub(crate) fn refresh_changes(&mut self, layout: &NodeLayout, atlas: &NodeAtlas, changes: &[NodeId]) {
+        let n = self.config.node_count as i64;
+        for lod in (0..layout.levels).rev() {
+            let [ox, oy] = self.origins[lod as usize];
+            let [px, py] = self.refreshed[lod as usize];
+            if [ox, oy] != [px, py] {
+                let entered = |x: i64, y: i64| !((px..px + n).contains(&x) && (py..py + n).contains(&y));
+                self.refresh_nodes(layout, atlas, lod, ox..ox + n, oy..oy + n, entered);
+                self.refreshed[lod as usize] = [ox, oy];
+            }
+        }
+        debug_assert!(changes.windows(2).all(|w| w[0].lod >= w[1].lod), "changes are coarsest first");
+        for id in changes {
+            for lod in (0..=id.lod).rev() {
+                let shift = id.lod - lod;
+                let (x0, y0) = ((id.x as i64) << shift, (id.y as i64) << shift);
+                let [ox, oy] = self.origins[lod as usize];
+                let xs = x0.max(ox)..(x0 + (1 << shift)).min(ox + n);
+                let ys = y0.max(oy)..(y0 + (1 << shift)).min(oy + n);
+                self.refresh_nodes(layout, atlas, lod, xs, ys, |_, _| true);
+            }
+        }
+    }
+
+    /// Recomputes the entries of the window nodes of layer `lod` in the given
+    /// ranges for which `pick` says so.
+    fn refresh_nodes(
+        &mut self,
+        layout: &NodeLayout,
+        atlas: &NodeAtlas,
+        lod: u8,
+        xs: std::ops::Range<i64>,
+        ys: std::ops::Range<i64>,
+        pick: impl Fn(i64, i64) -> bool,
+    ) {
+        let [nx, ny] = layout.nodes_at(lod);
+        for y in ys {
+            for x in xs.clone() {
+                if !pick(x, y) {
+                    continue;
                 }
+                let inside = (0..nx as i64).contains(&x) && (0..ny as i64).contains(&y);
+                let entry = if inside { self.best_entry(atlas, lod, x, y) } else { Entry::NONE };
+                let index = self.entry_index(lod, x, y);
+                self.entries[index] = entry;
             }
         }
     }

@@ -6,7 +6,7 @@
 use std::sync::Arc;
 
 use glam::{DVec2, DVec3};
-use ridgeline::clipmap::{Clipmap, ClipmapConfig, LoaderMode, SlotState, UpdateStats, ViewConfig, ViewId};
+use ridgeline::clipmap::{Clipmap, ClipmapConfig, Entry, LoaderMode, SlotState, UpdateStats, ViewConfig, ViewId};
 use ridgeline::node::{NodeId, NodeSource};
 use ridgeline::procedural::{EarthParams, ProceduralEarth};
 
@@ -137,6 +137,38 @@ pub fn check_lookup(clipmap: &Clipmap, view: ViewId, point: DVec2) -> Result<(),
     }
     if !covers(clipmap, found.node, point) || !(0.0..=1.0).contains(&found.atlas_coords.x) {
         return Err(format!("lookup gave {found:?} for {point}"));
+    }
+    Ok(())
+}
+
+/// Every entry of every layer of the view names the finest resident node
+/// at its node's level or above (recomputed here from scratch), or nothing
+/// outside the pyramid.
+pub fn check_entries(clipmap: &Clipmap, view: ViewId) -> Result<(), String> {
+    let layout = clipmap.layout();
+    let quadtree = clipmap.view(view);
+    let n = quadtree.config().node_count as i64;
+    for lod in 0..layout.levels {
+        let [ox, oy] = quadtree.origin(lod);
+        let [nx, ny] = layout.nodes_at(lod);
+        for (x, y) in (oy..oy + n).flat_map(|y| (ox..ox + n).map(move |x| (x, y))) {
+            let inside = (0..nx as i64).contains(&x) && (0..ny as i64).contains(&y);
+            let expected = if inside {
+                let mut id = NodeId::new(lod, x as u32, y as u32);
+                loop {
+                    if let Some(slot) = clipmap.atlas().slot_of(id) {
+                        break Entry { slot, atlas_lod: id.lod };
+                    }
+                    id = id.parent().filter(|p| p.lod < layout.levels).ok_or("no resident ancestor")?;
+                }
+            } else {
+                Entry::NONE
+            };
+            let got = quadtree.entry(lod, x, y).ok_or("a window node has no entry")?;
+            if got != expected {
+                return Err(format!("layer {lod} node ({x}, {y}): entry {got:?}, expected {expected:?}"));
+            }
+        }
     }
     Ok(())
 }
