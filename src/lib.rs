@@ -18,16 +18,20 @@
 //! | [`dataset`] | which terrain a run uses; the built-in SRTM tile, built into `cache/` on first use |
 //! | [`node`] | the node pyramid's vocabulary: node ids, layout, node data, the `NodeSource` trait |
 //! | [`pyramid`] | building the node pyramid from a grid (split, downsample, stitch, delta), its checksummed file, writing it atomically, opening it memory-mapped |
+//! | [`procedural`] | a deterministic earth-sized `NodeSource` computed on demand, for scale tests |
+//! | [`clipmap`] | the chunked clipmap: node atlas, clipped quadtrees per view, loader, height queries |
 #![deny(unsafe_code)]
 
 pub mod allocator;
 pub mod camera;
+pub mod clipmap;
 pub mod dataset;
 pub mod dem;
 pub mod flight;
 pub mod geo;
 pub mod lod;
 pub mod node;
+pub mod procedural;
 pub mod pyramid;
 pub mod render;
 pub mod scene;

@@ -53,7 +53,7 @@ impl NodeLayout {
 
     /// Nodes per side at `lod`, east and north (covering every sample).
     pub fn nodes_at(&self, lod: u8) -> [u32; 2] {
-        let span = (self.node_size as u64) << lod;
+        let span = self.span(lod);
         let count = |samples: u32| (samples.saturating_sub(1) as u64).div_ceil(span).max(1) as u32;
         [count(self.samples[0]), count(self.samples[1])]
     }
@@ -88,6 +88,18 @@ impl NodeLayout {
         x as u64 * y as u64
     }
 
+    /// Side of a node of `lod` in metres, east and north.
+    pub fn node_size_m(&self, lod: u8) -> [f64; 2] {
+        let span = self.span(lod) as f64;
+        [span * self.spacing_m[0], span * self.spacing_m[1]]
+    }
+
+    /// Distance in metres from the south-west sample to the north-east one.
+    pub fn extent_m(&self) -> [f64; 2] {
+        let last = |axis: usize| self.samples[axis].saturating_sub(1) as f64 * self.spacing_m[axis];
+        [last(0), last(1)]
+    }
+
     /// Whether `id` names a node of this pyramid.
     pub fn contains(&self, id: NodeId) -> bool {
         if id.lod >= self.levels {
@@ -107,6 +119,40 @@ impl NodeLayout {
         let [x_count, _] = self.nodes_at(id.lod);
         Some(before + id.y as u64 * x_count as u64 + id.x as u64)
     }
+
+    /// The node of `lod` covering the point `(x_m, y_m)` of the local frame and
+    /// the point's post coordinates inside it, or `None` when the point is not
+    /// finite or lies outside the data. A point on a shared edge belongs to
+    /// the node east or north of it, except on the data's far edges.
+    pub fn locate(&self, lod: u8, x_m: f64, y_m: f64) -> Option<NodePoint> {
+        if lod >= self.levels {
+            return None;
+        }
+        let span = self.span(lod);
+        let stride = (1u64 << lod) as f64;
+        let extent = self.extent_m();
+        let nodes = self.nodes_at(lod);
+        let axis = |axis: usize, m: f64| -> Option<(u32, f64)> {
+            if !(m >= 0.0 && m <= extent[axis]) {
+                return None; // also refuses NaN
+            }
+            let sample = m / self.spacing_m[axis];
+            let node = ((sample / span as f64).floor() as u64).min(nodes[axis] as u64 - 1);
+            Some((node as u32, (sample - (node * span) as f64) / stride))
+        };
+        let (x, u) = axis(0, x_m)?;
+        let (y, v) = axis(1, y_m)?;
+        Some(NodePoint { id: NodeId::new(lod, x, y), posts: [u, v] })
+    }
+}
+
+/// A point located inside a node.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NodePoint {
+    pub id: NodeId,
+    /// Post coordinates east and north from the node's south-west centre
+    /// post, each in `0..=node_size`.
+    pub posts: [f64; 2],
 }
 
 /// A node's stored content.
@@ -123,12 +169,60 @@ pub struct NodeData {
     pub delta: f32,
 }
 
+impl NodeData {
+    /// Empty node data whose buffer already holds a node of `layout`, so that
+    /// reading into it does not allocate.
+    pub fn with_capacity(layout: &NodeLayout) -> Self {
+        let side = layout.stored_side() as usize;
+        NodeData { heights: Vec::with_capacity(side * side), ..NodeData::default() }
+    }
+
+    /// Height of centre post `(i, j)` (`0..=node_size` each, border excluded).
+    pub fn post(&self, layout: &NodeLayout, i: u32, j: u32) -> f32 {
+        let side = layout.stored_side();
+        debug_assert!(i <= layout.node_size && j <= layout.node_size);
+        debug_assert_eq!(self.heights.len(), (side * side) as usize);
+        self.heights[((j + layout.border) * side + i + layout.border) as usize]
+    }
+
+    /// The node's surface at post coordinates `posts` (see [`NodePoint`]):
+    /// each cell is split from its south-west to its north-east corner and
+    /// the triangle holding the point is interpolated linearly, the surface
+    /// `delta` is measured against.
+    pub fn interpolate(&self, layout: &NodeLayout, posts: [f64; 2]) -> f32 {
+        let last_cell = layout.node_size.saturating_sub(1);
+        let cell = |p: f64| (p.max(0.0).floor() as u32).min(last_cell);
+        let (i, j) = (cell(posts[0]), cell(posts[1]));
+        let (fx, fy) = (posts[0] - i as f64, posts[1] - j as f64);
+        let h = |di: u32, dj: u32| self.post(layout, i + di, j + dj) as f64;
+        let (sw, se, nw, ne) = (h(0, 0), h(1, 0), h(0, 1), h(1, 1));
+        let height = if fx >= fy {
+            sw + fx * (se - sw) + fy * (ne - se) // south-east triangle
+        } else {
+            sw + fy * (nw - sw) + fx * (ne - nw) // north-west triangle
+        };
+        height as f32
+    }
+}
+
 /// Anything that can produce nodes: the memory-mapped pyramid, the procedural
 /// earth. Called from the loader thread.
 pub trait NodeSource: Send + Sync {
     fn layout(&self) -> &NodeLayout;
     /// Writes node `id` into `out`, reusing its buffers.
     fn read_node(&self, id: NodeId, out: &mut NodeData) -> Result<(), NodeError>;
+
+    /// The height at `(x_m, y_m)` at full resolution: the level-0 samples
+    /// joined as triangles (the surface every `delta` is measured against).
+    /// The default reads the level-0 node holding the point, which allocates
+    /// one node; sources with direct access to samples override it.
+    fn exact_height(&self, x_m: f64, y_m: f64) -> Result<f32, NodeError> {
+        let layout = *self.layout();
+        let point = layout.locate(0, x_m, y_m).ok_or(NodeError::OutsideData { x_m, y_m })?;
+        let mut node = NodeData::with_capacity(&layout);
+        self.read_node(point.id, &mut node)?;
+        Ok(node.interpolate(&layout, point.posts))
+    }
 }
 
 /// Why a node could not be produced.
@@ -140,4 +234,6 @@ pub enum NodeError {
     Corrupt { path: std::path::PathBuf, id: NodeId, problem: String },
     #[error("{path}: {source}")]
     Io { path: std::path::PathBuf, source: std::io::Error },
+    #[error("point ({x_m} m, {y_m} m) is outside the data")]
+    OutsideData { x_m: f64, y_m: f64 },
 }

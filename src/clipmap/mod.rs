@@ -1,0 +1,481 @@
+//! The chunked clipmap (Kühnert 4.5): pages the node pyramid of any
+//! [`NodeSource`] into a [`NodeAtlas`] of fixed size shared by several views,
+//! each with its own [`ClippedQuadtree`], and answers height queries from the
+//! best resident data.
+//!
+//! Every frame [`Clipmap::update`] runs the four steps of Kühnert 4.5.7:
+//! 1. each view centres its quadtree under the viewer and lists the nodes
+//!    within its `load_distance` (scaled by each level's node size);
+//! 2. the union over views is compared with the atlas: resident nodes are
+//!    marked used, the rest become unused (kept as a cache, reused least
+//!    recently used first), and missing ones are requested coarsest first,
+//!    then nearest first, never more than the atlas can take;
+//! 3. at most `budget` finished loads are copied into atlas slots;
+//! 4. each view's entries are re-pointed at the best resident node.
+//!
+//! The root level is loaded when the clipmap is built and pinned, so every
+//! lookup inside the data answers, from the finest resident ancestor when the
+//! node it would like is not there yet.
+
+mod atlas;
+mod hash;
+mod loader;
+mod lru;
+mod quadtree;
+
+use std::sync::Arc;
+
+use glam::{DVec2, DVec3};
+
+pub use atlas::{NodeAtlas, SlotState};
+pub use loader::LoaderMode;
+pub use quadtree::{ClippedQuadtree, Entry};
+
+use hash::{node_map, node_set, NodeMap, NodeSet};
+use loader::{Loaded, Loader};
+use crate::node::{NodeData, NodeError, NodeId, NodeLayout, NodeSource};
+
+/// Settings shared by all views.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ClipmapConfig {
+    /// Slots in the node atlas; must exceed the root level's node count.
+    pub atlas_slots: u32,
+    /// Most finished loads copied into the atlas per frame.
+    pub budget: u32,
+    pub loader: LoaderMode,
+}
+
+/// Settings of one view's clipped quadtree. Distances are in node sizes of
+/// each level (Kühnert's `view_distance` and `load_distance` in multiples of
+/// the leaf node size, scaled by the level).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewConfig {
+    /// Entries per side of each layer (`node_count`), 4 to 256.
+    pub node_count: u32,
+    /// Lookups use layer `l` up to `view_distance` node sizes of level `l`.
+    pub view_distance: f64,
+    /// Nodes of level `l` are loaded up to `load_distance` node sizes away;
+    /// `view_distance <= load_distance <= (node_count - 3) / 2`, the largest
+    /// radius whose nodes always fit the window centred under the viewer.
+    pub load_distance: f64,
+}
+
+impl ViewConfig {
+    /// The largest `load_distance` a window of `node_count` nodes supports.
+    pub fn max_load_distance(node_count: u32) -> f64 {
+        (node_count as f64 - 3.0) / 2.0
+    }
+}
+
+/// Names one view of a [`Clipmap`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ViewId(usize);
+
+/// Why a clipmap or a view cannot be built or updated.
+#[derive(Debug, thiserror::Error)]
+pub enum ClipmapError {
+    #[error("clipmap: the node source has no levels")]
+    NoLevels,
+    #[error("clipmap: {slots} atlas slots cannot hold the {roots} root nodes and one more")]
+    TooFewSlots { slots: u32, roots: u64 },
+    #[error("clipmap: the load budget must be at least one node per frame")]
+    ZeroBudget,
+    #[error("clipmap: the loader queue must hold at least one request")]
+    ZeroQueue,
+    #[error("clipmap: node_count {0} must be between 4 and 256")]
+    NodeCount(u32),
+    #[error("clipmap: need 0 < view_distance {view} <= load_distance {load} <= {max} for node_count {node_count}")]
+    Distances { view: f64, load: f64, max: f64, node_count: u32 },
+    #[error("clipmap: viewer position {0} is not finite")]
+    Position(DVec3),
+    #[error("clipmap: loading the root level: {0}")]
+    Root(NodeError),
+    #[error("clipmap: starting the loader thread: {0}")]
+    Spawn(std::io::Error),
+    #[error("clipmap: the loader thread stopped (the node source panicked)")]
+    LoaderStopped,
+}
+
+/// Why a lookup has no answer.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum LookupError {
+    #[error("point ({0}, {1}) is outside the data")]
+    OutsideData(f64, f64),
+    #[error("point ({0}, {1}) is outside the view's quadtree")]
+    OutsideView(f64, f64),
+}
+
+/// Where a lookup found its data (Kühnert eq. 4.10, 4.11).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NodeLookup {
+    /// The atlas slot holding `node`.
+    pub slot: u32,
+    pub node: NodeId,
+    /// Position inside the node, 0..=1 east and north (eq. 4.11).
+    pub atlas_coords: DVec2,
+}
+
+/// A height from the clipmap.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HeightSample {
+    pub height_m: f32,
+    /// The answering node's `delta`: the full-resolution surface is within
+    /// this many metres of `height_m`.
+    pub error_bound_m: f32,
+    pub node: NodeId,
+}
+
+/// What one [`Clipmap::update`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct UpdateStats {
+    pub frame: u64,
+    /// Nodes wanted by at least one view.
+    pub wanted: u32,
+    /// Wanted nodes not resident after step 2.
+    pub missing: u32,
+    /// Requests queued for the loader thread this frame (0 when inline).
+    pub requested: u32,
+    /// Loads copied into the atlas this frame (at most the budget).
+    pub applied: u32,
+    /// Unused nodes whose slots those loads took.
+    pub evicted: u32,
+    /// Finished loads dropped: no longer wanted, or no slot free.
+    pub discarded: u32,
+    /// Loads that failed this frame (see [`Clipmap::last_load_error`]).
+    pub failed: u32,
+    /// Requests still with the loader thread after the frame.
+    pub in_flight: u32,
+}
+
+/// A node not resident but wanted, with its priority.
+#[derive(Clone, Copy, Debug)]
+struct Candidate {
+    id: NodeId,
+    distance_m: f64,
+}
+
+/// The chunked clipmap over one node source.
+pub struct Clipmap {
+    source: Arc<dyn NodeSource>,
+    layout: NodeLayout,
+    config: ClipmapConfig,
+    atlas: NodeAtlas,
+    views: Vec<ClippedQuadtree>,
+    loader: Loader,
+    /// This frame's union of wanted nodes, with the nearest view's distance.
+    wanted: NodeMap<f64>,
+    candidates: Vec<Candidate>,
+    /// Nodes whose load failed; never requested again.
+    failed: NodeSet,
+    last_error: Option<NodeError>,
+    frame: u64,
+}
+
+impl Clipmap {
+    /// Builds the atlas, loads and pins the root level, starts the loader.
+    pub fn new(source: Arc<dyn NodeSource>, config: ClipmapConfig) -> Result<Self, ClipmapError> {
+        let layout = *source.layout();
+        let top = layout.levels.checked_sub(1).ok_or(ClipmapError::NoLevels)?;
+        let [rx, ry] = layout.nodes_at(top);
+        let roots = rx as u64 * ry as u64;
+        if (config.atlas_slots as u64) <= roots {
+            return Err(ClipmapError::TooFewSlots { slots: config.atlas_slots, roots });
+        }
+        if config.budget == 0 {
+            return Err(ClipmapError::ZeroBudget);
+        }
+        if config.loader == (LoaderMode::Thread { queue: 0 }) {
+            return Err(ClipmapError::ZeroQueue);
+        }
+        let changes = 2 * config.budget as usize + roots as usize;
+        let mut atlas = NodeAtlas::new(config.atlas_slots, &layout, changes);
+        let mut buffer = NodeData::with_capacity(&layout);
+        for y in 0..ry {
+            for x in 0..rx {
+                let id = NodeId::new(top, x, y);
+                source.read_node(id, &mut buffer).map_err(ClipmapError::Root)?;
+                atlas.insert(id, &mut buffer, SlotState::Pinned, 0).expect("slots were counted");
+            }
+        }
+        atlas.clear_changes(); // no view yet; each new view refreshes fully
+        let loader = Loader::new(source.clone(), config.loader).map_err(ClipmapError::Spawn)?;
+        Ok(Clipmap {
+            source,
+            layout,
+            config,
+            atlas,
+            views: Vec::new(),
+            loader,
+            wanted: node_map(0),
+            candidates: Vec::new(),
+            failed: node_set(0),
+            last_error: None,
+            frame: 0,
+        })
+    }
+
+    /// Adds a view at `position` (metres: x east, y north, z altitude),
+    /// immediately answering lookups from whatever is resident.
+    pub fn add_view(&mut self, config: ViewConfig, position: DVec3) -> Result<ViewId, ClipmapError> {
+        validate_view(config)?;
+        check_position(position)?;
+        let mut view = ClippedQuadtree::new(config, &self.layout, position);
+        view.refresh_all(&self.layout, &self.atlas);
+        self.views.push(view);
+        let id = ViewId(self.views.len() - 1);
+        let ground = self.ground_under(id);
+        self.views[id.0].set_ground(ground);
+        self.reserve_wanted();
+        Ok(id)
+    }
+
+    /// Moves a view; takes effect at the next [`Clipmap::update`].
+    pub fn set_view_position(&mut self, view: ViewId, position: DVec3) -> Result<(), ClipmapError> {
+        check_position(position)?;
+        self.views[view.0].set_position(position);
+        Ok(())
+    }
+
+    /// Room for every view's largest wanted set, so frames never allocate.
+    fn reserve_wanted(&mut self) {
+        let per_view = |v: &ClippedQuadtree| {
+            let across = (2.0 * v.config().load_distance).ceil() as usize + 2;
+            across * across * self.layout.levels as usize
+        };
+        let most: usize = self.views.iter().map(per_view).sum();
+        self.wanted.reserve(most.saturating_sub(self.wanted.len()));
+        self.candidates.reserve(most.saturating_sub(self.candidates.len()));
+    }
+
+    /// One frame of the four-step update (see the module docs).
+    pub fn update(&mut self) -> Result<UpdateStats, ClipmapError> {
+        self.frame += 1;
+        let mut stats = UpdateStats { frame: self.frame, ..UpdateStats::default() };
+        self.collect_wanted();
+        self.compare_with_atlas(&mut stats);
+        self.load(&mut stats)?;
+        self.atlas.sort_changes();
+        for view in &mut self.views {
+            view.refresh_changes(&self.layout, &self.atlas, self.atlas.changes());
+        }
+        self.atlas.clear_changes();
+        stats.in_flight = self.loader.in_flight();
+        debug_assert_eq!(self.atlas.check(), Ok(()));
+        Ok(stats)
+    }
+
+    /// Step 1: recentres every view and gathers the union of wanted nodes.
+    fn collect_wanted(&mut self) {
+        self.wanted.clear();
+        for index in 0..self.views.len() {
+            let ground = self.ground_under(ViewId(index));
+            let view = &mut self.views[index];
+            view.set_ground(ground);
+            view.recenter(&self.layout);
+            let wanted = &mut self.wanted;
+            view.collect_wanted(&self.layout, |id, distance| {
+                wanted.entry(id).and_modify(|d| *d = d.min(distance)).or_insert(distance);
+            });
+        }
+    }
+
+    /// The terrain height under a view from its current entries (Kühnert
+    /// 4.5.2), at the nearest point of the data.
+    fn ground_under(&self, view: ViewId) -> f64 {
+        let p = self.views[view.0].position();
+        let [ex, ey] = self.layout.extent_m();
+        let (x, y) = (p.x.clamp(0.0, ex), p.y.clamp(0.0, ey));
+        self.height_at(view, DVec2::new(x, y)).map_or(0.0, |s| s.height_m as f64)
+    }
+
+    /// Step 2: marks resident wanted nodes used, releases the rest, lists
+    /// the missing ones by priority.
+    fn compare_with_atlas(&mut self, stats: &mut UpdateStats) {
+        self.candidates.clear();
+        for (&id, &distance_m) in &self.wanted {
+            match self.atlas.slot_of(id) {
+                Some(slot) => self.atlas.mark_used(slot, self.frame),
+                None => {
+                    stats.missing += 1;
+                    if !self.loader.is_loading(id) && !self.failed.contains(&id) {
+                        self.candidates.push(Candidate { id, distance_m });
+                    }
+                }
+            }
+        }
+        self.atlas.release_unused(self.frame);
+        // Coarsest first (they are everyone's fallback), then nearest; the
+        // id breaks ties so the order never depends on the hash map.
+        self.candidates.sort_unstable_by(|a, b| {
+            (b.id.lod.cmp(&a.id.lod))
+                .then(a.distance_m.total_cmp(&b.distance_m))
+                .then(a.id.cmp(&b.id))
+        });
+        stats.wanted = self.wanted.len() as u32;
+    }
+
+    /// Steps 2 (requests) and 3: loads missing nodes, at most as many as
+    /// the atlas can take and, per frame, at most `budget` applied.
+    fn load(&mut self, stats: &mut UpdateStats) -> Result<(), ClipmapError> {
+        let room = self.atlas.available().saturating_sub(self.loader.in_flight()) as usize;
+        if self.loader.is_threaded() {
+            for index in 0..self.candidates.len().min(room) {
+                if !self.loader.request(self.candidates[index].id) {
+                    break;
+                }
+                stats.requested += 1;
+            }
+            while stats.applied < self.config.budget {
+                match self.loader.try_finished() {
+                    Ok(Some(loaded)) => self.apply(loaded, stats),
+                    Ok(None) => break,
+                    Err(_) => return Err(ClipmapError::LoaderStopped),
+                }
+            }
+        } else {
+            let count = room.min(self.config.budget as usize).min(self.candidates.len());
+            for index in 0..count {
+                let loaded = self.loader.load_now(self.candidates[index].id);
+                self.apply(loaded, stats);
+            }
+        }
+        Ok(())
+    }
+
+    /// Copies a finished load into the atlas if it is still wanted.
+    fn apply(&mut self, loaded: Loaded, stats: &mut UpdateStats) {
+        let Loaded { id, mut data, outcome } = loaded;
+        match outcome {
+            Err(error) => {
+                stats.failed += 1;
+                self.failed.insert(id);
+                self.last_error = Some(error);
+            }
+            Ok(()) if self.wanted.contains_key(&id) => {
+                match self.atlas.insert(id, &mut data, SlotState::Used, self.frame) {
+                    Some(insertion) => {
+                        stats.applied += 1;
+                        stats.evicted += insertion.evicted.is_some() as u32;
+                    }
+                    None => stats.discarded += 1,
+                }
+            }
+            Ok(()) => stats.discarded += 1,
+        }
+        self.loader.recycle(data);
+    }
+
+    /// The lookup of Kühnert eq. 4.10 and 4.11 in layer `lod` of a view:
+    /// the best resident node covering the point at that level or coarser.
+    pub fn lookup(&self, view: ViewId, point: DVec2, lod: u8) -> Result<NodeLookup, LookupError> {
+        let outside = LookupError::OutsideData(point.x, point.y);
+        let lod = lod.min(self.layout.levels - 1);
+        let located = self.layout.locate(lod, point.x, point.y).ok_or(outside)?;
+        let quadtree = &self.views[view.0];
+        let (x, y) = (located.id.x as i64, located.id.y as i64);
+        let entry = quadtree.entry(lod, x, y).ok_or(LookupError::OutsideView(point.x, point.y))?;
+        debug_assert_ne!(entry, Entry::NONE, "a located node is inside the pyramid");
+        let node = self.atlas.node_in(entry.slot).expect("entries name resident slots");
+        let at = self.layout.locate(entry.atlas_lod, point.x, point.y).ok_or(outside)?;
+        debug_assert_eq!(at.id, node);
+        let posts = DVec2::from(at.posts) / self.layout.node_size as f64;
+        Ok(NodeLookup { slot: entry.slot, node, atlas_coords: posts })
+    }
+
+    /// The layer a lookup at `point` should use for rendering (eq. 4.9): the
+    /// finest whose view radius holds the 3D distance from the viewer,
+    /// heights approximated by the ground under the viewer at the last
+    /// update.
+    pub fn quadtree_lod(&self, view: ViewId, point: DVec2) -> u8 {
+        let quadtree = &self.views[view.0];
+        let p = quadtree.position();
+        let dz = p.z - quadtree.ground_m();
+        let distance = (point.distance_squared(p.truncate()) + dz * dz).sqrt();
+        (0..self.layout.levels)
+            .find(|&lod| distance < quadtree.view_radius_m(&self.layout, lod))
+            .unwrap_or(self.layout.levels - 1)
+    }
+
+    /// The height at `point` from the finest data the view holds there: the
+    /// finest layer whose window contains the point, which answers from the
+    /// best resident node (terrain awareness wants the best, not the
+    /// distance-appropriate, level).
+    pub fn height_at(&self, view: ViewId, point: DVec2) -> Result<HeightSample, LookupError> {
+        let quadtree = &self.views[view.0];
+        for lod in 0..self.layout.levels {
+            let Some(located) = self.layout.locate(lod, point.x, point.y) else {
+                return Err(LookupError::OutsideData(point.x, point.y));
+            };
+            if quadtree.in_window(lod, located.id.x as i64, located.id.y as i64) {
+                let found = self.lookup(view, point, lod)?;
+                let data = self.atlas.data(found.slot);
+                let posts = (found.atlas_coords * self.layout.node_size as f64).to_array();
+                let height_m = data.interpolate(&self.layout, posts);
+                return Ok(HeightSample { height_m, error_bound_m: data.delta, node: found.node });
+            }
+        }
+        Err(LookupError::OutsideView(point.x, point.y))
+    }
+
+    /// The full-resolution height at `point`, read from the source on this
+    /// thread (see [`NodeSource::exact_height`]).
+    pub fn exact_height(&self, point: DVec2) -> Result<f32, NodeError> {
+        self.source.exact_height(point.x, point.y)
+    }
+
+    pub fn layout(&self) -> &NodeLayout {
+        &self.layout
+    }
+
+    pub fn config(&self) -> ClipmapConfig {
+        self.config
+    }
+
+    pub fn atlas(&self) -> &NodeAtlas {
+        &self.atlas
+    }
+
+    pub fn view(&self, view: ViewId) -> &ClippedQuadtree {
+        &self.views[view.0]
+    }
+
+    /// The last frame's number (0 before the first update).
+    pub fn frame(&self) -> u64 {
+        self.frame
+    }
+
+    /// Whether a view wanted `id` in the last update.
+    pub fn is_wanted(&self, id: NodeId) -> bool {
+        self.wanted.contains_key(&id)
+    }
+
+    /// Whether `id` is with the loader thread.
+    pub fn is_loading(&self, id: NodeId) -> bool {
+        self.loader.is_loading(id)
+    }
+
+    /// The most recent failed load's error.
+    pub fn last_load_error(&self) -> Option<&NodeError> {
+        self.last_error.as_ref()
+    }
+}
+
+fn validate_view(config: ViewConfig) -> Result<(), ClipmapError> {
+    let ViewConfig { node_count, view_distance, load_distance } = config;
+    if !(4..=256).contains(&node_count) {
+        return Err(ClipmapError::NodeCount(node_count));
+    }
+    let max = ViewConfig::max_load_distance(node_count);
+    if !(view_distance > 0.0 && view_distance <= load_distance && load_distance <= max) {
+        return Err(ClipmapError::Distances { view: view_distance, load: load_distance, max, node_count });
+    }
+    Ok(())
+}
+
+fn check_position(position: DVec3) -> Result<(), ClipmapError> {
+    if position.is_finite() {
+        Ok(())
+    } else {
+        Err(ClipmapError::Position(position))
+    }
+}
