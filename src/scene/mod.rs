@@ -6,8 +6,10 @@
 //! again with rings half as wide (coarser tiles), down to the root level,
 //! whose tiles are always resident: the picture gets coarser, never a hole.
 
+mod clipmap_terrain;
 mod terrain;
 
+pub use clipmap_terrain::{ClipmapTerrain, TerrainSummary};
 pub use terrain::{PreloadedTerrain, TerrainData};
 
 use crate::camera::{Camera, CameraError, Frustum, EARTH_RADIUS_M};

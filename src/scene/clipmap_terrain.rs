@@ -1,0 +1,69 @@
+//! The clipmap as the scene's terrain: tiles read whatever nodes the node
+//! atlas holds now, and fall back to the finest resident ancestor.
+
+use super::terrain::{node_height_bounds, TerrainData};
+use crate::clipmap::{Clipmap, SlotState};
+use crate::lod::select::TileBounds;
+use crate::lod::TileKey;
+use crate::node::{NodeData, NodeId, NodeLayout};
+use crate::pyramid::PyramidInfo;
+use crate::tiles::ResidentNodes;
+
+/// Per-level error and height range of the data behind a clipmap (from the
+/// pyramid's header, or the procedural source's bounds).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TerrainSummary {
+    pub delta_per_level: Vec<f64>,
+    pub height_range: (f32, f32),
+}
+
+impl TerrainSummary {
+    pub fn from_pyramid(info: &PyramidInfo) -> Self {
+        TerrainSummary {
+            delta_per_level: info.levels.iter().map(|level| level.delta_max as f64).collect(),
+            height_range: (info.stats.height_min, info.stats.height_max),
+        }
+    }
+}
+
+/// Borrows a clipmap for one frame.
+pub struct ClipmapTerrain<'a> {
+    pub clipmap: &'a Clipmap,
+    pub summary: &'a TerrainSummary,
+}
+
+impl ResidentNodes for ClipmapTerrain<'_> {
+    fn layout(&self) -> &NodeLayout {
+        self.clipmap.layout()
+    }
+
+    fn resident(&self, id: NodeId) -> Option<&NodeData> {
+        let atlas = self.clipmap.atlas();
+        let slot = atlas.slot_of(id)?;
+        (atlas.state(slot) != SlotState::Empty).then(|| atlas.data(slot))
+    }
+}
+
+impl TileBounds for ClipmapTerrain<'_> {
+    fn samples(&self) -> [u32; 2] {
+        self.clipmap.layout().samples
+    }
+
+    fn spacing_m(&self) -> [f64; 2] {
+        self.clipmap.layout().spacing_m
+    }
+
+    fn height_bounds(&self, tile: TileKey, grid_size: u32) -> (f32, f32) {
+        node_height_bounds(self, tile, grid_size, self.summary.height_range)
+    }
+}
+
+impl TerrainData for ClipmapTerrain<'_> {
+    fn delta_per_level(&self) -> Vec<f64> {
+        self.summary.delta_per_level.clone()
+    }
+
+    fn height_range(&self) -> (f32, f32) {
+        self.summary.height_range
+    }
+}
