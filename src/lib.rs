@@ -9,10 +9,12 @@
 //! | [`allocator`] | the contiguous two-pass buffer allocator: one address space, its staging copy, who holds which bytes |
 //! | [`geo`] | georeference conventions and the local metric frame |
 //! | [`dem`] | elevation importers (GeoTIFF, SRTM, DTED, ASCII grid) producing an [`dem::ElevationGrid`] |
+//! | [`gl`] | the thin GL layer: contexts (window, EGL, OSMesa), owner types for GL objects, error checks |
 //! | [`node`] | the node pyramid's vocabulary: node ids, layout, node data, the `NodeSource` trait |
 #![deny(unsafe_code)]
 
 pub mod allocator;
 pub mod dem;
 pub mod geo;
+pub mod gl;
 pub mod node;
