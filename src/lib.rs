@@ -16,6 +16,7 @@
 //! | [`flight`] | camera paths for `fly`: the `--path` CSV, interpolation, frame times, the built-in approach |
 //! | [`scene`] | one frame of the display, GL-free: rings, selection, tile uploads, draw list, stage times |
 //! | [`dataset`] | which terrain a run uses; the built-in SRTM tile, built into `cache/` on first use |
+//! | [`gl`] | the thin GL layer: contexts (window, EGL, OSMesa), owner types for GL objects, error checks |
 //! | [`node`] | the node pyramid's vocabulary: node ids, layout, node data, the `NodeSource` trait |
 //! | [`pyramid`] | building the node pyramid from a grid (split, downsample, stitch, delta), its checksummed file, writing it atomically, opening it memory-mapped |
 //! | [`procedural`] | a deterministic earth-sized `NodeSource` computed on demand, for scale tests |
@@ -29,6 +30,7 @@ pub mod dataset;
 pub mod dem;
 pub mod flight;
 pub mod geo;
+pub mod gl;
 pub mod lod;
 pub mod node;
 pub mod procedural;

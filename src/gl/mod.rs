@@ -1,0 +1,48 @@
+//! The thin GL layer: the only place with OpenGL calls and FFI. It opens
+//! contexts (window, headless EGL, OSMesa), owns GL objects through one type
+//! per kind that frees it on Drop, and checks GL errors with file and line in
+//! debug builds.
+//!
+//! | file | owns |
+//! |---|---|
+//! | `context` | [`GlContext`]: backend choice, info strings, render target, read-back |
+//! | `caps` | [`Capabilities`]: features detected from version and extensions |
+//! | `egl`, `osmesa`, `window` | the platform contexts |
+//! | `probe` | whether a window system answers (for `--backend auto`) |
+//! | `handle` | [`Gl`]: the shared function table and the context's liveness |
+//! | `objects` | owner types: [`Buffer`], [`Shader`], [`Program`], [`Renderbuffer`], [`Framebuffer`], [`VertexArray`] |
+//! | `offscreen` | [`OffscreenTarget`] and pixel read-back |
+//! | `check` | [`gl_check!`](crate::gl_check) |
+//! | `smoke` | [`SmokePass`]: clear and one triangle, proving a context draws |
+//! | `terrain_pass`, `sky_pass` | the terrain tiles (heights as attributes, transforms as uniforms) and the sky |
+//! | `renderer` | [`GlRenderer`]: the GL [`RenderBackend`](crate::render::RenderBackend) |
+//!
+//! unsafe here is allowed per item, each block with a `// SAFETY:` comment.
+
+mod caps;
+pub mod check;
+mod context;
+mod egl;
+mod error;
+mod handle;
+mod objects;
+mod offscreen;
+mod osmesa;
+pub mod probe;
+mod renderer;
+mod sky_pass;
+mod smoke;
+mod terrain_pass;
+mod window;
+
+pub use caps::{Capabilities, GlApi, GlesVersion, Limits, ReportedVersion};
+pub use context::{ContextRequest, GlBackend, GlContext, GlInfo, OpenedBackend};
+pub use error::{GlError, ShaderStage};
+pub use handle::Gl;
+pub use objects::{
+    Buffer, BufferTarget, BufferUsage, Framebuffer, Program, Renderbuffer, Shader, VertexArray,
+};
+pub use offscreen::OffscreenTarget;
+pub use renderer::GlRenderer;
+pub use smoke::{SmokePass, SMOKE_TRIANGLE};
+pub use window::WindowEvents;

@@ -1,0 +1,164 @@
+//! The terrain pass: shared grid positions and indices, one vertex buffer
+//! mirroring the tile allocator's staging copy, and per tile only uniforms
+//! and an attribute offset (Polok). Vertex shaders read no textures.
+
+use std::rc::Rc;
+
+use glow::HasContext;
+
+use super::error::GlError;
+use super::handle::Gl;
+use super::objects::{Buffer, BufferTarget, BufferUsage, Program, VertexArray};
+use crate::gl_check;
+use crate::render::{palette, DrawList, FrameUniforms, TileUniforms};
+use crate::tiles::{TileGrid, TileVertex};
+
+const VERTEX_SOURCE: &str = include_str!("../../shaders/gles/terrain.vert");
+const FRAGMENT_SOURCE: &str = include_str!("../../shaders/gles/terrain.frag");
+
+const GRID: u32 = 0;
+const HEIGHT: u32 = 1;
+const NORMAL: u32 = 2;
+const VERTEX_STRIDE: i32 = std::mem::size_of::<TileVertex>() as i32;
+const NORMAL_OFFSET: i32 = 8;
+
+struct Locations {
+    view_projection: Option<glow::UniformLocation>,
+    tile: Option<glow::UniformLocation>,
+    morph: Option<glow::UniformLocation>,
+    frame: Option<glow::UniformLocation>,
+    sun: Option<glow::UniformLocation>,
+    awareness: Option<glow::UniformLocation>,
+    haze: Option<glow::UniformLocation>,
+}
+
+pub struct TerrainPass {
+    gl: Rc<Gl>,
+    program: Program,
+    at: Locations,
+    grid_vertices: Buffer,
+    grid_indices: Buffer,
+    heights: Buffer,
+    vertex_array: Option<VertexArray>,
+    index_count: i32,
+}
+
+impl TerrainPass {
+    /// Builds the program, the shared grid of `grid_size` and a height
+    /// buffer of `buffer_bytes` (the tile allocator's capacity).
+    pub fn new(gl: &Rc<Gl>, grid_size: u32, buffer_bytes: u32) -> Result<TerrainPass, GlError> {
+        let attributes = [(GRID, "a_grid"), (HEIGHT, "a_height"), (NORMAL, "a_normal")];
+        let program = Program::build(gl, "terrain", VERTEX_SOURCE, FRAGMENT_SOURCE, &attributes)?;
+        let at = Locations {
+            view_projection: program.uniform_location("u_view_projection"),
+            tile: program.uniform_location("u_tile"),
+            morph: program.uniform_location("u_morph"),
+            frame: program.uniform_location("u_frame"),
+            sun: program.uniform_location("u_sun"),
+            awareness: program.uniform_location("u_awareness"),
+            haze: program.uniform_location("u_haze"),
+        };
+        let grid = TileGrid::new(grid_size);
+        let vertex_bytes: &[u8] = bytemuck::cast_slice(&grid.vertices);
+        let grid_vertices = Buffer::new(gl, BufferTarget::Vertices, vertex_bytes.len(), BufferUsage::Static)?;
+        grid_vertices.upload_range(0, vertex_bytes)?;
+        let index_bytes: &[u8] = bytemuck::cast_slice(&grid.indices);
+        let grid_indices = Buffer::new(gl, BufferTarget::Indices, index_bytes.len(), BufferUsage::Static)?;
+        grid_indices.upload_range(0, index_bytes)?;
+        let heights = Buffer::new(gl, BufferTarget::Vertices, buffer_bytes as usize, BufferUsage::Dynamic)?;
+        let vertex_array = if gl.caps().vertex_array_objects { Some(VertexArray::new(gl)?) } else { None };
+        Ok(TerrainPass {
+            gl: Rc::clone(gl),
+            program,
+            at,
+            grid_vertices,
+            grid_indices,
+            heights,
+            vertex_array,
+            index_count: grid.indices.len() as i32,
+        })
+    }
+
+    /// Copies the dirty ranges of the staging copy into the height buffer at
+    /// the same offsets: one glBufferSubData per range (per run piece).
+    pub fn upload(&self, staging: &[u8], ranges: &[std::ops::Range<u32>]) -> Result<(), GlError> {
+        for range in ranges {
+            let bytes = &staging[range.start as usize..range.end as usize];
+            self.heights.upload_range(range.start as usize, bytes)?;
+        }
+        Ok(())
+    }
+
+    /// Draws every tile of `list`. Sets all the state it relies on: depth
+    /// test and writes on, back faces culled, no blending.
+    #[allow(unsafe_code)]
+    pub fn draw(&self, list: &DrawList) -> Result<(), GlError> {
+        let Some(frame) = list.frame else { return Ok(()) };
+        let gl = &self.gl;
+        // SAFETY: every object bound is live in this context; attribute
+        // pointers stay inside the buffers (grid vertices are indexed by the
+        // shared indices, each tile's offset leaves room for a whole tile, as
+        // the allocator placed it).
+        unsafe {
+            gl.viewport(0, 0, frame.viewport[0] as i32, frame.viewport[1] as i32);
+            gl.enable(glow::DEPTH_TEST);
+            gl.depth_func(glow::LESS);
+            gl.depth_mask(true);
+            gl.enable(glow::CULL_FACE);
+            gl.cull_face(glow::BACK);
+            gl.front_face(glow::CCW);
+            gl.disable(glow::BLEND);
+            self.program.bind();
+            self.set_frame_uniforms(&frame);
+            if let Some(vertex_array) = &self.vertex_array {
+                vertex_array.bind();
+            }
+            self.grid_indices.bind();
+            self.grid_vertices.bind();
+            gl.enable_vertex_attrib_array(GRID);
+            gl.vertex_attrib_pointer_f32(GRID, 3, glow::UNSIGNED_SHORT, false, 8, 0);
+            self.heights.bind();
+            gl.enable_vertex_attrib_array(HEIGHT);
+            gl.enable_vertex_attrib_array(NORMAL);
+            for tile in &list.tiles {
+                self.draw_tile(tile);
+            }
+            gl.disable_vertex_attrib_array(GRID);
+            gl.disable_vertex_attrib_array(HEIGHT);
+            gl.disable_vertex_attrib_array(NORMAL);
+        }
+        gl_check!(gl)
+    }
+
+    #[allow(unsafe_code)]
+    fn set_frame_uniforms(&self, frame: &FrameUniforms) {
+        let gl = &self.gl;
+        let curvature = if frame.curvature { 1.0 / (2.0 * crate::camera::EARTH_RADIUS_M) } else { 0.0 };
+        let sun = frame.sun_direction;
+        let haze = palette::SKY_HORIZON;
+        // SAFETY: the program is bound; locations come from it.
+        unsafe {
+            gl.uniform_matrix_4_f32_slice(self.at.view_projection.as_ref(), false, &frame.view_projection.to_cols_array());
+            gl.uniform_4_f32(self.at.frame.as_ref(), frame.camera_altitude as f32, curvature as f32, 0.0, 0.0);
+            gl.uniform_3_f32(self.at.sun.as_ref(), sun.x, sun.y, sun.z);
+            let awareness = (frame.warning_above_m, frame.caution_below_m, frame.fog_distance_m);
+            gl.uniform_4_f32(self.at.awareness.as_ref(), awareness.0, awareness.1, awareness.2, 0.0);
+            gl.uniform_3_f32(self.at.haze.as_ref(), haze[0], haze[1], haze[2]);
+        }
+    }
+
+    #[allow(unsafe_code)]
+    fn draw_tile(&self, tile: &TileUniforms) {
+        let gl = &self.gl;
+        let offset = tile.byte_offset as i32;
+        // SAFETY: the height buffer is bound; the tile's block holds a whole
+        // tile's vertices from `offset`.
+        unsafe {
+            gl.uniform_4_f32(self.at.tile.as_ref(), tile.origin[0], tile.origin[1], tile.spacing[0], tile.spacing[1]);
+            gl.uniform_4_f32(self.at.morph.as_ref(), tile.morph[0], tile.morph[1], tile.skirt_depth, 0.0);
+            gl.vertex_attrib_pointer_f32(HEIGHT, 2, glow::FLOAT, false, VERTEX_STRIDE, offset);
+            gl.vertex_attrib_pointer_f32(NORMAL, 4, glow::BYTE, true, VERTEX_STRIDE, offset + NORMAL_OFFSET);
+            gl.draw_elements(glow::TRIANGLES, self.index_count, glow::UNSIGNED_SHORT, 0);
+        }
+    }
+}
