@@ -17,6 +17,7 @@
 //! | [`scene`] | one frame of the display, GL-free: rings, selection, tile uploads, draw list, stage times |
 //! | [`dataset`] | which terrain a run uses; the built-in SRTM tile, built into `cache/` on first use |
 //! | [`gl`] | the thin GL layer: contexts (window, EGL, OSMesa), owner types for GL objects, error checks |
+//! | [`display`] | the display put together: GL context and renderer, scene, clipmap; one call per frame |
 //! | [`node`] | the node pyramid's vocabulary: node ids, layout, node data, the `NodeSource` trait |
 //! | [`pyramid`] | building the node pyramid from a grid (split, downsample, stitch, delta), its checksummed file, writing it atomically, opening it memory-mapped |
 //! | [`procedural`] | a deterministic earth-sized `NodeSource` computed on demand, for scale tests |
@@ -28,6 +29,7 @@ pub mod camera;
 pub mod clipmap;
 pub mod dataset;
 pub mod dem;
+pub mod display;
 pub mod flight;
 pub mod geo;
 pub mod gl;

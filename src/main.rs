@@ -7,16 +7,19 @@ use clap::{Parser, Subcommand};
 
 /// Ridgeline: a synthetic-vision terrain display for low-power OpenGL ES boards.
 #[derive(Parser)]
-#[command(version, about)]
+#[command(version, about, args_conflicts_with_subcommands = true)]
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
+    /// With no subcommand, `ridgeline` flies: these are `fly`'s options.
+    #[command(flatten)]
+    fly: cli::fly::FlyArgs,
 }
 
 #[derive(Subcommand)]
 enum Command {
-    /// Fly the built-in approach over the built-in terrain (the main job).
-    Fly,
+    /// Fly a camera path over a terrain (the main job; the default command).
+    Fly(cli::fly::FlyArgs),
     /// Build a node pyramid cache from elevation files.
     Import(cli::import::ImportArgs),
     /// Describe a node pyramid cache.
@@ -25,10 +28,8 @@ enum Command {
 
 fn main() -> Result<()> {
     let cli = Cli::parse();
-    match cli.command.unwrap_or(Command::Fly) {
-        Command::Fly => {
-            println!("ridgeline: the renderer is not built yet; the allocator is (cargo bench --bench allocator).");
-        }
+    match cli.command.unwrap_or(Command::Fly(cli.fly)) {
+        Command::Fly(args) => cli::fly::run(&args)?,
         Command::Import(args) => cli::import::run(&args)?,
         Command::Info(args) => cli::info::run(&args)?,
     }

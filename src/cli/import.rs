@@ -6,9 +6,10 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use indicatif::{ProgressBar, ProgressStyle};
 use ridgeline::dem::ElevationGrid;
-use ridgeline::pyramid::{self, BuildOptions, Progress, FILE_NAME, MAX_SYNTHETIC_SIZE};
+use ridgeline::pyramid::{self, BuildOptions, FILE_NAME, MAX_SYNTHETIC_SIZE};
+
+use super::progress::Bar;
 
 #[derive(clap::Args)]
 pub struct ImportArgs {
@@ -46,7 +47,7 @@ pub fn run(args: &ImportArgs) -> Result<()> {
     std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create the cache", args.out.display()))?;
     let path = args.out.join(FILE_NAME);
     pyramid::write_atomic(&built, &path, &bar)?;
-    bar.0.finish_and_clear();
+    bar.finish();
     let layout = built.layout();
     println!(
         "ridgeline import: wrote {} ({} levels, {} nodes, {:.1} MB of heights in) in {:.1} s",
@@ -64,26 +65,3 @@ fn read_dem_files(files: &[PathBuf]) -> Result<ElevationGrid> {
     Ok(ridgeline::dem::import_files(files)?)
 }
 
-/// The import's progress on a terminal bar (drawn only when stderr is a terminal).
-struct Bar(ProgressBar);
-
-impl Bar {
-    fn new() -> Self {
-        let style = ProgressStyle::with_template("{msg:>18} [{bar:40}] {percent:>3}% {elapsed}")
-            .expect("the template is valid")
-            .progress_chars("=> ");
-        Bar(ProgressBar::new(0).with_style(style))
-    }
-}
-
-impl Progress for Bar {
-    fn phase(&self, name: &str, total: u64) {
-        self.0.set_message(name.to_string());
-        self.0.set_length(total);
-        self.0.set_position(0);
-    }
-
-    fn advance(&self, units: u64) {
-        self.0.inc(units);
-    }
-}

@@ -1,5 +1,8 @@
-//! The subcommands of the `ridgeline` binary that work on terrain data:
-//! `import` builds a node pyramid cache, `info` describes one.
+//! The subcommands of the `ridgeline` binary: `fly` (the main job) flies a
+//! camera path over a terrain, `import` builds a node pyramid cache, `info`
+//! describes one.
 
+pub mod fly;
 pub mod import;
 pub mod info;
+mod progress;

@@ -1,0 +1,241 @@
+//! `ridgeline fly`: the main job. Flies a camera path (the built-in approach
+//! over the built-in terrain by default) in a window where a display answers,
+//! headless otherwise; headless it writes PNG snapshots, the last frame and
+//! `stats.json`, and ends with a summary table.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::{bail, Context, Result};
+use glam::UVec2;
+use ridgeline::dataset;
+use ridgeline::display::{Display, DisplayConfig, FrameStats};
+use ridgeline::flight::{builtin_approach, FlightPath};
+use ridgeline::gl::{GlBackend, GlesVersion, OpenedBackend};
+use ridgeline::node::NodeSource;
+use ridgeline::pyramid::Pyramid;
+use ridgeline::scene::TerrainSummary;
+use serde_json::json;
+
+use super::progress::Bar;
+
+#[derive(clap::Args)]
+pub struct FlyArgs {
+    /// Terrain: a cache name under cache/, or a path to a pyramid; the
+    /// built-in SRTM tile when omitted.
+    #[arg(long)]
+    pub dataset: Option<String>,
+    /// Camera path CSV: t,x,y,alt,heading,pitch,roll (or lat,lon for x,y).
+    #[arg(long)]
+    pub path: Option<PathBuf>,
+    /// Headless: frames at evenly spaced times along the path.
+    #[arg(long, default_value_t = 120)]
+    pub frames: u32,
+    /// Image or window size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+    pub size: UVec2,
+    /// Screen-space error bound in pixels.
+    #[arg(long, default_value_t = 1.0)]
+    pub tau: f64,
+    /// Horizontal field of view in degrees.
+    #[arg(long, default_value_t = 60.0)]
+    pub fov: f64,
+    #[arg(long, value_enum, default_value_t = GlBackend::Auto)]
+    pub backend: GlBackend,
+    /// Ask for an OpenGL ES 2.0 context (the low-end path).
+    #[arg(long)]
+    pub es2: bool,
+    /// Where headless runs write their images and stats.json.
+    #[arg(long, default_value = "target/fly")]
+    pub out: PathBuf,
+    /// PNG snapshots written along a headless flight (the last frame always is).
+    #[arg(long, default_value_t = 6)]
+    pub snapshots: u32,
+}
+
+fn parse_size(text: &str) -> Result<UVec2, String> {
+    let (w, h) = text.split_once(['x', 'X']).ok_or_else(|| format!("size `{text}` is not WIDTHxHEIGHT"))?;
+    let parse = |s: &str| s.trim().parse::<u32>().map_err(|_| format!("size `{text}`: `{s}` is not a whole number"));
+    let size = UVec2::new(parse(w)?, parse(h)?);
+    if size.x == 0 || size.y == 0 || size.x > 16384 || size.y > 16384 {
+        return Err(format!("size `{text}` must be between 1x1 and 16384x16384"));
+    }
+    Ok(size)
+}
+
+pub fn run(args: &FlyArgs) -> Result<()> {
+    if !(args.tau.is_finite() && args.tau > 0.0) {
+        bail!("--tau {} must be a number of pixels above 0", args.tau);
+    }
+    if !(args.fov.is_finite() && args.fov > 0.0 && args.fov < 179.0) {
+        bail!("--fov {} must be between 0 and 179 degrees", args.fov);
+    }
+    let bar = Bar::new();
+    let pyramid = dataset::open(args.dataset.as_deref(), Path::new("cache"), &bar)?;
+    bar.finish();
+    let path = flight_path(args, &pyramid)?;
+    let summary = TerrainSummary::from_pyramid(pyramid.info());
+    let dataset_name = pyramid.path().display().to_string();
+    let source: Arc<dyn NodeSource> = Arc::new(pyramid);
+    let mut config = DisplayConfig::new(args.backend, args.size);
+    config.version = if args.es2 { GlesVersion::Es2 } else { GlesVersion::Es3 };
+    config.scene.lod.tau_px = args.tau;
+    config.fov_x_deg = args.fov;
+    let mut display = Display::new(&config, source, summary).context("opening the display")?;
+    let info = display.info().clone();
+    println!("ridgeline fly: {} on {} ({}), {}", dataset_name, info.backend.name(), info.version, info.renderer);
+    let rows = if info.backend == OpenedBackend::Window {
+        fly_window(args, &mut display, &path)?
+    } else {
+        fly_headless(args, &mut display, &path)?
+    };
+    if info.backend != OpenedBackend::Window {
+        write_stats(args, &info, &dataset_name, &rows)?;
+    }
+    print_summary(&rows);
+    Ok(())
+}
+
+fn flight_path(args: &FlyArgs, pyramid: &Pyramid) -> Result<FlightPath> {
+    let layout = *pyramid.layout();
+    match &args.path {
+        Some(file) => Ok(FlightPath::read(file, &pyramid.info().georef, layout.samples)?),
+        None => {
+            let extent = layout.extent_m();
+            let height = |x: f64, y: f64| pyramid.exact_height(x, y).unwrap_or(0.0);
+            Ok(builtin_approach(extent, &height))
+        }
+    }
+}
+
+/// One row of stats.json.
+#[derive(serde::Serialize)]
+struct Row {
+    frame: u32,
+    t: f64,
+    #[serde(flatten)]
+    stats: FrameStats,
+}
+
+fn fly_headless(args: &FlyArgs, display: &mut Display, path: &FlightPath) -> Result<Vec<Row>> {
+    std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create the output folder", args.out.display()))?;
+    let frames = args.frames.max(1);
+    // Start-up: page in the terrain around the first pose, as a display would
+    // before it is shown, so the first frame is not drawn from the root alone.
+    let first = path.sample(path.start_time()).camera(args.fov, [args.size.x, args.size.y]);
+    display.settle(&first, 10_000)?;
+    let every = (frames / args.snapshots.max(1)).max(1);
+    let mut rows = Vec::with_capacity(frames as usize);
+    for (k, t) in path.frame_times(frames).enumerate() {
+        let k = k as u32;
+        let camera = path.sample(t).camera(args.fov, [args.size.x, args.size.y]);
+        let stats = display.frame(&camera).with_context(|| format!("frame {k} at t = {t:.2} s"))?;
+        let last = k + 1 == frames;
+        if k % every == 0 || last {
+            let image = display.read_pixels()?;
+            let name = if last { "last.png".to_string() } else { format!("frame_{k:05}.png") };
+            save_png(&image, &args.out.join(name))?;
+        }
+        rows.push(Row { frame: k, t, stats });
+    }
+    Ok(rows)
+}
+
+fn fly_window(args: &FlyArgs, display: &mut Display, path: &FlightPath) -> Result<Vec<Row>> {
+    let start = Instant::now();
+    let mut rows = Vec::new();
+    let duration = path.end_time() - path.start_time();
+    loop {
+        let elapsed = start.elapsed().as_secs_f64();
+        if elapsed > duration {
+            break;
+        }
+        let t = path.start_time() + elapsed;
+        let camera = path.sample(t).camera(args.fov, [args.size.x, args.size.y]);
+        let stats = display.frame(&camera)?;
+        display.present()?;
+        rows.push(Row { frame: rows.len() as u32, t, stats });
+        if display.context_mut().pump_events(Some(Duration::ZERO)).close_requested {
+            break;
+        }
+    }
+    Ok(rows)
+}
+
+/// Writes the image beside its final name and renames it into place.
+fn save_png(image: &image::RgbaImage, path: &Path) -> Result<()> {
+    let partial = path.with_extension("png.tmp");
+    image.save_with_format(&partial, image::ImageFormat::Png).with_context(|| format!("{}: cannot write", partial.display()))?;
+    std::fs::rename(&partial, path).with_context(|| format!("{}: cannot rename into place", path.display()))?;
+    Ok(())
+}
+
+fn write_stats(args: &FlyArgs, info: &ridgeline::gl::GlInfo, dataset: &str, rows: &[Row]) -> Result<()> {
+    let frames: Vec<serde_json::Value> = rows
+        .iter()
+        .map(|row| {
+            let s = &row.stats;
+            json!({
+                "frame": row.frame,
+                "t": row.t,
+                "tiles": s.scene.tiles,
+                "triangles": s.scene.triangles,
+                "draw_calls": s.draw_calls,
+                "bytes_uploaded": s.scene.bytes_uploaded,
+                "transfers": s.scene.transfers,
+                "tiles_generated": s.scene.generated,
+                "allocator_used_bytes": s.scene.allocator_used_bytes,
+                "allocator_workspace_bytes": s.scene.allocator_workspace_bytes,
+                "resident_nodes": s.resident_nodes,
+                "nodes_loaded": s.nodes_loaded,
+                "coarsened": s.scene.coarsened,
+                "cpu_ms": {
+                    "clipmap": s.clipmap_ms,
+                    "select": s.scene.cpu_ms.select_ms,
+                    "tiles": s.scene.cpu_ms.tiles_ms,
+                    "draw_list": s.scene.cpu_ms.draw_list_ms,
+                    "gl": s.gl_ms,
+                },
+                "frame_ms": s.frame_ms,
+            })
+        })
+        .collect();
+    let report = json!({
+        "backend": info.backend.name(),
+        "gl_version": info.version,
+        "gl_renderer": info.renderer,
+        "shading_language_version": info.shading_language_version,
+        "dataset": dataset,
+        "size": [args.size.x, args.size.y],
+        "tau_px": args.tau,
+        "fov_x_deg": args.fov,
+        "frames": frames,
+    });
+    let path = args.out.join("stats.json");
+    let partial = args.out.join("stats.json.tmp");
+    std::fs::write(&partial, serde_json::to_string_pretty(&report)?).with_context(|| format!("{}: cannot write", partial.display()))?;
+    std::fs::rename(&partial, &path).with_context(|| format!("{}: cannot rename into place", path.display()))?;
+    println!("wrote {} and {} images", path.display(), rows.len().min(args.snapshots as usize + 1));
+    Ok(())
+}
+
+fn print_summary(rows: &[Row]) {
+    if rows.is_empty() {
+        return;
+    }
+    let mut frame_ms: Vec<f64> = rows.iter().map(|r| r.stats.frame_ms).collect();
+    frame_ms.sort_by(f64::total_cmp);
+    let pick = |q: f64| frame_ms[((frame_ms.len() - 1) as f64 * q).round() as usize];
+    let mean = |f: &dyn Fn(&FrameStats) -> f64| rows.iter().map(|r| f(&r.stats)).sum::<f64>() / rows.len() as f64;
+    let uploaded: u64 = rows.iter().map(|r| r.stats.scene.bytes_uploaded).sum();
+    let last = rows.last().expect("rows is not empty");
+    println!();
+    println!("  frames            {}", rows.len());
+    println!("  frame ms          mean {:.1}, p50 {:.1}, p95 {:.1}, max {:.1}", mean(&|s| s.frame_ms), pick(0.5), pick(0.95), pick(1.0));
+    println!("  cpu ms            clipmap {:.2}, select {:.2}, tiles {:.2}", mean(&|s| s.clipmap_ms), mean(&|s| s.scene.cpu_ms.select_ms), mean(&|s| s.scene.cpu_ms.tiles_ms));
+    println!("  tiles             mean {:.0} ({:.0} triangles, {:.0} draw calls)", mean(&|s| s.scene.tiles as f64), mean(&|s| s.scene.triangles as f64), mean(&|s| s.draw_calls as f64));
+    println!("  uploaded          {:.1} MB in all, {:.0} KB per frame", uploaded as f64 / 1e6, uploaded as f64 / 1e3 / rows.len() as f64);
+    println!("  allocator         {:.1} MB used at the end", last.stats.scene.allocator_used_bytes as f64 / 1e6);
+    println!("  resident nodes    {} at the end", last.stats.resident_nodes);
+}

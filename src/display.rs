@@ -1,0 +1,214 @@
+//! The display put together: a GL context and renderer, the scene, and the
+//! chunked clipmap paging a node source, one call per frame. `fly`, the
+//! accuracy tool, the regression tests and the render bench all drive this.
+
+use crate::camera::Camera;
+use crate::clipmap::{Clipmap, ClipmapConfig, ClipmapError, LoaderMode, UpdateStats, ViewConfig, ViewId};
+use crate::gl::{ContextRequest, GlBackend, GlContext, GlError, GlInfo, GlRenderer, GlesVersion};
+use crate::lod::ranges::RingInputs;
+use crate::lod::LevelRanges;
+use crate::node::NodeSource;
+use crate::render::RenderBackend;
+use crate::scene::{ClipmapTerrain, FrameReport, Scene, SceneConfig, SceneError, TerrainSummary};
+use glam::{DVec3, UVec2};
+use image::RgbaImage;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Everything fixed for one display.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DisplayConfig {
+    pub backend: GlBackend,
+    pub version: GlesVersion,
+    pub size: UVec2,
+    pub scene: SceneConfig,
+    /// Field of view used to size the clipmap's load radius (the rings depend on it).
+    pub fov_x_deg: f64,
+    /// Loads copied into the node atlas per frame.
+    pub load_budget: u32,
+    /// Load nodes on a thread (flying) or inline up to the budget (tests that
+    /// want every frame complete and repeatable).
+    pub loader: LoaderMode,
+    /// Clear to this colour and skip the sky (hole detection in tests).
+    pub sentinel: Option<[f32; 4]>,
+}
+
+impl DisplayConfig {
+    pub fn new(backend: GlBackend, size: UVec2) -> Self {
+        DisplayConfig {
+            backend,
+            version: GlesVersion::Es3,
+            size,
+            scene: SceneConfig::default(),
+            fov_x_deg: 60.0,
+            load_budget: 32,
+            loader: LoaderMode::Thread { queue: 256 },
+            sentinel: None,
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum DisplayError {
+    #[error(transparent)]
+    Gl(#[from] GlError),
+    #[error(transparent)]
+    Clipmap(#[from] ClipmapError),
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+}
+
+/// What one frame did and cost.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct FrameStats {
+    #[serde(flatten)]
+    pub scene: FrameReport,
+    pub draw_calls: usize,
+    pub resident_nodes: u32,
+    pub nodes_loaded: u32,
+    pub clipmap_ms: f64,
+    pub gl_ms: f64,
+    /// Whole frame on the CPU and GPU, measured up to glFinish.
+    pub frame_ms: f64,
+}
+
+pub struct Display {
+    // Field order is drop order: GL objects before their context.
+    renderer: GlRenderer,
+    context: GlContext,
+    scene: Scene,
+    clipmap: Clipmap,
+    view: ViewId,
+    summary: TerrainSummary,
+}
+
+impl Display {
+    /// Opens the context and builds the clipmap over `source` (whose per-level
+    /// error and height range `summary` gives).
+    pub fn new(config: &DisplayConfig, source: Arc<dyn NodeSource>, summary: TerrainSummary) -> Result<Display, DisplayError> {
+        let mut request = ContextRequest::new(config.backend, config.version, config.size);
+        request.title = "Ridgeline".to_owned();
+        let context = GlContext::new(&request)?;
+        let layout = *source.layout();
+        let view_config = view_config(config, &summary, &layout);
+        let slots = atlas_slots(&view_config, layout.levels);
+        let clipmap_config = ClipmapConfig { atlas_slots: slots, budget: config.load_budget, loader: config.loader };
+        let mut clipmap = Clipmap::new(source, clipmap_config)?;
+        let view = clipmap.add_view(view_config, DVec3::ZERO)?;
+        let terrain = ClipmapTerrain { clipmap: &clipmap, summary: &summary };
+        let scene = Scene::new(config.scene, &terrain)?;
+        let mut renderer = GlRenderer::new(context.gl(), config.scene.lod.grid_size, config.scene.buffer_bytes)?;
+        renderer.set_sentinel(config.sentinel);
+        Ok(Display { renderer, context, scene, clipmap, view, summary })
+    }
+
+    pub fn info(&self) -> &GlInfo {
+        self.context.info()
+    }
+
+    pub fn context_mut(&mut self) -> &mut GlContext {
+        &mut self.context
+    }
+
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    pub fn clipmap(&self) -> &Clipmap {
+        &self.clipmap
+    }
+
+    /// Pages, tiles, uploads and draws one frame for `camera`, then waits for
+    /// the GPU (glFinish) so `frame_ms` is the whole frame.
+    pub fn frame(&mut self, camera: &Camera) -> Result<FrameStats, DisplayError> {
+        let start = Instant::now();
+        self.clipmap.set_view_position(self.view, camera.position)?;
+        let update: UpdateStats = self.clipmap.update()?;
+        let paged = Instant::now();
+        let terrain = ClipmapTerrain { clipmap: &self.clipmap, summary: &self.summary };
+        let report = self.scene.frame(camera, &terrain)?;
+        let tiled = Instant::now();
+        self.context.bind_target();
+        let (staging, ranges) = self.scene.uploads();
+        self.renderer.upload(staging, ranges)?;
+        self.renderer.draw(self.scene.draw_list())?;
+        self.renderer.finish();
+        let done = Instant::now();
+        Ok(FrameStats {
+            scene: report,
+            draw_calls: self.scene.draw_list().tiles.len(),
+            resident_nodes: self.clipmap.atlas().resident_count(),
+            nodes_loaded: update.applied,
+            clipmap_ms: (paged - start).as_secs_f64() * 1e3,
+            gl_ms: (done - tiled).as_secs_f64() * 1e3,
+            frame_ms: (done - start).as_secs_f64() * 1e3,
+        })
+    }
+
+    /// Pages in every node the view wants around `camera` before the first
+    /// frame (start-up, and tests that need complete, repeatable frames).
+    /// Gives up after `max_updates` clipmap updates; returns how many ran.
+    pub fn settle(&mut self, camera: &Camera, max_updates: u32) -> Result<u32, DisplayError> {
+        self.clipmap.set_view_position(self.view, camera.position)?;
+        for update in 1..=max_updates {
+            let stats = self.clipmap.update()?;
+            if stats.missing == 0 && stats.in_flight == 0 {
+                return Ok(update);
+            }
+            if stats.applied == 0 {
+                std::thread::sleep(std::time::Duration::from_millis(1));
+            }
+        }
+        Ok(max_updates)
+    }
+
+    /// The last frame as RGBA, row 0 at the top.
+    pub fn read_pixels(&self) -> Result<RgbaImage, GlError> {
+        self.context.read_pixels()
+    }
+
+    /// Shows the frame (swaps a window's buffers).
+    pub fn present(&self) -> Result<(), GlError> {
+        self.context.present()
+    }
+}
+
+/// Sizes the clipmap's view so that every tile the rings can select finds
+/// its own level's node within the load radius: for each level, the far edge
+/// of its ring plus a tile diagonal, in node sizes.
+fn view_config(config: &DisplayConfig, summary: &TerrainSummary, layout: &crate::node::NodeLayout) -> ViewConfig {
+    let camera = Camera {
+        position: DVec3::ZERO,
+        heading_deg: 0.0,
+        pitch_deg: 0.0,
+        roll_deg: 0.0,
+        fov_x_deg: config.fov_x_deg,
+        viewport: [config.size.x, config.size.y],
+    };
+    let grid = config.scene.lod.grid_size as f64;
+    let tile_size_m = grid * layout.spacing_m[0].max(layout.spacing_m[1]);
+    let inputs = RingInputs {
+        tile_size_m,
+        delta_per_level: &summary.delta_per_level,
+        height_range_m: (summary.height_range.1 - summary.height_range.0) as f64,
+        perspective_scale: camera.perspective_scale(),
+    };
+    let ranges = LevelRanges::new(&config.scene.lod, inputs);
+    let mut load_distance: f64 = 2.0;
+    for lod in 0..layout.levels.saturating_sub(1) {
+        let node = layout.node_size_m(lod);
+        let tile = tile_size_m * (1u64 << lod) as f64;
+        let reach = ranges.split_distance(lod + 1) + tile * std::f64::consts::SQRT_2;
+        load_distance = load_distance.max(reach / node[0].min(node[1]) + 0.5);
+    }
+    let load_distance = load_distance.min(40.0);
+    let node_count = (2.0 * load_distance).ceil() as u32 + 4;
+    ViewConfig { node_count, view_distance: load_distance, load_distance }
+}
+
+/// Room for every node a view can want (a disc of the load radius per level)
+/// and as many again as a cache of recently used ones.
+fn atlas_slots(view: &ViewConfig, levels: u8) -> u32 {
+    let disc = std::f64::consts::PI * (view.load_distance + 1.5).powi(2);
+    (2.0 * disc * levels as f64).ceil() as u32 + 64
+}
