@@ -16,21 +16,21 @@ varying float v_relative_height;
 varying float v_height;
 varying float v_distance;
 
-// Hypsometric tint: lowland green through tan and brown to grey rock.
+// Hypsometric tint in absolute metres, the bands charts use: lowland green,
+// yellow-green hills, tan and brown mountains, grey rock, snow.
 vec3 elevation_tint(float h) {
-    vec3 low = vec3(0.30, 0.47, 0.25);
-    vec3 mid = vec3(0.66, 0.60, 0.38);
-    vec3 high = vec3(0.52, 0.40, 0.29);
-    vec3 peak = vec3(0.80, 0.79, 0.77);
-    float t = clamp(h / 1500.0, 0.0, 1.0);
-    vec3 c = mix(low, mid, t);
-    c = mix(c, high, clamp((h - 1500.0) / 1500.0, 0.0, 1.0));
-    return mix(c, peak, clamp((h - 3000.0) / 2500.0, 0.0, 1.0));
+    vec3 c = vec3(0.24, 0.44, 0.22);
+    c = mix(c, vec3(0.55, 0.60, 0.32), clamp(h / 800.0, 0.0, 1.0));
+    c = mix(c, vec3(0.72, 0.62, 0.40), clamp((h - 800.0) / 800.0, 0.0, 1.0));
+    c = mix(c, vec3(0.56, 0.41, 0.28), clamp((h - 1600.0) / 900.0, 0.0, 1.0));
+    c = mix(c, vec3(0.58, 0.56, 0.54), clamp((h - 2500.0) / 900.0, 0.0, 1.0));
+    return mix(c, vec3(0.93, 0.94, 0.96), clamp((h - 3600.0) / 1200.0, 0.0, 1.0));
 }
 
 void main() {
     vec3 n = normalize(v_normal);
-    float light = 0.42 + 0.58 * max(dot(n, u_sun), 0.0);
+    // Lambert from the sun plus a sky fill, so slopes facing away stay readable.
+    float light = 0.30 + 0.75 * max(dot(n, u_sun), 0.0);
     vec3 colour = elevation_tint(v_height);
     if (v_relative_height >= u_awareness.x) {
         colour = vec3(0.85, 0.12, 0.10);
