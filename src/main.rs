@@ -26,7 +26,19 @@ enum Command {
     Info(cli::info::InfoArgs),
 }
 
-fn main() -> Result<()> {
+/// Errors end the program with their whole chain on one line and exit code 1
+/// (no backtrace: these are the user's files and options, not our bugs).
+fn main() -> std::process::ExitCode {
+    match run() {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(error) => {
+            eprintln!("ridgeline: {error:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run() -> Result<()> {
     let cli = Cli::parse();
     match cli.command.unwrap_or(Command::Fly(cli.fly)) {
         Command::Fly(args) => cli::fly::run(&args)?,
