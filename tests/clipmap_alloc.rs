@@ -3,46 +3,15 @@
 //! a global allocator wrapper; this file holds one test so no other test's
 //! allocations are counted.
 
+mod alloc_counter;
 mod clipmap_common;
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 use clipmap_common::*;
 use glam::DVec3;
 use ridgeline::clipmap::{Clipmap, LoaderMode, ViewConfig};
 use ridgeline::procedural::ProceduralEarth;
-
-static ALLOCATIONS: AtomicU64 = AtomicU64::new(0);
-
-/// The system allocator, counting allocations and reallocations.
-struct Counting;
-
-// SAFETY: every call is forwarded unchanged to the system allocator, which
-// upholds GlobalAlloc's contract; the counter is only an atomic increment.
-#[allow(unsafe_code)]
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: forwarded with the caller's guarantees.
-        unsafe { System.alloc(layout) }
-    }
-
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: `ptr` came from `System.alloc` with this layout.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: forwarded with the caller's guarantees.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
 
 /// A flight: east at 250 m/s for `frames` frames of 1/60 s, with a map
 /// view 6 km above; returns allocations counted after the first `warm`.
@@ -54,12 +23,12 @@ fn fly(earth: &ProceduralEarth, clipmap: &mut Clipmap, frames: u32, warm: u32, p
     let mut counted = 0;
     for frame in 0..frames {
         let at = start + DVec3::new(250.0 / 60.0 * frame as f64, 0.0, 0.0);
-        let before = ALLOCATIONS.load(Ordering::Relaxed);
+        let before = alloc_counter::allocations();
         clipmap.set_view_position(pfd, at).unwrap();
         clipmap.set_view_position(map, at + DVec3::Z * 6000.0).unwrap();
         clipmap.update().unwrap();
         clipmap.height_at(pfd, at.truncate()).unwrap();
-        let after = ALLOCATIONS.load(Ordering::Relaxed);
+        let after = alloc_counter::allocations();
         if frame >= warm {
             counted += after - before;
         }

@@ -273,45 +273,46 @@ impl FreeIndex {
         }
     }
 
-    /// In-order list of `(slot, offset, size)`; for checks and tests only.
-    pub fn entries(&self) -> Vec<(Slot, u32, u32)> {
-        let mut out = Vec::with_capacity(self.len);
-        let mut stack = Vec::new();
-        let mut slot = self.root;
-        while slot != NIL || !stack.is_empty() {
-            while slot != NIL {
-                stack.push(slot);
-                slot = self.node(slot).left;
-            }
-            let top = stack.pop().expect("stack is non-empty here");
-            let node = self.node(top);
-            out.push((top, node.offset, node.size));
-            slot = node.right;
+    /// Calls `visit(slot, offset, size)` for every free block in address
+    /// order. Recursive rather than with a stack so that the debug checks
+    /// allocate nothing (the frame loop is checked for allocations).
+    pub fn for_each(&self, visit: &mut dyn FnMut(Slot, u32, u32)) {
+        self.visit_subtree(self.root, visit);
+    }
+
+    fn visit_subtree(&self, slot: Slot, visit: &mut dyn FnMut(Slot, u32, u32)) {
+        if slot == NIL {
+            return;
         }
-        out
+        let node = *self.node(slot);
+        self.visit_subtree(node.left, visit);
+        visit(slot, node.offset, node.size);
+        self.visit_subtree(node.right, visit);
     }
 
     /// Verifies ordering, heap priority and the size augmentation. O(F).
     pub fn check(&self) -> Result<(), String> {
-        let entries = self.entries();
-        if entries.len() != self.len {
-            return Err(format!("free index holds {} nodes, counts {}", entries.len(), self.len));
-        }
-        if entries.windows(2).any(|w| w[0].1 >= w[1].1) {
-            return Err("free index keys out of order".into());
-        }
-        for &(slot, _, _) in &entries {
+        let (mut count, mut last, mut problem) = (0usize, None::<u32>, None::<String>);
+        self.for_each(&mut |slot, offset, _| {
+            count += 1;
+            if last.is_some_and(|l| l >= offset) && problem.is_none() {
+                problem = Some("free index keys out of order".into());
+            }
+            last = Some(offset);
             let node = self.node(slot);
             for child in [node.left, node.right] {
-                if child != NIL && self.node(child).priority > node.priority {
-                    return Err(format!("free index heap order broken at {slot}"));
+                if child != NIL && self.node(child).priority > node.priority && problem.is_none() {
+                    problem = Some(format!("free index heap order broken at {slot}"));
                 }
             }
             let expected = node.size.max(self.subtree_max(node.left)).max(self.subtree_max(node.right));
-            if node.max_size != expected {
-                return Err(format!("free index max_size stale at {slot}"));
+            if node.max_size != expected && problem.is_none() {
+                problem = Some(format!("free index max_size stale at {slot}"));
             }
+        });
+        if count != self.len {
+            return Err(format!("free index holds {count} nodes, counts {}", self.len));
         }
-        Ok(())
+        problem.map_or(Ok(()), Err)
     }
 }

@@ -363,13 +363,14 @@ impl ContiguousAllocator {
     pub fn check_invariants(&self) -> Result<(), String> {
         self.blocks.check()?;
         self.free.check()?;
-        let listed: Vec<(Slot, u32, u32)> = self
-            .blocks
-            .iter()
-            .filter(|(_, b)| b.state == BlockState::Free)
-            .map(|(s, b)| (s, b.offset, b.size))
-            .collect();
-        if listed != self.free.entries() {
+        // The index must hold exactly the list's free blocks, in order.
+        let mut listed = self.blocks.iter().filter(|(_, b)| b.state == BlockState::Free);
+        let mut matches = true;
+        self.free.for_each(&mut |slot, offset, size| {
+            let same = listed.next().is_some_and(|(s, b)| (s, b.offset, b.size) == (slot, offset, size));
+            matches &= same;
+        });
+        if !matches || listed.next().is_some() {
             return Err("free index does not match the free blocks of the list".into());
         }
         let (mut live, mut live_bytes, mut retiring, mut retiring_bytes) = (0, 0u64, 0, 0u64);
@@ -397,7 +398,7 @@ impl ContiguousAllocator {
         }
         let owned = self.owner.iter().filter(|&&s| s != NIL).count();
         if owned != live || live != self.live_blocks || live_bytes != self.live_bytes {
-            return Err(format!("live count {live}/{live_bytes} vs owners {owned}, counters {}/{}", self.live_blocks, self.live_bytes));
+            return Err("live blocks, owners and counters disagree".into());
         }
         if retiring != self.retiring.len() || retiring_bytes != self.retiring_bytes {
             return Err("retiring counters disagree with the list".into());

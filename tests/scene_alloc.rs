@@ -1,0 +1,36 @@
+//! Once warmed up, a frame of the scene allocates nothing: ring updates, tile
+//! selection, the tile cache (slots, allocator, vertex generation) and the
+//! draw list all reuse buffers sized at start. One test in this binary, since
+//! the counter sees the whole process.
+
+mod alloc_counter;
+mod scene_common;
+
+use ridgeline::scene::{Scene, SceneConfig};
+use scene_common::{camera, terrain};
+
+#[test]
+fn steady_state_frames_allocate_nothing() {
+    let terrain = terrain();
+    let mut scene = Scene::new(SceneConfig::default(), terrain).unwrap();
+    let path = |k: u32| camera(20_000.0 + 40.0 * k as f64, 30_000.0 + 25.0 * k as f64, 3_000.0, 55.0, -7.0);
+    // Warm-up: the hash map and tables reach their working size.
+    for k in 0..40 {
+        scene.frame(&path(k), terrain).unwrap();
+    }
+    let before = alloc_counter::allocations();
+    let mut generated = 0;
+    for k in 40..120 {
+        generated += scene.frame(&path(k), terrain).unwrap().generated;
+    }
+    let moving = alloc_counter::allocations() - before;
+    let still = path(120);
+    scene.frame(&still, terrain).unwrap();
+    let before = alloc_counter::allocations();
+    for _ in 0..20 {
+        scene.frame(&still, terrain).unwrap();
+    }
+    let resting = alloc_counter::allocations() - before;
+    assert!(generated > 0, "the flight made new tiles");
+    assert_eq!((moving, resting), (0, 0), "allocations in 80 moving and 20 still frames");
+}
