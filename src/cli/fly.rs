@@ -49,6 +49,17 @@ pub struct FlyArgs {
     /// Where headless runs write their images and stats.json.
     #[arg(long, default_value = "target/fly")]
     pub out: PathBuf,
+    /// Terrain this many metres above the aircraft, or higher, is red
+    /// (default: at the aircraft's altitude, as on EGPWS and TSO-C151 TAWS).
+    #[arg(long, default_value_t = ridgeline::render::palette::DEFAULT_WARNING_ABOVE_M)]
+    pub warning_above: f32,
+    /// Terrain less than this many metres below the aircraft is amber
+    /// (default 152.4 m, 500 ft, the EGPWS caution band).
+    #[arg(long, default_value_t = ridgeline::render::palette::DEFAULT_CAUTION_BELOW_M)]
+    pub caution_below: f32,
+    /// Draw a flat earth (no curvature drop).
+    #[arg(long)]
+    pub flat_earth: bool,
     /// PNG snapshots written along a headless flight (the last frame always is).
     #[arg(long, default_value_t = 6)]
     pub snapshots: u32,
@@ -71,6 +82,9 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     if !(args.fov.is_finite() && args.fov > 0.0 && args.fov < 179.0) {
         bail!("--fov {} must be between 0 and 179 degrees", args.fov);
     }
+    if !(args.warning_above.is_finite() && args.caution_below.is_finite() && args.caution_below >= 0.0) {
+        bail!("--warning-above and --caution-below must be finite metres, the caution band not negative");
+    }
     let bar = Bar::new();
     let pyramid = dataset::open(args.dataset.as_deref(), Path::new("cache"), &bar)?;
     bar.finish();
@@ -81,6 +95,9 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     let mut config = DisplayConfig::new(args.backend, args.size);
     config.version = if args.es2 { GlesVersion::Es2 } else { GlesVersion::Es3 };
     config.scene.lod.tau_px = args.tau;
+    config.scene.warning_above_m = args.warning_above;
+    config.scene.caution_below_m = args.caution_below;
+    config.scene.curvature = !args.flat_earth;
     config.fov_x_deg = args.fov;
     let mut display = Display::new(&config, source, summary).context("opening the display")?;
     let info = display.info().clone();
