@@ -1,8 +1,9 @@
-#!/bin/sh
+#!/usr/bin/env bash
 # Runs every Ridgeline test. On a fresh Debian machine (as root) it first
 # installs the Mesa packages the headless GL tests need (scripts/mesa.sh).
-# `.ci/run` calls exactly this, as the README says.
-set -eu
+# `.ci/run` calls exactly this, as the README says. The last line totals the
+# tests of every test binary.
+set -euo pipefail
 cd "$(dirname "$0")/.."
 sh scripts/mesa.sh
 
@@ -11,4 +12,8 @@ if [ "${CI:-}" = true ]; then
     export RIDGELINE_REQUIRE_OSMESA=1 RIDGELINE_REQUIRE_WINDOW=1
 fi
 
-exec cargo test --locked
+log=$(mktemp)
+trap 'rm -f "$log"' EXIT
+cargo test --locked 2>&1 | tee "$log"
+total() { grep -o "[0-9]* $1;" "$log" | awk '{ n += $1 } END { print n + 0 }'; }
+echo "tests: $(total passed) passed, $(total failed) failed"
