@@ -1,0 +1,71 @@
+//! Cameras at the edges of what a pilot can do to the display: straight up
+//! and down, inverted, below the terrain, at 100 km, with a near-zero field of
+//! view, and with numbers that are not numbers. Every frame must either be
+//! refused with a clear error or produce a valid draw list (tiles inside the
+//! data, finite uniforms, nothing allocated past the buffer).
+
+mod scene_common;
+
+use ridgeline::camera::CameraError;
+use ridgeline::scene::{Scene, SceneConfig, SceneError};
+use scene_common::{camera, terrain};
+
+fn check_frame(scene: &mut Scene, cam: &ridgeline::camera::Camera) -> usize {
+    let report = scene.frame(cam, terrain()).unwrap_or_else(|e| panic!("{cam:?}: {e}"));
+    let list = scene.draw_list();
+    let frame = list.frame.expect("frame uniforms");
+    assert!(frame.view_projection.is_finite(), "{cam:?}: projection not finite");
+    for tile in &list.tiles {
+        let values = [tile.origin[0], tile.origin[1], tile.spacing[0], tile.spacing[1], tile.morph[0], tile.morph[1], tile.skirt_depth];
+        assert!(values.iter().all(|v| v.is_finite()), "{cam:?}: tile {:?} has {values:?}", tile.key);
+    }
+    assert!(report.allocator_used_bytes <= scene.config().buffer_bytes as u64);
+    report.tiles
+}
+
+#[test]
+fn extreme_attitudes_and_positions_draw_or_refuse_cleanly() {
+    let mut scene = Scene::new(SceneConfig::default(), terrain()).unwrap();
+    let centre = (35_000.0, 45_000.0);
+    let cases = [
+        ("looking straight down", camera(centre.0, centre.1, 5_000.0, 0.0, -90.0)),
+        ("looking straight up", camera(centre.0, centre.1, 5_000.0, 0.0, 90.0)),
+        ("inverted", { let mut c = camera(centre.0, centre.1, 4_000.0, 30.0, -5.0); c.roll_deg = 180.0; c }),
+        ("below the terrain", camera(centre.0, centre.1, 500.0, 10.0, 5.0)),
+        ("at 100 km", camera(centre.0, centre.1, 100_000.0, 0.0, -60.0)),
+        ("near-zero field of view", { let mut c = camera(centre.0, centre.1, 3_500.0, 0.0, -5.0); c.fov_x_deg = 1e-3; c }),
+        ("far outside the data", camera(-500_000.0, 2_000_000.0, 3_000.0, 135.0, -3.0)),
+    ];
+    for (name, cam) in cases {
+        let tiles = check_frame(&mut scene, &cam);
+        println!("{name}: {tiles} tiles");
+    }
+    // Looking down from 5 km over the middle of the data must see terrain.
+    assert!(check_frame(&mut scene, &cases[0].1) > 0);
+    // Looking straight up sees none of it.
+    assert_eq!(check_frame(&mut scene, &cases[1].1), 0);
+}
+
+#[test]
+fn numbers_that_are_not_numbers_are_refused() {
+    let mut scene = Scene::new(SceneConfig::default(), terrain()).unwrap();
+    for (field, value) in [("x", f64::NAN), ("altitude", f64::INFINITY), ("heading", f64::NEG_INFINITY), ("pitch", f64::NAN)] {
+        let mut cam = camera(30_000.0, 30_000.0, 3_000.0, 0.0, 0.0);
+        match field {
+            "x" => cam.position.x = value,
+            "altitude" => cam.position.z = value,
+            "heading" => cam.heading_deg = value,
+            _ => cam.pitch_deg = value,
+        }
+        match scene.frame(&cam, terrain()) {
+            Err(SceneError::Camera(CameraError::NotFinite { field: named, .. })) => assert_eq!(named, field),
+            other => panic!("{field} = {value}: expected a refusal, got {other:?}"),
+        }
+    }
+    let mut cam = camera(30_000.0, 30_000.0, 3_000.0, 0.0, 0.0);
+    cam.fov_x_deg = 0.0;
+    assert!(matches!(scene.frame(&cam, terrain()), Err(SceneError::Camera(CameraError::FieldOfView(_)))));
+    cam.fov_x_deg = 60.0;
+    cam.viewport = [0, 100];
+    assert!(matches!(scene.frame(&cam, terrain()), Err(SceneError::Camera(CameraError::EmptyViewport(0, 100)))));
+}
