@@ -110,6 +110,13 @@ impl Display {
         &mut self.context
     }
 
+    /// The GL renderer, for tests that redraw the last frame's draw list
+    /// altered (a tile dropped, morphing or skirts off) to prove that their
+    /// image checks would catch such a fault.
+    pub fn renderer_mut(&mut self) -> &mut GlRenderer {
+        &mut self.renderer
+    }
+
     pub fn scene(&self) -> &Scene {
         &self.scene
     }

@@ -7,20 +7,15 @@
 //! RIDGELINE_REQUIRE_WINDOW=1. Window and auto run in child processes: winit
 //! gives a process one event loop, and auto must be seen without a display.
 
-use std::io::{BufRead, BufReader};
-use std::process::{Child, Command, Stdio};
-use std::sync::Mutex;
+mod gl_common;
+
 use std::time::Instant;
 
 use clap::ValueEnum;
 use glam::{UVec2, Vec4};
 use image::{Rgba, RgbaImage};
-use ridgeline::gl::{
-    probe, ContextRequest, GlBackend, GlContext, GlError, GlesVersion, OpenedBackend, SmokePass,
-};
-
-/// llvmpipe already uses every core; contexts take turns.
-static SERIAL: Mutex<()> = Mutex::new(());
+use gl_common::{child_test, run_child, skip_for_missing_osmesa, take_turn, window_display};
+use ridgeline::gl::{ContextRequest, GlBackend, GlContext, GlesVersion, OpenedBackend, SmokePass};
 
 const SIZE: UVec2 = UVec2::new(96, 64);
 const CLEAR: [u8; 4] = [0, 64, 128, 255];
@@ -112,13 +107,9 @@ fn report(context: &GlContext, started: Instant) {
     );
 }
 
-fn required(var: &str) -> bool {
-    std::env::var(var).is_ok_and(|value| value == "1")
-}
-
 #[test]
 fn egl_es3_draws_and_reads_back() {
-    let _turn = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let _turn = take_turn();
     let started = Instant::now();
     let context = GlContext::new(&ContextRequest::new(GlBackend::Egl, GlesVersion::Es3, SIZE))
         .expect("headless EGL context (Mesa's llvmpipe needs libegl-mesa0)");
@@ -134,7 +125,7 @@ fn egl_es3_draws_and_reads_back() {
 
 #[test]
 fn egl_es2_keeps_to_the_es2_level() {
-    let _turn = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let _turn = take_turn();
     let started = Instant::now();
     let context = GlContext::new(&ContextRequest::new(GlBackend::Egl, GlesVersion::Es2, SIZE))
         .expect("headless EGL ES 2 context");
@@ -148,17 +139,11 @@ fn egl_es2_keeps_to_the_es2_level() {
 
 #[test]
 fn osmesa_runs_the_es_shaders_on_desktop_gl() {
-    let _turn = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let _turn = take_turn();
     let started = Instant::now();
     let request = ContextRequest::new(GlBackend::OsMesa, GlesVersion::Es2, SIZE);
     let context = match GlContext::new(&request) {
-        Err(GlError::LibraryMissing { library, reason }) if !required("RIDGELINE_REQUIRE_OSMESA") => {
-            eprintln!(
-                "\n*** SKIPPED osmesa_runs_the_es_shaders_on_desktop_gl: {library} missing ({reason}).\n\
-                 *** Install libosmesa6; RIDGELINE_REQUIRE_OSMESA=1 makes this a failure.\n"
-            );
-            return;
-        }
+        Err(error) if skip_for_missing_osmesa("osmesa_runs_the_es_shaders_on_desktop_gl", &error) => return,
         other => other.expect("OSMesa context"),
     };
     let info = context.info();
@@ -166,44 +151,6 @@ fn osmesa_runs_the_es_shaders_on_desktop_gl() {
     assert!(!info.is_es(), "OSMesa gives desktop GL, got {}", info.version);
     assert!(context.caps().glsl_es_100);
     draw_check_and_report(&context, started);
-}
-
-/// An Xvfb server this test started, killed on drop.
-struct Xvfb {
-    server: Child,
-    display: String,
-}
-
-impl Xvfb {
-    /// Starts Xvfb on a free display number (-displayfd prints it when the
-    /// server is ready), or None when Xvfb is not installed.
-    fn start() -> Option<Xvfb> {
-        let spawned = Command::new("Xvfb")
-            .args(["-displayfd", "1", "-screen", "0", "320x240x24", "-nolisten", "tcp"])
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn();
-        let mut server = match spawned {
-            Ok(server) => server,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return None,
-            Err(e) => panic!("Xvfb is installed but did not start: {e}"),
-        };
-        let mut line = String::new();
-        let stdout = server.stdout.take().expect("piped stdout");
-        BufReader::new(stdout).read_line(&mut line).expect("read Xvfb's display number");
-        let number: u32 = line.trim().parse().unwrap_or_else(|_| {
-            let _ = server.kill();
-            panic!("Xvfb printed {line:?} instead of a display number")
-        });
-        Some(Xvfb { server, display: format!(":{number}") })
-    }
-}
-
-impl Drop for Xvfb {
-    fn drop(&mut self) {
-        let _ = self.server.kill();
-        let _ = self.server.wait();
-    }
 }
 
 /// One run of [`child_context`] in a new process of this test binary.
@@ -222,52 +169,28 @@ struct ChildRun<'a> {
 
 impl ChildRun<'_> {
     fn run(&self) {
-        let mut command = Command::new(std::env::current_exe().expect("test binary path"));
+        let mut command = child_test("child_context");
         command
-            .args(["child_context", "--exact", "--ignored", "--nocapture", "--test-threads=1"])
             .env("RIDGELINE_CHILD_BACKEND", self.backend)
             .env("RIDGELINE_CHILD_VERSION", self.version)
             .env("RIDGELINE_CHILD_EXPECT", self.expect)
             .env("RIDGELINE_CHILD_EXPECT_VERSION", self.expect_version)
-            .env_remove("WAYLAND_DISPLAY")
-            .env_remove("WAYLAND_SOCKET")
             .envs(self.env.iter().copied());
         match self.display {
             Some(display) => command.env("DISPLAY", display),
             None => command.env_remove("DISPLAY"),
         };
-        let output = command.output().expect("run the child test");
-        let stdout = String::from_utf8_lossy(&output.stdout);
-        let stderr = String::from_utf8_lossy(&output.stderr);
-        println!("child ({} {}):\n{stdout}{stderr}", self.backend, self.version);
-        assert!(output.status.success(), "child test for {} {} failed", self.backend, self.version);
-        assert!(stdout.contains("1 passed"), "the child ran no test");
+        run_child(&mut command, &format!("{} {}", self.backend, self.version));
     }
 }
 
 #[test]
 fn window_under_xvfb_draws_and_reads_back() {
-    let _turn = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let _turn = take_turn();
     let started = Instant::now();
     // A display of our own (a developer's) is used only when it answers.
-    let existing =
-        std::env::var("DISPLAY").ok().filter(|d| !d.is_empty() && probe::display_answers().is_ok());
-    let xvfb = match existing {
-        Some(_) => None,
-        None => match Xvfb::start() {
-            Some(xvfb) => Some(xvfb),
-            None if !required("RIDGELINE_REQUIRE_WINDOW") => {
-                eprintln!(
-                    "\n*** SKIPPED window_under_xvfb_draws_and_reads_back: no display answers and Xvfb \
-                     is not installed.\n*** Install xvfb; RIDGELINE_REQUIRE_WINDOW=1 makes this a failure.\n"
-                );
-                return;
-            }
-            None => panic!("RIDGELINE_REQUIRE_WINDOW=1 but no display answers and Xvfb is missing"),
-        },
-    };
-    let display = xvfb.as_ref().map(|x| x.display.clone()).or(existing);
-    let display = display.as_deref();
+    let Some(window_display) = window_display("window_under_xvfb_draws_and_reads_back") else { return };
+    let display = Some(window_display.display.as_str());
     let window = ChildRun {
         backend: "window",
         version: "es3",
@@ -283,7 +206,7 @@ fn window_under_xvfb_draws_and_reads_back() {
 
 #[test]
 fn auto_without_a_display_opens_egl() {
-    let _turn = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let _turn = take_turn();
     let child = ChildRun {
         backend: "auto",
         version: "es3",
@@ -299,7 +222,7 @@ fn auto_without_a_display_opens_egl() {
 /// ES 2.0 context, where only ES 2.0 entry points and extensions exist.
 #[test]
 fn egl_true_es2_context_draws() {
-    let _turn = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let _turn = take_turn();
     let child = ChildRun {
         backend: "egl",
         version: "es2",

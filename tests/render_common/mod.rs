@@ -1,0 +1,175 @@
+//! What the rendering regression tests share: the built-in terrain (built once
+//! into the target's temporary directory, so child processes and later runs
+//! reuse it), displays over it that draw complete, repeatable frames, the
+//! fixed views, and the image comparison ([`compare`]).
+#![allow(dead_code)] // each test binary uses part of this
+
+pub mod compare;
+pub mod coverage;
+
+use glam::{DVec2, DVec3, UVec2};
+use image::RgbaImage;
+use ridgeline::camera::Camera;
+use ridgeline::clipmap::LoaderMode;
+use ridgeline::display::{Display, DisplayConfig, DisplayError, FrameStats};
+use ridgeline::gl::{GlBackend, GlesVersion};
+use ridgeline::lod::TileKey;
+use ridgeline::pyramid::{Pyramid, Silent};
+use ridgeline::render::{DrawList, RenderBackend};
+use ridgeline::scene::TerrainSummary;
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, OnceLock};
+
+/// Small enough that llvmpipe draws a frame in milliseconds, large enough to
+/// see every level of detail (Ulrich's bound is in pixels of this viewport).
+pub const SIZE: UVec2 = UVec2::new(256, 144);
+
+/// Clear colour with the sky off: any pixel left this colour is not terrain.
+pub const SENTINEL: [f32; 4] = [1.0, 0.0, 1.0, 1.0];
+pub const SENTINEL_RGBA: [u8; 4] = [255, 0, 255, 255];
+
+/// How closely two renders of one view must agree, across backends
+/// (EGL, OSMesa, a window) and context versions (ES 2.0, ES 3), and against
+/// the golden images (see [`compare`] for the metric). Measured on Mesa
+/// 22.3.6 (llvmpipe): EGL, OSMesa and ES 2.0, with 128- or 256-bit vectors,
+/// give identical pixels; a window under Xvfb differs in 30 of 36864 pixels,
+/// 2 of them by more than 16 (far ridges at the skyline, where the depth
+/// buffer decides); softpipe, a different rasteriser, differs in 0.005% of
+/// pixels by at most 10 (mean 0.002). Moving the camera 5 m, changing tau
+/// from 1 to 2 px or turning 0.2 degrees gives a mean of 0.22 to 1.8, so the
+/// mean bound of 0.1 sits 50 times above driver noise and 2 times below the
+/// smallest change that matters; the share bound (7 pixels) takes the
+/// window's stray pixels with a margin of 3.
+pub const TOLERANCE: compare::Tolerance =
+    compare::Tolerance { channel_threshold: 16, max_share_over: 0.0002, max_mean: 0.1 };
+
+/// Where failing images, child renders and the terrain cache go.
+pub fn scratch_dir() -> &'static Path {
+    Path::new(env!("CARGO_TARGET_TMPDIR"))
+}
+
+/// The built-in terrain, built on first use into the target's temporary
+/// directory (beside-and-rename writes make a reader never see half a file).
+pub fn pyramid() -> Arc<Pyramid> {
+    static PYRAMID: OnceLock<Arc<Pyramid>> = OnceLock::new();
+    let pyramid = PYRAMID.get_or_init(|| {
+        let cache: PathBuf = scratch_dir().join("render-terrain");
+        std::fs::create_dir_all(&cache).expect("terrain cache directory");
+        Arc::new(ridgeline::dataset::open(None, &cache, &Silent).expect("built-in terrain"))
+    });
+    Arc::clone(pyramid)
+}
+
+/// Terrain height under `(x, y)`; the views stay inside the data.
+pub fn ground(x: f64, y: f64) -> f64 {
+    pyramid().exact_height(x, y).unwrap_or_else(|| panic!("({x}, {y}) is outside the terrain")) as f64
+}
+
+/// A display whose frames are complete and repeatable: nodes load inline with
+/// a budget no view exhausts, and every view is settled before it is drawn.
+pub fn config(backend: GlBackend, version: GlesVersion) -> DisplayConfig {
+    DisplayConfig { version, loader: LoaderMode::Inline, load_budget: 1000, ..DisplayConfig::new(backend, SIZE) }
+}
+
+pub fn open(config: &DisplayConfig) -> Result<Display, DisplayError> {
+    let pyramid = pyramid();
+    let summary = TerrainSummary::from_pyramid(pyramid.info());
+    Display::new(config, pyramid, summary)
+}
+
+pub fn camera(x: f64, y: f64, altitude: f64, heading_deg: f64, pitch_deg: f64) -> Camera {
+    Camera {
+        position: DVec3::new(x, y, altitude),
+        heading_deg,
+        pitch_deg,
+        roll_deg: 0.0,
+        fov_x_deg: 60.0,
+        viewport: [SIZE.x, SIZE.y],
+    }
+}
+
+/// A named fixed view over the built-in terrain (local metres, degrees).
+#[derive(Clone, Copy, Debug)]
+pub struct View {
+    pub name: &'static str,
+    pub x: f64,
+    pub y: f64,
+    pub altitude: f64,
+    pub heading: f64,
+    pub pitch: f64,
+}
+
+impl View {
+    pub fn camera(&self) -> Camera {
+        camera(self.x, self.y, self.altitude, self.heading, self.pitch)
+    }
+}
+
+/// The golden views: a medium one, a low one among ridges higher than the
+/// aircraft (amber and red terrain-awareness bands), a high one looking
+/// steeply down. All look across the data, away from its near edges. Where
+/// the aircraft is above every ridge the skyline is the data's far edge,
+/// hazed at 50 to 65 km: the medium view's few rows of sky just above it and
+/// about one row in the low view would show terrain beyond the data in the
+/// world; the high view shows no sky.
+pub const VIEWS: [View; 3] = [
+    View { name: "medium", x: 30_000.0, y: 40_000.0, altitude: 3_500.0, heading: 45.0, pitch: -8.0 },
+    View { name: "low", x: 20_000.0, y: 60_000.0, altitude: 2_600.0, heading: 120.0, pitch: -15.0 },
+    View { name: "high", x: 35_000.0, y: 45_000.0, altitude: 9_000.0, heading: 0.0, pitch: -30.0 },
+];
+
+/// Pages in everything `camera` wants, draws it and reads it back. Makes
+/// the display's context current first: `Display::frame` does not, and a
+/// test may hold two displays on one thread.
+pub fn render(display: &mut Display, camera: &Camera) -> (RgbaImage, FrameStats) {
+    display.context_mut().make_current().expect("make the display's context current");
+    display.settle(camera, 1000).expect("settle");
+    let stats = display.frame(camera).expect("frame");
+    (display.read_pixels().expect("read back"), stats)
+}
+
+/// Draws the last frame's draw list again, changed by `alter`, and reads it
+/// back: the same uploads, so only what `alter` changed differs. Tests use it
+/// to break the picture on purpose and show their checks notice.
+pub fn redraw(display: &mut Display, alter: impl FnOnce(&mut DrawList)) -> RgbaImage {
+    let mut list = display.scene().draw_list().clone();
+    alter(&mut list);
+    display.context_mut().make_current().expect("make the display's context current");
+    display.context_mut().bind_target();
+    let renderer = display.renderer_mut();
+    renderer.draw(&list).expect("redraw");
+    renderer.finish();
+    display.read_pixels().expect("read back")
+}
+
+/// The data rectangle less `margin_m` on every side, and the lowest height,
+/// for [`coverage::terrain_guaranteed`].
+pub fn terrain_bounds(margin_m: f64) -> coverage::TerrainBounds {
+    let pyramid = pyramid();
+    let layout = *ridgeline::node::NodeSource::layout(&*pyramid);
+    let [sx, sy] = layout.spacing_m;
+    let extent = DVec2::new((layout.samples[0] - 1) as f64 * sx, (layout.samples[1] - 1) as f64 * sy);
+    // A triangle of the coarsest level may reach this far beyond a point on it.
+    let coarsest_post = (1u64 << (layout.levels - 1)) as f64 * sx.max(sy);
+    coverage::TerrainBounds {
+        min: DVec2::splat(margin_m),
+        max: extent - margin_m,
+        lowest_m: pyramid.info().stats.height_min as f64,
+        reach_slack_m: coarsest_post * std::f64::consts::SQRT_2,
+    }
+}
+
+/// The tiles of the display's last frame.
+pub fn drawn_tiles(display: &Display) -> BTreeSet<TileKey> {
+    display.scene().draw_list().tiles.iter().map(|tile| tile.key).collect()
+}
+
+/// Whether going from `before` to `after` split or merged a tile (tiles that
+/// merely entered or left the view do not count).
+pub fn lod_changed(before: &BTreeSet<TileKey>, after: &BTreeSet<TileKey>) -> bool {
+    let related = |key: &TileKey, other: &BTreeSet<TileKey>| {
+        other.contains(&key.parent()) || (key.level > 0 && key.children().iter().any(|child| other.contains(child)))
+    };
+    after.difference(before).any(|key| related(key, before)) || before.difference(after).any(|key| related(key, after))
+}
