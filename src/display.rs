@@ -129,6 +129,8 @@ impl Display {
     /// the GPU (glFinish) so `frame_ms` is the whole frame.
     pub fn frame(&mut self, camera: &Camera) -> Result<FrameStats, DisplayError> {
         let start = Instant::now();
+        // Another display on this thread may have made its context current.
+        self.context.make_current()?;
         self.clipmap.set_view_position(self.view, camera.position)?;
         let update: UpdateStats = self.clipmap.update()?;
         let paged = Instant::now();
