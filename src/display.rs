@@ -4,12 +4,12 @@
 
 use crate::camera::Camera;
 use crate::clipmap::{Clipmap, ClipmapConfig, ClipmapError, LoaderMode, UpdateStats, ViewConfig, ViewId};
-use crate::gl::{ContextRequest, GlBackend, GlContext, GlError, GlInfo, GlRenderer, GlesVersion};
+use crate::gl::{ContextRequest, GlBackend, GlContext, GlError, GlInfo, GlRenderer, GlesVersion, TruthFrameStats, TruthPass};
 use crate::lod::ranges::RingInputs;
 use crate::lod::LevelRanges;
 use crate::node::NodeSource;
-use crate::render::RenderBackend;
-use crate::scene::{ClipmapTerrain, FrameReport, Scene, SceneConfig, SceneError, TerrainSummary};
+use crate::render::{palette, DrawList, FrameUniforms, RenderBackend};
+use crate::scene::{clip_planes, ClipmapTerrain, FrameReport, Scene, SceneConfig, SceneError, TerrainSummary};
 use glam::{DVec3, UVec2};
 use image::RgbaImage;
 use std::sync::Arc;
@@ -106,6 +106,10 @@ impl Display {
         self.context.info()
     }
 
+    pub fn context(&self) -> &GlContext {
+        &self.context
+    }
+
     pub fn context_mut(&mut self) -> &mut GlContext {
         &mut self.context
     }
@@ -152,6 +156,43 @@ impl Display {
             gl_ms: (done - tiled).as_secs_f64() * 1e3,
             frame_ms: (done - start).as_secs_f64() * 1e3,
         })
+    }
+
+    /// The frame uniforms the scene draws `camera` with (the same near and
+    /// far planes, bands and sun), for passes drawn beside it.
+    pub fn frame_uniforms(&self, camera: &Camera) -> FrameUniforms {
+        let terrain = ClipmapTerrain { clipmap: &self.clipmap, summary: &self.summary };
+        let (near, far) = clip_planes(camera, &terrain);
+        let config = self.scene.config();
+        FrameUniforms {
+            view_projection: camera.projection(near, far) * camera.view(),
+            camera_altitude: camera.position.z,
+            sun_direction: palette::sun_direction(),
+            curvature: config.curvature,
+            warning_above_m: config.warning_above_m,
+            caution_below_m: config.caution_below_m,
+            tint_range_m: [0.0, 0.0],
+            viewport: camera.viewport,
+            fog_distance_m: far,
+        }
+    }
+
+    /// Draws `camera`'s view of the brute-force ground truth into this
+    /// display's target: the same clear and sky as [`Self::frame`], then every
+    /// chunk of `truth` (built on [`Self::context`]), waiting for the GPU.
+    /// Touches neither the clipmap nor the tile cache, so it may be
+    /// interleaved with LOD frames; [`Self::read_pixels`] reads the result.
+    pub fn render_truth(&mut self, camera: &Camera, truth: &TruthPass) -> Result<TruthFrameStats, DisplayError> {
+        camera.validate().map_err(SceneError::from)?;
+        let start = Instant::now();
+        let frame = self.frame_uniforms(camera);
+        self.context.bind_target();
+        // A list without tiles: the renderer clears and draws the sky only.
+        self.renderer.draw(&DrawList { frame: Some(frame), ..DrawList::default() })?;
+        truth.draw(&frame, camera)?;
+        self.renderer.finish();
+        let frame_ms = start.elapsed().as_secs_f64() * 1e3;
+        Ok(TruthFrameStats { triangles: truth.triangles(), draw_calls: truth.draw_calls(), frame_ms })
     }
 
     /// Pages in every node the view wants around `camera` before the first

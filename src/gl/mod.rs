@@ -15,6 +15,7 @@
 //! | `check` | [`gl_check!`](crate::gl_check) |
 //! | `smoke` | [`SmokePass`]: clear and one triangle, proving a context draws |
 //! | `terrain_pass`, `sky_pass` | the terrain tiles (heights as attributes, transforms as uniforms) and the sky |
+//! | `truth_pass` | [`TruthPass`]: the brute-force ground truth, every level-0 post drawn with the terrain shaders |
 //! | `renderer` | [`GlRenderer`]: the GL [`RenderBackend`](crate::render::RenderBackend) |
 //!
 //! unsafe here is allowed per item, each block with a `// SAFETY:` comment.
@@ -33,6 +34,7 @@ mod renderer;
 mod sky_pass;
 mod smoke;
 mod terrain_pass;
+mod truth_pass;
 mod window;
 
 pub use caps::{Capabilities, GlApi, GlesVersion, Limits, ReportedVersion};
@@ -45,4 +47,8 @@ pub use objects::{
 pub use offscreen::OffscreenTarget;
 pub use renderer::GlRenderer;
 pub use smoke::{SmokePass, SMOKE_TRIANGLE};
+pub use truth_pass::{
+    TruthChunk, TruthError, TruthFrameStats, TruthMesh, TruthPass, TruthRegion, CHUNK_CELLS, CHUNK_TRIANGLES,
+    MAX_TRUTH_POSTS,
+};
 pub use window::WindowEvents;

@@ -1,0 +1,313 @@
+//! The ground truth's geometry, GL-free: every level-0 post of a region read
+//! from a node source, with the normal a level-0 tile would give it, cut into
+//! chunks of [`CHUNK_CELLS`] cells a side that share their edge posts.
+//!
+//! A chunk is laid out as a tile of that grid size ([`crate::tiles::TileGrid`] numbering,
+//! 16-bit indices), with the morph target equal to the height, the parent
+//! normal equal to its own, and skirt vertices that copy the edge posts (drawn
+//! with depth 0 they have no area), so the terrain pass draws it as a big
+//! unmorphed level-0 tile. The region is widened to whole chunks; posts
+//! outside the data take the height of the nearest edge post, the pyramid's
+//! clamping rule, as the LOD display's edge tiles do.
+
+use crate::lod::select::tiles_at;
+use crate::node::{NodeData, NodeError, NodeId, NodeLayout, NodeSource};
+use crate::tiles::grid::{edge_posts, vertex_count};
+use crate::tiles::TileVertex;
+
+/// Most posts a truth mesh may hold (4096^2: 200 MB of vertices on the GPU).
+pub const MAX_TRUTH_POSTS: u64 = 1 << 24;
+/// Cells per chunk side: the largest power of two whose tile grid,
+/// skirts included, numbers its vertices in `u16`.
+pub const CHUNK_CELLS: u32 = 128;
+
+/// A rectangle of level-0 posts: `posts` of them east and north from `first`.
+/// It may reach past the data, where heights extend the edge.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TruthRegion {
+    pub first: [i64; 2],
+    pub posts: [u32; 2],
+}
+
+impl TruthRegion {
+    /// Every sample of the data.
+    pub fn whole(layout: &NodeLayout) -> Self {
+        TruthRegion { first: [0, 0], posts: layout.samples }
+    }
+
+    /// What the level-0 tiles of `grid_size` cover: the data, extended to a
+    /// whole number of tiles as the LOD display draws it.
+    pub fn covering_tiles(layout: &NodeLayout, grid_size: u32) -> Self {
+        let tiles = tiles_at(layout.samples, grid_size, 0);
+        TruthRegion { first: [0, 0], posts: tiles.map(|t| t.saturating_mul(grid_size).saturating_add(1)) }
+    }
+
+    /// The region widened east and north to whole chunks, as posts per side
+    /// (u64: the widening may not fit `u32`).
+    fn chunked_posts(&self) -> [u64; 2] {
+        let chunk = CHUNK_CELLS as u64;
+        self.posts.map(|p| (p as u64).saturating_sub(1).div_ceil(chunk) * chunk + 1)
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum TruthError {
+    #[error("truth mesh: a region of {0:?} posts needs at least 2 posts a side")]
+    Degenerate([u32; 2]),
+    #[error("truth mesh: {posts} posts exceed the limit of {max}")]
+    TooLarge { posts: u64, max: u64 },
+    #[error("truth mesh: reading level-0 node {id:?}: {source}")]
+    Node { id: NodeId, source: NodeError },
+    #[error("truth mesh: level-0 node {id:?} has a non-finite height at post ({i}, {j})")]
+    NotFinite { id: NodeId, i: u32, j: u32 },
+}
+
+/// One chunk of [`CHUNK_CELLS`] cells a side, its vertices in
+/// [`crate::tiles::TileGrid`] order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TruthChunk {
+    /// The south-west post, counted from the region's first post.
+    pub first_post: [u32; 2],
+    /// `vertex_count(CHUNK_CELLS)` vertices: posts row by row from the
+    /// south-west, then the skirt's copies of the edge posts.
+    pub vertices: Vec<TileVertex>,
+}
+
+/// Surface triangles of one chunk (its skirts have no area).
+pub const CHUNK_TRIANGLES: u64 = 2 * CHUNK_CELLS as u64 * CHUNK_CELLS as u64;
+
+/// The whole region at full resolution, chunked.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TruthMesh {
+    /// The region drawn: the one asked for, widened to whole chunks.
+    pub region: TruthRegion,
+    /// Metres between level-0 posts, east and north.
+    pub spacing_m: [f64; 2],
+    pub chunks: Vec<TruthChunk>,
+}
+
+impl TruthMesh {
+    /// Reads the level-0 nodes under `region` (and one post around it, for
+    /// the normals) from `source`. Refuses a region larger than
+    /// [`MAX_TRUTH_POSTS`] before allocating.
+    pub fn load(source: &dyn NodeSource, region: TruthRegion) -> Result<TruthMesh, TruthError> {
+        if region.posts[0] < 2 || region.posts[1] < 2 {
+            return Err(TruthError::Degenerate(region.posts));
+        }
+        let [east, north] = region.chunked_posts();
+        let posts = east.saturating_mul(north);
+        if posts > MAX_TRUTH_POSTS {
+            return Err(TruthError::TooLarge { posts, max: MAX_TRUTH_POSTS });
+        }
+        // Both sides fit u32 now: their product is at most 2^24.
+        let region = TruthRegion { first: region.first, posts: [east as u32, north as u32] };
+        let layout = *source.layout();
+        let heights = MarginGrid::load(source, &layout, region)?;
+        let starts = |posts: u32| (0..posts / CHUNK_CELLS).map(|k| k * CHUNK_CELLS);
+        let chunks = starts(region.posts[1])
+            .flat_map(|y| starts(region.posts[0]).map(move |x| [x, y]))
+            .map(|first_post| heights.chunk(first_post, layout.spacing_m))
+            .collect();
+        Ok(TruthMesh { region, spacing_m: layout.spacing_m, chunks })
+    }
+
+    /// Surface triangles of the whole mesh.
+    pub fn triangles(&self) -> u64 {
+        self.chunks.len() as u64 * CHUNK_TRIANGLES
+    }
+
+    /// Position of the chunk's south-west post in the local frame, metres.
+    pub fn chunk_origin_m(&self, chunk: &TruthChunk) -> [f64; 2] {
+        let post = |axis: usize| self.region.first[axis] as f64 + chunk.first_post[axis] as f64;
+        [post(0) * self.spacing_m[0], post(1) * self.spacing_m[1]]
+    }
+}
+
+/// The region's heights with one post of margin on every side.
+struct MarginGrid {
+    /// Posts per row, margin included.
+    width: usize,
+    /// Row 0 is the margin south of the region.
+    heights: Vec<f32>,
+}
+
+/// Where each post along one axis of the margin grid comes from: the node
+/// index and the post inside it, after clamping to the data.
+struct AxisMap {
+    nodes: Vec<u32>,
+    local: Vec<u32>,
+}
+
+impl AxisMap {
+    fn new(first: i64, posts: u32, samples: u32, node_size: u32, node_count: u32) -> Self {
+        let last = samples.saturating_sub(1) as i64;
+        let (mut nodes, mut local) = (Vec::new(), Vec::new());
+        for k in 0..posts as i64 + 2 {
+            let sample = first.saturating_sub(1).saturating_add(k).clamp(0, last) as u32;
+            let node = (sample / node_size).min(node_count - 1);
+            nodes.push(node);
+            local.push(sample - node * node_size);
+        }
+        AxisMap { nodes, local }
+    }
+
+    /// Runs of consecutive posts read from the same node (the map is monotone).
+    fn runs(&self) -> Vec<(u32, std::ops::Range<usize>)> {
+        let mut runs: Vec<(u32, std::ops::Range<usize>)> = Vec::new();
+        for (k, &node) in self.nodes.iter().enumerate() {
+            match runs.last_mut() {
+                Some((last, range)) if *last == node => range.end = k + 1,
+                _ => runs.push((node, k..k + 1)),
+            }
+        }
+        runs
+    }
+}
+
+impl MarginGrid {
+    fn load(source: &dyn NodeSource, layout: &NodeLayout, region: TruthRegion) -> Result<MarginGrid, TruthError> {
+        let [nx, ny] = layout.nodes_at(0);
+        let x = AxisMap::new(region.first[0], region.posts[0], layout.samples[0], layout.node_size, nx);
+        let y = AxisMap::new(region.first[1], region.posts[1], layout.samples[1], layout.node_size, ny);
+        let width = x.nodes.len();
+        let mut heights = vec![0.0f32; width * y.nodes.len()];
+        let mut node = NodeData::with_capacity(layout);
+        let x_runs = x.runs();
+        for (node_y, rows) in y.runs() {
+            for (node_x, columns) in &x_runs {
+                let id = NodeId::new(0, *node_x, node_y);
+                source.read_node(id, &mut node).map_err(|source| TruthError::Node { id, source })?;
+                for row in rows.clone() {
+                    for column in columns.clone() {
+                        let (i, j) = (x.local[column], y.local[row]);
+                        let height = node.post(layout, i, j);
+                        if !height.is_finite() {
+                            return Err(TruthError::NotFinite { id, i, j });
+                        }
+                        heights[row * width + column] = height;
+                    }
+                }
+            }
+        }
+        Ok(MarginGrid { width, heights })
+    }
+
+    /// Height of region post `(i, j)`; -1 and `posts` reach into the margin.
+    fn at(&self, i: i64, j: i64) -> f64 {
+        self.heights[(j + 1) as usize * self.width + (i + 1) as usize] as f64
+    }
+
+    /// The unit normal's x and y at region post `(i, j)`, by central
+    /// differences as level-0 tiles compute it (`tiles::vertex::fill_tile`).
+    fn normal(&self, i: i64, j: i64, spacing_m: [f64; 2]) -> [i8; 2] {
+        let dx = (self.at(i + 1, j) - self.at(i - 1, j)) / (2.0 * spacing_m[0]);
+        let dy = (self.at(i, j + 1) - self.at(i, j - 1)) / (2.0 * spacing_m[1]);
+        let inv = 1.0 / (dx * dx + dy * dy + 1.0).sqrt();
+        [quantize(-dx * inv), quantize(-dy * inv)]
+    }
+
+    fn chunk(&self, first_post: [u32; 2], spacing_m: [f64; 2]) -> TruthChunk {
+        let g = CHUNK_CELLS;
+        let mut vertices = Vec::with_capacity(vertex_count(g));
+        for j in 0..=g {
+            for i in 0..=g {
+                let (i, j) = ((first_post[0] + i) as i64, (first_post[1] + j) as i64);
+                let height = self.at(i, j) as f32;
+                let [nx, ny] = self.normal(i, j, spacing_m);
+                vertices.push(TileVertex { height, target: height, normal: [nx, ny, nx, ny] });
+            }
+        }
+        for (i, j) in edge_posts(g) {
+            vertices.push(vertices[(i + j * (g + 1)) as usize]);
+        }
+        debug_assert_eq!(vertices.len(), vertex_count(g));
+        TruthChunk { first_post, vertices }
+    }
+}
+
+/// Same rounding as the tiles' normals.
+fn quantize(x: f64) -> i8 {
+    (x * 127.0).round().clamp(-127.0, 127.0) as i8
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::procedural::{EarthParams, ProceduralEarth};
+
+    fn earth() -> ProceduralEarth {
+        // 16 << 5 = 512 cells: 513 samples a side, four chunks a side.
+        let params = EarthParams { node_size: 16, levels: 6, border: 1, spacing_m: 30.0, seed: 7 };
+        ProceduralEarth::new(params).expect("small earth")
+    }
+
+    /// Region post `k` of a chunk's vertex list, in region posts.
+    fn post_of(chunk: &TruthChunk, k: usize) -> (i64, i64) {
+        let row = CHUNK_CELLS as usize + 1;
+        ((chunk.first_post[0] as usize + k % row) as i64, (chunk.first_post[1] as usize + k / row) as i64)
+    }
+
+    #[test]
+    fn the_largest_chunk_numbers_its_vertices_in_16_bits() {
+        assert!(vertex_count(CHUNK_CELLS) <= 1 << 16);
+        assert!(vertex_count(2 * CHUNK_CELLS) > 1 << 16);
+    }
+
+    #[test]
+    fn every_post_is_the_sample_and_normals_match_the_tiles() {
+        let earth = earth();
+        let mesh = TruthMesh::load(&earth, TruthRegion::whole(earth.layout())).expect("loads");
+        assert_eq!(mesh.region.posts, [513, 513]);
+        assert_eq!(mesh.chunks.len(), 16);
+        assert_eq!(mesh.triangles(), 2 * 512 * 512);
+        let spacing = 30.0;
+        let h = |i: i64, j: i64| earth.sample(i, j) as f64;
+        let posts = (CHUNK_CELLS as usize + 1).pow(2);
+        for chunk in &mesh.chunks {
+            assert_eq!(chunk.vertices.len(), vertex_count(CHUNK_CELLS));
+            for (k, vertex) in chunk.vertices[..posts].iter().enumerate().step_by(37) {
+                let (i, j) = post_of(chunk, k);
+                assert_eq!(vertex.height, earth.sample(i, j), "post ({i}, {j})");
+                assert_eq!(vertex.target, vertex.height);
+                let dx = (h(i + 1, j) - h(i - 1, j)) / (2.0 * spacing);
+                let dy = (h(i, j + 1) - h(i, j - 1)) / (2.0 * spacing);
+                let inv = 1.0 / (dx * dx + dy * dy + 1.0).sqrt();
+                let expected = [quantize(-dx * inv), quantize(-dy * inv)];
+                assert_eq!(vertex.normal, [expected[0], expected[1], expected[0], expected[1]]);
+            }
+            for (skirt, (i, j)) in chunk.vertices[posts..].iter().zip(edge_posts(CHUNK_CELLS)) {
+                assert_eq!(*skirt, chunk.vertices[(i + j * (CHUNK_CELLS + 1)) as usize]);
+            }
+        }
+        let last = mesh.chunks.last().unwrap();
+        assert_eq!(mesh.chunk_origin_m(last), [384.0 * spacing, 384.0 * spacing]);
+    }
+
+    #[test]
+    fn regions_widen_to_whole_chunks_and_posts_past_the_data_extend_its_edge() {
+        let earth = earth();
+        let region = TruthRegion { first: [-3, 500], posts: [5, 20] };
+        let mesh = TruthMesh::load(&earth, region).expect("loads");
+        assert_eq!((mesh.region.first, mesh.region.posts), ([-3, 500], [129, 129]));
+        let chunk = &mesh.chunks[0];
+        for k in (0..129 * 129).step_by(11) {
+            let (i, j) = post_of(chunk, k);
+            assert_eq!(chunk.vertices[k].height, earth.sample(i - 3, j + 500), "post ({i}, {j})");
+        }
+        let tiled = TruthRegion::covering_tiles(earth.layout(), 32);
+        assert_eq!(tiled.posts, [513, 513]);
+        let wider = TruthRegion { first: [0, 0], posts: [514, 2] };
+        assert_eq!(TruthMesh::load(&earth, wider).expect("loads").region.posts, [641, 129]);
+    }
+
+    #[test]
+    fn refuses_degenerate_and_huge_regions_before_reading() {
+        let earth = earth();
+        let flat = TruthRegion { first: [0, 0], posts: [1, 9] };
+        assert!(matches!(TruthMesh::load(&earth, flat), Err(TruthError::Degenerate(_))));
+        let huge = TruthRegion { first: [i64::MAX - 5, i64::MIN], posts: [u32::MAX, u32::MAX] };
+        assert!(matches!(TruthMesh::load(&earth, huge), Err(TruthError::TooLarge { .. })));
+        let long = TruthRegion { first: [0, 0], posts: [1 << 24, 2] };
+        assert!(matches!(TruthMesh::load(&earth, long), Err(TruthError::TooLarge { .. })));
+    }
+}
