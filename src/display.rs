@@ -8,8 +8,8 @@ use crate::gl::{ContextRequest, GlBackend, GlContext, GlError, GlInfo, GlRendere
 use crate::lod::ranges::RingInputs;
 use crate::lod::LevelRanges;
 use crate::node::NodeSource;
-use crate::render::{palette, DrawList, FrameUniforms, RenderBackend};
-use crate::scene::{clip_planes, ClipmapTerrain, FrameReport, Scene, SceneConfig, SceneError, TerrainSummary};
+use crate::render::{DrawList, FrameUniforms, RenderBackend};
+use crate::scene::{ClipmapTerrain, FrameReport, Scene, SceneConfig, SceneError, TerrainSummary};
 use glam::{DVec3, UVec2};
 use image::RgbaImage;
 use std::sync::Arc;
@@ -162,19 +162,7 @@ impl Display {
     /// far planes, bands and sun), for passes drawn beside it.
     pub fn frame_uniforms(&self, camera: &Camera) -> FrameUniforms {
         let terrain = ClipmapTerrain { clipmap: &self.clipmap, summary: &self.summary };
-        let (near, far) = clip_planes(camera, &terrain);
-        let config = self.scene.config();
-        FrameUniforms {
-            view_projection: camera.projection(near, far) * camera.view(),
-            camera_altitude: camera.position.z,
-            sun_direction: palette::sun_direction(),
-            curvature: config.curvature,
-            warning_above_m: config.warning_above_m,
-            caution_below_m: config.caution_below_m,
-            tint_range_m: [0.0, 0.0],
-            viewport: camera.viewport,
-            fog_distance_m: far,
-        }
+        self.scene.frame_uniforms(camera, &terrain)
     }
 
     /// Draws `camera`'s view of the brute-force ground truth into this

@@ -148,9 +148,8 @@ impl Scene {
         let layout = *terrain.layout();
         let grid_size = self.config.lod.grid_size;
         let tile_size_m = grid_size as f64 * layout.spacing_m[0].max(layout.spacing_m[1]);
-        let (near, far) = clip_planes(camera, terrain);
-        let view_projection = camera.projection(near, far) * camera.view();
-        let frustum = Frustum::from_view_projection(view_projection);
+        let uniforms = self.frame_uniforms(camera, terrain);
+        let frustum = Frustum::from_view_projection(uniforms.view_projection);
         let mut report = FrameReport::default();
         let mut lod = self.config.lod;
         loop {
@@ -180,7 +179,6 @@ impl Scene {
             }
         }
         let start = Instant::now();
-        let uniforms = self.frame_uniforms(camera, view_projection, far);
         let geometry = TileGeometry { grid_size, spacing_m: layout.spacing_m, delta_per_level: &self.deltas };
         let draws = self.cache.draws();
         self.draw_list.build(camera, uniforms, draws, &self.ranges, geometry);
@@ -197,9 +195,12 @@ impl Scene {
         Ok(report)
     }
 
-    fn frame_uniforms(&self, camera: &Camera, view_projection: glam::Mat4, far: f32) -> FrameUniforms {
+    /// The uniforms every pass of a frame for `camera` shares: projection
+    /// (near and far planes from [`clip_planes`]), bands, sun, curvature.
+    pub fn frame_uniforms(&self, camera: &Camera, terrain: &dyn TerrainData) -> FrameUniforms {
+        let (near, far) = clip_planes(camera, terrain);
         FrameUniforms {
-            view_projection,
+            view_projection: camera.projection(near, far) * camera.view(),
             camera_altitude: camera.position.z,
             sun_direction: palette::sun_direction(),
             curvature: self.config.curvature,
