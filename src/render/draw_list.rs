@@ -26,8 +26,6 @@ pub struct FrameUniforms {
     /// `warning_above_m` is red, above `-caution_below_m` amber.
     pub warning_above_m: f32,
     pub caution_below_m: f32,
-    /// Elevation tint range, metres.
-    pub tint_range_m: [f32; 2],
     pub viewport: [u32; 2],
     /// Distance at which fog has fully hidden the terrain, metres.
     pub fog_distance_m: f32,

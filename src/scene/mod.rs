@@ -206,7 +206,6 @@ impl Scene {
             curvature: self.config.curvature,
             warning_above_m: self.config.warning_above_m,
             caution_below_m: self.config.caution_below_m,
-            tint_range_m: [0.0, 0.0],
             viewport: camera.viewport,
             fog_distance_m: far,
         }
