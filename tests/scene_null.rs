@@ -19,7 +19,7 @@ fn run_frame(scene: &mut Scene, backend: &mut NullBackend, cam: &ridgeline::came
 
 #[test]
 fn scripted_flight_counts_and_a_still_camera_uploads_nothing() {
-    let config = SceneConfig::default();
+    let config = SceneConfig { transfer_cap: None, ..SceneConfig::default() };
     let mut scene = Scene::new(config, terrain()).unwrap();
     let mut backend = NullBackend::new(config.buffer_bytes);
     let mut uploaded = 0;
@@ -43,6 +43,23 @@ fn scripted_flight_counts_and_a_still_camera_uploads_nothing() {
         assert_eq!((counts.bytes_uploaded, counts.upload_calls, report.generated), (0, 0, 0), "a still camera uploads nothing");
         assert!(counts.draw_calls > 0);
     }
+}
+
+#[test]
+fn the_default_transfer_cap_bounds_every_upload() {
+    let config = SceneConfig::default();
+    let cap = config.transfer_cap.expect("the default caps transfers");
+    let mut scene = Scene::new(config, terrain()).unwrap();
+    let mut pieces = 0;
+    for k in 0..10 {
+        let cam = camera(10_000.0 + 3_000.0 * k as f64, 25_000.0, 3_200.0, 70.0, -6.0);
+        scene.frame(&cam, terrain()).unwrap();
+        let (_, ranges) = scene.uploads();
+        pieces += ranges.len();
+        let tile = ridgeline::tiles::vertex::tile_bytes(config.lod.grid_size);
+        assert!(ranges.iter().all(|r| r.end - r.start <= cap.max(tile)), "a transfer exceeds the cap: {ranges:?}");
+    }
+    assert!(pieces > 10, "a moving camera's uploads are cut into several transfers");
 }
 
 #[test]

@@ -21,6 +21,15 @@ use crate::render::{palette, DrawList, FrameUniforms};
 use crate::tiles::{grid, TileCache, TileCacheConfig, TileError};
 use std::time::Instant;
 
+/// The default longest single upload: four of Polok's 64 x 64 tiles in our
+/// 12-byte vertex format (196 608 bytes). `cargo bench --bench hwmetrics`
+/// finds no gain from batching on llvmpipe (glBufferSubData is a memcpy
+/// there), so the cap comes from the paper's Table 1, where runs shorter than
+/// four tiles cost up to 35 % more and longer ones gain nothing significant.
+/// A cap also keeps the allocator's runs short enough to reuse small gaps
+/// (see the transfer-cap table of `cargo bench --bench allocator`).
+pub const DEFAULT_TRANSFER_CAP: u32 = 4 * 64 * 64 * 12;
+
 /// Everything fixed for a run of the display.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SceneConfig {
@@ -39,7 +48,7 @@ impl Default for SceneConfig {
         SceneConfig {
             lod: LodConfig::default(),
             buffer_bytes: 32 << 20,
-            transfer_cap: None,
+            transfer_cap: Some(DEFAULT_TRANSFER_CAP),
             frames_in_flight: 0,
             curvature: true,
             warning_above_m: palette::DEFAULT_WARNING_ABOVE_M,
