@@ -110,8 +110,7 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     if info.backend != OpenedBackend::Window {
         write_stats(args, &info, &dataset_name, &rows)?;
     }
-    print_summary(&rows);
-    Ok(())
+    print_summary(&rows)
 }
 
 fn flight_path(args: &FlyArgs, pyramid: &Pyramid) -> Result<FlightPath> {
@@ -237,22 +236,25 @@ fn write_stats(args: &FlyArgs, info: &ridgeline::gl::GlInfo, dataset: &str, rows
     Ok(())
 }
 
-fn print_summary(rows: &[Row]) {
+fn print_summary(rows: &[Row]) -> Result<()> {
+    use std::fmt::Write as _;
     if rows.is_empty() {
-        return;
+        return Ok(());
     }
+    let mut out = String::new();
     let mut frame_ms: Vec<f64> = rows.iter().map(|r| r.stats.frame_ms).collect();
     frame_ms.sort_by(f64::total_cmp);
     let pick = |q: f64| frame_ms[((frame_ms.len() - 1) as f64 * q).round() as usize];
     let mean = |f: &dyn Fn(&FrameStats) -> f64| rows.iter().map(|r| f(&r.stats)).sum::<f64>() / rows.len() as f64;
     let uploaded: u64 = rows.iter().map(|r| r.stats.scene.bytes_uploaded).sum();
     let last = rows.last().expect("rows is not empty");
-    println!();
-    println!("  frames            {}", rows.len());
-    println!("  frame ms          mean {:.1}, p50 {:.1}, p95 {:.1}, max {:.1}", mean(&|s| s.frame_ms), pick(0.5), pick(0.95), pick(1.0));
-    println!("  cpu ms            clipmap {:.2}, select {:.2}, tiles {:.2}", mean(&|s| s.clipmap_ms), mean(&|s| s.scene.cpu_ms.select_ms), mean(&|s| s.scene.cpu_ms.tiles_ms));
-    println!("  tiles             mean {:.0} ({:.0} triangles, {:.0} draw calls)", mean(&|s| s.scene.tiles as f64), mean(&|s| s.scene.triangles as f64), mean(&|s| s.draw_calls as f64));
-    println!("  uploaded          {:.1} MB in all, {:.0} KB per frame", uploaded as f64 / 1e6, uploaded as f64 / 1e3 / rows.len() as f64);
-    println!("  allocator         {:.1} MB used at the end", last.stats.scene.allocator_used_bytes as f64 / 1e6);
-    println!("  resident nodes    {} at the end", last.stats.resident_nodes);
+    writeln!(out)?;
+    writeln!(out, "  frames            {}", rows.len())?;
+    writeln!(out, "  frame ms          mean {:.1}, p50 {:.1}, p95 {:.1}, max {:.1}", mean(&|s| s.frame_ms), pick(0.5), pick(0.95), pick(1.0))?;
+    writeln!(out, "  cpu ms            clipmap {:.2}, select {:.2}, tiles {:.2}", mean(&|s| s.clipmap_ms), mean(&|s| s.scene.cpu_ms.select_ms), mean(&|s| s.scene.cpu_ms.tiles_ms))?;
+    writeln!(out, "  tiles             mean {:.0} ({:.0} triangles, {:.0} draw calls)", mean(&|s| s.scene.tiles as f64), mean(&|s| s.scene.triangles as f64), mean(&|s| s.draw_calls as f64))?;
+    writeln!(out, "  uploaded          {:.1} MB in all, {:.0} KB per frame", uploaded as f64 / 1e6, uploaded as f64 / 1e3 / rows.len() as f64)?;
+    writeln!(out, "  allocator         {:.1} MB used at the end", last.stats.scene.allocator_used_bytes as f64 / 1e6)?;
+    writeln!(out, "  resident nodes    {} at the end", last.stats.resident_nodes)?;
+    super::print(&out)
 }

@@ -60,12 +60,8 @@ struct Georef {
 pub fn run(args: &InfoArgs) -> Result<()> {
     let pyramid = Pyramid::open(&args.cache)?;
     let summary = summarise(&pyramid);
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&summary)?);
-    } else {
-        print_table(&summary);
-    }
-    Ok(())
+    let text = if args.json { serde_json::to_string_pretty(&summary)? + "\n" } else { table(&summary) };
+    super::print(&text)
 }
 
 fn summarise(pyramid: &Pyramid) -> Summary<'_> {
@@ -101,9 +97,18 @@ fn summarise(pyramid: &Pyramid) -> Summary<'_> {
     }
 }
 
-fn print_table(s: &Summary) {
-    println!("{} (format {}, {:.1} MB, all checksums verified)", s.path.display(), s.format_version, s.file_bytes as f64 / 1e6);
-    println!(
+/// `writeln!` into a `String`, which cannot fail.
+macro_rules! line {
+    ($out:expr, $($arg:tt)*) => {{
+        use std::fmt::Write as _;
+        let _ = writeln!($out, $($arg)*);
+    }};
+}
+
+fn table(s: &Summary) -> String {
+    let mut out = String::new();
+    line!(out, "{} (format {}, {:.1} MB, all checksums verified)", s.path.display(), s.format_version, s.file_bytes as f64 / 1e6);
+    line!(out, 
         "samples   {} x {}, {:.2} x {:.2} m apart, extent {:.2} x {:.2} km",
         s.samples[0],
         s.samples[1],
@@ -112,14 +117,15 @@ fn print_table(s: &Summary) {
         s.extent.east_m / 1e3,
         s.extent.north_m / 1e3
     );
-    println!("georef    {}", describe_georef(&s.georef));
-    println!("nodes     {} cells + {} border posts, {} levels, {} nodes", s.node_size, s.border, s.levels, s.node_count);
-    println!("heights   {:.1} .. {:.1} m, {} voids filled", s.height_min, s.height_max, s.voids_filled);
-    println!("level  nodes        delta max (m)  heights (m)");
+    line!(out, "georef    {}", describe_georef(&s.georef));
+    line!(out, "nodes     {} cells + {} border posts, {} levels, {} nodes", s.node_size, s.border, s.levels, s.node_count);
+    line!(out, "heights   {:.1} .. {:.1} m, {} voids filled", s.height_min, s.height_max, s.voids_filled);
+    line!(out, "level  nodes        delta max (m)  heights (m)");
     for (lod, level) in s.level_details.iter().enumerate() {
         let nodes = format!("{} x {}", level.nodes[0], level.nodes[1]);
-        println!("{lod:>5}  {nodes:<11}  {:>13.3}  {:.1} .. {:.1}", level.delta_max, level.height_min, level.height_max);
+        line!(out, "{lod:>5}  {nodes:<11}  {:>13.3}  {:.1} .. {:.1}", level.delta_max, level.height_min, level.height_max);
     }
+    out
 }
 
 fn describe_georef(g: &Georef) -> String {

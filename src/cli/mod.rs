@@ -6,3 +6,13 @@ pub mod fly;
 pub mod import;
 pub mod info;
 mod progress;
+
+/// Writes `text` to standard output. A reader that has gone away (a closed
+/// pipe, as in `ridgeline info ... | head`) is not an error.
+pub fn print(text: &str) -> anyhow::Result<()> {
+    use std::io::Write as _;
+    match std::io::stdout().lock().write_all(text.as_bytes()) {
+        Err(error) if error.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+        other => Ok(other?),
+    }
+}
