@@ -102,6 +102,11 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     let mut display = Display::new(&config, source, summary).context("opening the display")?;
     let info = display.info().clone();
     println!("ridgeline fly: {} on {} ({}), {}", dataset_name, info.backend.name(), info.version, info.renderer);
+    if info.requested == GlesVersion::Es2 {
+        // Mesa answers an ES 2.0 request with a newer context; the renderer
+        // then uses only what ES 2.0 has.
+        println!("ridgeline fly: OpenGL ES 2.0 requested: features capped to ES 2.0");
+    }
     let rows = if info.backend == OpenedBackend::Window {
         fly_window(args, &mut display, &path)?
     } else {
@@ -222,6 +227,7 @@ fn write_stats(args: &FlyArgs, info: &ridgeline::gl::GlInfo, dataset: &str, rows
         "gl_version": info.version,
         "gl_renderer": info.renderer,
         "shading_language_version": info.shading_language_version,
+        "requested": if info.requested == GlesVersion::Es2 { "es2" } else { "es3" },
         "dataset": dataset,
         "size": [args.size.x, args.size.y],
         "tau_px": args.tau,
