@@ -173,6 +173,7 @@ impl Display {
     pub fn render_truth(&mut self, camera: &Camera, truth: &TruthPass) -> Result<TruthFrameStats, DisplayError> {
         camera.validate().map_err(SceneError::from)?;
         let start = Instant::now();
+        self.context.make_current()?;
         let frame = self.frame_uniforms(camera);
         self.context.bind_target();
         // A list without tiles: the renderer clears and draws the sky only.
