@@ -8,6 +8,7 @@
 //!    they were made from, announce their size (pass 1);
 //! 3. the run is placed and each such tile fills its bytes (pass 2);
 //! 4. the dirty ranges, one per run piece, are what the GPU must receive.
+//!
 //! A still camera with settled data announces nothing and uploads nothing.
 //! The root level's tiles are made once and never released, so whatever
 //! happens to the buffer there is always a coarse tile to draw.

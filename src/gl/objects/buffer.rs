@@ -89,8 +89,6 @@ impl Buffer {
         self.target
     }
 
-    /// The GL name, for draw code in this module tree.
-
     /// Binds the buffer to its target. For index buffers the vertex array
     /// bound at the time records the binding.
     #[allow(unsafe_code)]
