@@ -1,4 +1,4 @@
-//! The built-in terrain, built once per test process into a temporary cache,
+//! The built-in terrain, built once into a cache under the target folder,
 //! and cameras over it.
 #![allow(dead_code)] // each test file uses part of this
 
@@ -13,11 +13,14 @@ use ridgeline::pyramid::{Pyramid, Silent};
 use ridgeline::scene::PreloadedTerrain;
 use std::sync::OnceLock;
 
+/// A cache under the target folder, shared by the test binaries (they run
+/// one after another, and pyramids are written atomically) and removed with
+/// `cargo clean`.
 pub fn cache_dir() -> &'static std::path::Path {
     static DIR: OnceLock<std::path::PathBuf> = OnceLock::new();
     DIR.get_or_init(|| {
-        let dir = std::env::temp_dir().join(format!("ridgeline-scene-tests-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("temp cache");
+        let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("scene-cache");
+        std::fs::create_dir_all(&dir).expect("test cache");
         dir
     })
 }
