@@ -155,6 +155,22 @@ pub struct NodePoint {
     pub posts: [f64; 2],
 }
 
+/// The height at fractions `(fu, fv)` of a cell whose corners are `h00`
+/// (south-west), `h10` (south-east), `h01` (north-west) and `h11` (north-east),
+/// the cell split along its south-west to north-east diagonal: the one
+/// triangulation the pyramid's delta, the tiles, the exact heights and the
+/// shaders' meshes share.
+#[inline]
+pub fn cell_surface(h00: f64, h10: f64, h01: f64, h11: f64, fu: f64, fv: f64) -> f64 {
+    if fu >= fv {
+        // South-east triangle (SW, SE, NE).
+        h00 + fu * (h10 - h00) + fv * (h11 - h10)
+    } else {
+        // North-west triangle (SW, NE, NW).
+        h00 + fv * (h01 - h00) + fu * (h11 - h01)
+    }
+}
+
 /// A node's stored content.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct NodeData {
@@ -195,13 +211,7 @@ impl NodeData {
         let (i, j) = (cell(posts[0]), cell(posts[1]));
         let (fx, fy) = (posts[0] - i as f64, posts[1] - j as f64);
         let h = |di: u32, dj: u32| self.post(layout, i + di, j + dj) as f64;
-        let (sw, se, nw, ne) = (h(0, 0), h(1, 0), h(0, 1), h(1, 1));
-        let height = if fx >= fy {
-            sw + fx * (se - sw) + fy * (ne - se) // south-east triangle
-        } else {
-            sw + fy * (nw - sw) + fx * (ne - nw) // north-west triangle
-        };
-        height as f32
+        cell_surface(h(0, 0), h(1, 0), h(0, 1), h(1, 1), fx, fy) as f32
     }
 }
 

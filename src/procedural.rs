@@ -208,15 +208,7 @@ impl NodeSource for ProceduralEarth {
         let (i, j) = (cell(sx), cell(sy));
         let (fx, fy) = (sx - i as f64, sy - j as f64);
         let h = |di: i64, dj: i64| self.sample(i + di, j + dj) as f64;
-        let sw = h(0, 0);
-        let height = if fx >= fy {
-            let se = h(1, 0);
-            sw + fx * (se - sw) + fy * (h(1, 1) - se)
-        } else {
-            let nw = h(0, 1);
-            sw + fy * (nw - sw) + fx * (h(1, 1) - nw)
-        };
-        Ok(height as f32)
+        Ok(crate::node::cell_surface(h(0, 0), h(1, 0), h(0, 1), h(1, 1), fx, fy) as f32)
     }
 }
 

@@ -13,20 +13,6 @@ use super::progress::Progress;
 use super::raster::LevelRaster;
 use crate::dem::ElevationGrid;
 
-/// The height at fractions `(fu, fv)` of a cell whose corners are `h00`
-/// (south-west), `h10` (south-east), `h01` (north-west) and `h11` (north-east),
-/// the cell split along its south-west to north-east diagonal.
-#[inline]
-pub(crate) fn cell_surface(h00: f64, h10: f64, h01: f64, h11: f64, fu: f64, fv: f64) -> f64 {
-    if fu >= fv {
-        // South-east triangle (SW, SE, NE).
-        h00 + fu * (h10 - h00) + fv * (h11 - h10)
-    } else {
-        // North-west triangle (SW, NE, NW).
-        h00 + fv * (h01 - h00) + fu * (h11 - h01)
-    }
-}
-
 /// Delta of every node of level `raster.lod`, `nodes[0] * nodes[1]` values in
 /// node order (row by row, south first), each rounded up to `f32`.
 pub(crate) fn level_deltas(
@@ -129,6 +115,7 @@ fn round_up_to_f32(value: f64) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::node::cell_surface;
 
     #[test]
     fn rounding_up_never_loses_the_bound() {

@@ -87,7 +87,7 @@ impl Pyramid {
         let (j, fv) = cell_of(y_m / layout.spacing_m[1], layout.samples[1]);
         let (i1, j1) = ((i + 1).min(layout.samples[0] - 1), (j + 1).min(layout.samples[1] - 1));
         let h = |i, j| self.sample(i, j) as f64;
-        let surface = super::delta::cell_surface(h(i, j), h(i1, j), h(i, j1), h(i1, j1), fu, fv);
+        let surface = crate::node::cell_surface(h(i, j), h(i1, j), h(i, j1), h(i1, j1), fu, fv);
         Some(surface as f32)
     }
 

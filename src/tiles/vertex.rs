@@ -5,7 +5,7 @@
 
 use super::grid::{edge_posts, vertex_count};
 use crate::lod::TileKey;
-use crate::node::{NodeData, NodeId, NodeLayout};
+use crate::node::{cell_surface, NodeData, NodeId, NodeLayout};
 
 /// Twelve bytes per vertex.
 #[repr(C)]
@@ -78,15 +78,7 @@ pub fn sample_node(layout: &NodeLayout, data: &NodeData, fx: f64, fy: f64) -> f3
     let (x0, y0) = ((gx.floor() as i64).min(side - 2), (gy.floor() as i64).min(side - 2));
     let (tx, ty) = (gx - x0 as f64, gy - y0 as f64);
     let h = |x: i64, y: i64| data.heights[(y * side + x) as usize] as f64;
-    let (sw, se, nw, ne) = (h(x0, y0), h(x0 + 1, y0), h(x0, y0 + 1), h(x0 + 1, y0 + 1));
-    let value = if tx >= ty {
-        // Lower-right triangle: sw, se, ne.
-        sw + tx * (se - sw) + ty * (ne - se)
-    } else {
-        // Upper-left triangle: sw, ne, nw.
-        sw + ty * (nw - sw) + tx * (ne - nw)
-    };
-    value as f32
+    cell_surface(h(x0, y0), h(x0 + 1, y0), h(x0, y0 + 1), h(x0 + 1, y0 + 1), tx, ty) as f32
 }
 
 /// Fills `out` (one tile's vertices, skirt included) from `reader`.
