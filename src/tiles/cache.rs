@@ -18,6 +18,7 @@ use super::vertex::{fill_tile, tile_bytes, tile_node, PostReader, TileVertex};
 use super::{best_resident, ResidentNodes};
 use crate::allocator::{AllocError, AllocatorConfig, ConfigError, ContiguousAllocator, GeneratorId, Request, VertexFormat};
 use crate::lod::select::tiles_at;
+use crate::node::NodeId;
 use crate::lod::{SelectedTile, TileKey};
 use std::collections::HashMap;
 use std::ops::Range;
@@ -88,6 +89,8 @@ struct Resident {
 struct Job {
     slot: u32,
     new: bool,
+    /// The resident node the tile's heights come from.
+    source: NodeId,
 }
 
 pub struct TileCache {
@@ -225,13 +228,13 @@ impl TileCache {
             let (source, _) = best_resident(nodes, node).ok_or(TileError::NoData(tile.key))?;
             let (slot, new) = match self.by_key.get(&tile.key) {
                 Some(&slot) => (slot, false),
-                None => (self.reserve(tile.key, tile.key.level.max(source.lod))?, true),
+                None => (self.reserve(tile.key, source.lod)?, true),
             };
             let resident = self.slots[slot as usize].as_mut().expect("reserved");
             resident.last_frame = self.frame;
             if new || source.lod < resident.source_level {
                 self.requests.push(Request { generator: GeneratorId(slot), format: VertexFormat(0), size });
-                self.jobs.push(Job { slot, new });
+                self.jobs.push(Job { slot, new, source });
             }
         }
         Ok(())
@@ -273,13 +276,13 @@ impl TileCache {
         let requests = std::mem::take(&mut self.requests);
         let layout = *nodes.layout();
         let grid_size = self.config.grid_size;
-        let (slots, vertices, dirty) = (&mut self.slots, &mut self.vertices, &mut self.dirty);
+        let (slots, vertices, dirty, jobs) = (&mut self.slots, &mut self.vertices, &mut self.dirty, &self.jobs);
         let outcome = self.allocator.allocate(&requests).map(|mut plan| {
             let mut bytes_uploaded = 0u64;
-            plan.fill(|_, request, bytes| {
+            plan.fill(|index, request, bytes| {
                 let resident = slots[request.generator.0 as usize].as_mut().expect("queued tiles are reserved");
-                let (node, _) = tile_node(resident.key, grid_size, layout.node_size);
-                let (source, data) = best_resident(nodes, node).expect("checked in mark_selected");
+                let source = jobs[index].source;
+                let data = nodes.resident(source).expect("resident since mark_selected");
                 let reader = PostReader::new(&layout, resident.key, grid_size, source, data);
                 let scale = 2f64.powi(resident.key.level as i32);
                 let spacing = [layout.spacing_m[0] * scale, layout.spacing_m[1] * scale];
