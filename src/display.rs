@@ -2,9 +2,13 @@
 //! chunked clipmap paging a node source, one call per frame. `fly`, the
 //! accuracy tool, the regression tests and the render bench all drive this.
 
+use crate::accuracy::PositionImage;
 use crate::camera::Camera;
 use crate::clipmap::{Clipmap, ClipmapConfig, ClipmapError, LoaderMode, UpdateStats, ViewConfig, ViewId};
-use crate::gl::{ContextRequest, GlBackend, GlContext, GlError, GlInfo, GlRenderer, GlesVersion, TruthFrameStats, TruthPass};
+use crate::gl::{
+    ContextRequest, GlBackend, GlContext, GlError, GlInfo, GlRenderer, GlesVersion, OffscreenTarget, TerrainOutput,
+    TruthFrameStats, TruthPass,
+};
 use crate::lod::ranges::RingInputs;
 use crate::lod::LevelRanges;
 use crate::node::NodeSource;
@@ -75,6 +79,8 @@ pub struct FrameStats {
 pub struct Display {
     // Field order is drop order: GL objects before their context.
     renderer: GlRenderer,
+    /// RGBA32F target of the accuracy tool's position renders, made on first use.
+    positions: Option<OffscreenTarget>,
     context: GlContext,
     scene: Scene,
     clipmap: Clipmap,
@@ -99,7 +105,7 @@ impl Display {
         let scene = Scene::new(config.scene, &terrain)?;
         let mut renderer = GlRenderer::new(context.gl(), config.scene.lod.grid_size, config.scene.buffer_bytes)?;
         renderer.set_sentinel(config.sentinel);
-        Ok(Display { renderer, context, scene, clipmap, view, summary })
+        Ok(Display { renderer, positions: None, context, scene, clipmap, view, summary })
     }
 
     pub fn info(&self) -> &GlInfo {
@@ -178,10 +184,61 @@ impl Display {
         self.context.bind_target();
         // A list without tiles: the renderer clears and draws the sky only.
         self.renderer.draw(&DrawList { frame: Some(frame), ..DrawList::default() })?;
-        truth.draw(&frame, camera)?;
+        truth.draw(&frame, camera, TerrainOutput::Colour)?;
         self.renderer.finish();
         let frame_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(TruthFrameStats { triangles: truth.triangles(), draw_calls: truth.draw_calls(), frame_ms })
+    }
+
+    /// Redraws the last frame's tiles (drawn by [`Self::frame`] for this same
+    /// `camera`) as camera-relative positions into `out`: what the display
+    /// drew, per pixel, for the accuracy tool. Needs float colour buffers.
+    pub fn render_positions(&mut self, camera: &Camera, out: &mut PositionImage) -> Result<(), DisplayError> {
+        let list = self.scene.draw_list();
+        if list.frame != Some(self.frame_uniforms(camera)) {
+            let why = "render_positions needs the last frame to have been drawn for the same camera";
+            return Err(GlError::InvalidRequest(why.to_owned()).into());
+        }
+        self.bind_positions()?;
+        self.renderer.draw_positions(self.scene.draw_list())?;
+        self.read_positions(out)
+    }
+
+    /// Draws `camera`'s view of the ground truth as camera-relative positions
+    /// into `out`, with the same frame uniforms as the LOD frame.
+    pub fn render_truth_positions(
+        &mut self,
+        camera: &Camera,
+        truth: &TruthPass,
+        out: &mut PositionImage,
+    ) -> Result<(), DisplayError> {
+        camera.validate().map_err(SceneError::from)?;
+        let frame = self.frame_uniforms(camera);
+        self.bind_positions()?;
+        self.renderer.draw_positions(&DrawList { frame: Some(frame), ..DrawList::default() })?;
+        truth.draw(&frame, camera, TerrainOutput::Position)?;
+        self.read_positions(out)
+    }
+
+    /// Makes the context current and binds the position target, creating it
+    /// on first use.
+    fn bind_positions(&mut self) -> Result<(), DisplayError> {
+        self.context.make_current()?;
+        if self.positions.is_none() {
+            self.positions = Some(OffscreenTarget::positions(self.context.gl(), self.context.size())?);
+        }
+        if let Some(target) = &self.positions {
+            target.bind();
+        }
+        Ok(())
+    }
+
+    fn read_positions(&mut self, out: &mut PositionImage) -> Result<(), DisplayError> {
+        let size = self.context.size();
+        out.size = size;
+        crate::gl::read_positions(self.context.gl(), size, &mut out.texels)?;
+        self.context.bind_target();
+        Ok(())
     }
 
     /// Pages in every node the view wants around `camera` before the first

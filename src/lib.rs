@@ -6,6 +6,7 @@
 //!
 //! | module | owns |
 //! |---|---|
+//! | [`accuracy`] | the accuracy tool's measurements: per-pixel screen-space error of the LOD against full resolution, its statistics and heat map |
 //! | [`allocator`] | the contiguous two-pass buffer allocator: one address space, its staging copy, who holds which bytes |
 //! | [`geo`] | georeference conventions and the local metric frame |
 //! | [`dem`] | elevation importers (GeoTIFF, SRTM, DTED, ASCII grid) producing an [`dem::ElevationGrid`] |
@@ -24,6 +25,7 @@
 //! | [`clipmap`] | the chunked clipmap: node atlas, clipped quadtrees per view, loader, height queries |
 #![deny(unsafe_code)]
 
+pub mod accuracy;
 pub mod allocator;
 pub mod camera;
 pub mod clipmap;

@@ -20,6 +20,8 @@ struct Cli {
 enum Command {
     /// Fly a camera path over a terrain (the main job; the default command).
     Fly(cli::fly::FlyArgs),
+    /// Measure the screen-space error the display draws against the full-resolution mesh.
+    Accuracy(cli::accuracy::AccuracyArgs),
     /// Build a node pyramid cache from elevation files.
     Import(cli::import::ImportArgs),
     /// Describe a node pyramid cache.
@@ -42,6 +44,7 @@ fn run() -> Result<()> {
     let cli = Cli::parse();
     match cli.command.unwrap_or(Command::Fly(cli.fly)) {
         Command::Fly(args) => cli::fly::run(&args)?,
+        Command::Accuracy(args) => cli::accuracy::run(&args)?,
         Command::Import(args) => cli::import::run(&args)?,
         Command::Info(args) => cli::info::run(&args)?,
     }

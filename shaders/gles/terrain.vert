@@ -20,6 +20,7 @@ varying vec3 v_normal;
 varying float v_relative_height;  // terrain height minus aircraft altitude
 varying float v_height;
 varying float v_distance;
+varying vec3 v_position;     // camera-relative, for the accuracy tool's position output
 
 void main() {
     vec2 position = u_tile.xy + a_grid.xy * u_tile.zw;
@@ -34,5 +35,6 @@ void main() {
     v_relative_height = height - altitude;
     v_height = height;
     v_distance = length(vec3(position, z));
+    v_position = vec3(position, z);
     gl_Position = u_view_projection * vec4(position, z, 1.0);
 }

@@ -11,10 +11,9 @@ use anyhow::{bail, Context, Result};
 use glam::UVec2;
 use ridgeline::dataset;
 use ridgeline::display::{Display, DisplayConfig, FrameStats};
-use ridgeline::flight::{builtin_approach, FlightPath};
+use ridgeline::flight::FlightPath;
 use ridgeline::gl::{GlBackend, GlesVersion, OpenedBackend};
 use ridgeline::node::NodeSource;
-use ridgeline::pyramid::Pyramid;
 use ridgeline::scene::TerrainSummary;
 use serde_json::json;
 
@@ -33,7 +32,7 @@ pub struct FlyArgs {
     #[arg(long, default_value_t = 120)]
     pub frames: u32,
     /// Image or window size, WIDTHxHEIGHT.
-    #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+    #[arg(long, default_value = "1280x720", value_parser = super::parse_size)]
     pub size: UVec2,
     /// Screen-space error bound in pixels.
     #[arg(long, default_value_t = 1.0)]
@@ -65,16 +64,6 @@ pub struct FlyArgs {
     pub snapshots: u32,
 }
 
-fn parse_size(text: &str) -> Result<UVec2, String> {
-    let (w, h) = text.split_once(['x', 'X']).ok_or_else(|| format!("size `{text}` is not WIDTHxHEIGHT"))?;
-    let parse = |s: &str| s.trim().parse::<u32>().map_err(|_| format!("size `{text}`: `{s}` is not a whole number"));
-    let size = UVec2::new(parse(w)?, parse(h)?);
-    if size.x == 0 || size.y == 0 || size.x > 16384 || size.y > 16384 {
-        return Err(format!("size `{text}` must be between 1x1 and 16384x16384"));
-    }
-    Ok(size)
-}
-
 pub fn run(args: &FlyArgs) -> Result<()> {
     if !(args.tau.is_finite() && args.tau > 0.0) {
         bail!("--tau {} must be a number of pixels above 0", args.tau);
@@ -88,7 +77,7 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     let bar = Bar::new();
     let pyramid = dataset::open(args.dataset.as_deref(), Path::new("cache"), &bar)?;
     bar.finish();
-    let path = flight_path(args, &pyramid)?;
+    let path = super::flight_path(args.path.as_deref(), &pyramid)?;
     let summary = TerrainSummary::from_pyramid(pyramid.info());
     let dataset_name = pyramid.path().display().to_string();
     let source: Arc<dyn NodeSource> = Arc::new(pyramid);
@@ -116,18 +105,6 @@ pub fn run(args: &FlyArgs) -> Result<()> {
         write_stats(args, &info, &dataset_name, &rows)?;
     }
     print_summary(&rows)
-}
-
-fn flight_path(args: &FlyArgs, pyramid: &Pyramid) -> Result<FlightPath> {
-    let layout = *pyramid.layout();
-    match &args.path {
-        Some(file) => Ok(FlightPath::read(file, &pyramid.info().georef, layout.samples)?),
-        None => {
-            let extent = layout.extent_m();
-            let height = |x: f64, y: f64| pyramid.exact_height(x, y).unwrap_or(0.0);
-            Ok(builtin_approach(extent, &height))
-        }
-    }
 }
 
 /// One row of stats.json.

@@ -70,6 +70,10 @@ pub struct Capabilities {
     pub rgba8_renderbuffer: bool,
     /// GL_DEPTH_COMPONENT24 renderbuffers (ES 3.0, desktop, OES_depth24).
     pub depth24_renderbuffer: bool,
+    /// RGBA32F colour attachments one can draw to and read back as floats
+    /// (core in ES 3.2 and GL 3.0, else `GL_EXT_color_buffer_float` on ES 3):
+    /// what the accuracy tool's position pass needs.
+    pub float_colour_buffer: bool,
     /// Implementation limits.
     pub limits: Limits,
 }
@@ -116,6 +120,7 @@ impl Capabilities {
             instancing: core((3, 0), (3, 3)),
             rgba8_renderbuffer: !es || core((3, 0), (3, 0)) || has("GL_OES_rgb8_rgba8"),
             depth24_renderbuffer: !es || core((3, 0), (3, 0)) || has("GL_OES_depth24"),
+            float_colour_buffer: core((3, 2), (3, 0)) || (core3 && has("GL_EXT_color_buffer_float")),
             limits,
         }
     }
@@ -166,6 +171,7 @@ mod tests {
         assert!(c.glsl_es_100 && !c.glsl_es_300);
         assert!(!c.vertex_array_objects && !c.base_vertex && !c.uint32_indices);
         assert!(!c.instancing && !c.rgba8_renderbuffer && !c.depth24_renderbuffer);
+        assert!(!c.float_colour_buffer);
     }
 
     #[test]
@@ -195,8 +201,10 @@ mod tests {
         let c = caps(GlApi::Es, 3, 0, &[], GlesVersion::Es3);
         assert_eq!(c.level, GlesVersion::Es3);
         assert!(c.glsl_es_300 && c.vertex_array_objects && c.instancing && c.uint32_indices);
-        assert!(!c.base_vertex);
-        assert!(caps(GlApi::Es, 3, 2, &[], GlesVersion::Es3).base_vertex);
+        assert!(!c.base_vertex && !c.float_colour_buffer);
+        assert!(caps(GlApi::Es, 3, 0, &["GL_EXT_color_buffer_float"], GlesVersion::Es3).float_colour_buffer);
+        let es32 = caps(GlApi::Es, 3, 2, &[], GlesVersion::Es3);
+        assert!(es32.base_vertex && es32.float_colour_buffer);
     }
 
     #[test]

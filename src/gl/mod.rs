@@ -45,8 +45,10 @@ pub use objects::{
     Buffer, BufferTarget, BufferUsage, Framebuffer, Program, Renderbuffer, Shader, VertexArray,
 };
 pub use offscreen::OffscreenTarget;
+pub(crate) use offscreen::read_positions;
 pub use renderer::GlRenderer;
 pub use smoke::{SmokePass, SMOKE_TRIANGLE};
+pub use terrain_pass::TerrainOutput;
 pub use truth_pass::{
     TruthChunk, TruthError, TruthFrameStats, TruthMesh, TruthPass, TruthRegion, CHUNK_CELLS, CHUNK_TRIANGLES,
     MAX_TRUTH_POSTS,

@@ -1,5 +1,6 @@
-//! The headless render target (a framebuffer with colour and depth
-//! renderbuffers) and reading pixels back into an image with row 0 at the top.
+//! The headless render targets (a framebuffer with colour and depth
+//! renderbuffers: RGBA8 for pictures, RGBA32F for the accuracy tool's
+//! positions) and reading them back with row 0 at the top.
 
 use std::rc::Rc;
 
@@ -24,10 +25,24 @@ impl OffscreenTarget {
     /// RGBA8 colour and 24-bit depth where the context has them; RGBA4 and
     /// 16-bit depth on a bare ES 2.0 context, which has nothing larger.
     pub fn new(gl: &Rc<Gl>, size: UVec2) -> Result<OffscreenTarget, GlError> {
-        let caps = gl.caps();
-        let colour_format = if caps.rgba8_renderbuffer { glow::RGBA8 } else { glow::RGBA4 };
+        let colour_format = if gl.caps().rgba8_renderbuffer { glow::RGBA8 } else { glow::RGBA4 };
+        OffscreenTarget::with_colour(gl, colour_format, size)
+    }
+
+    /// RGBA32F colour (camera-relative positions, in metres) and the best
+    /// depth the context has. Refused where float colour buffers are missing
+    /// (a bare ES 2.0 or ES 3.0 context without `GL_EXT_color_buffer_float`).
+    pub fn positions(gl: &Rc<Gl>, size: UVec2) -> Result<OffscreenTarget, GlError> {
+        if !gl.caps().float_colour_buffer {
+            let why = "position targets need RGBA32F colour buffers (ES 3.2, or GL_EXT_color_buffer_float)";
+            return Err(GlError::InvalidRequest(why.to_owned()));
+        }
+        OffscreenTarget::with_colour(gl, glow::RGBA32F, size)
+    }
+
+    fn with_colour(gl: &Rc<Gl>, colour_format: u32, size: UVec2) -> Result<OffscreenTarget, GlError> {
         let depth_format =
-            if caps.depth24_renderbuffer { glow::DEPTH_COMPONENT24 } else { glow::DEPTH_COMPONENT16 };
+            if gl.caps().depth24_renderbuffer { glow::DEPTH_COMPONENT24 } else { glow::DEPTH_COMPONENT16 };
         let colour = Renderbuffer::new(gl, colour_format, size)?;
         let depth = Renderbuffer::new(gl, depth_format, size)?;
         let framebuffer = Framebuffer::new(gl)?;
@@ -51,6 +66,29 @@ impl OffscreenTarget {
     pub fn formats(&self) -> (u32, u32) {
         (self.colour.internal_format(), self.depth.internal_format())
     }
+}
+
+/// Reads the bound RGBA32F framebuffer's `size` pixels into `out` (resized
+/// to width * height), row 0 at the top.
+#[allow(unsafe_code)]
+pub(crate) fn read_positions(gl: &Gl, size: UVec2, out: &mut Vec<[f32; 4]>) -> Result<(), GlError> {
+    let (width, height) = (size.x as usize, size.y as usize);
+    out.resize(width * height, [0.0; 4]);
+    // SAFETY: RGBA/FLOAT writes exactly width * height * 16 bytes, the
+    // length of `out` as bytes; sizes come from a target the GL accepted.
+    unsafe {
+        gl.pixel_store_i32(glow::PACK_ALIGNMENT, 4);
+        let bytes: &mut [u8] = bytemuck::cast_slice_mut(out.as_mut_slice());
+        let data = glow::PixelPackData::Slice(Some(bytes));
+        gl.read_pixels(0, 0, size.x as i32, size.y as i32, glow::RGBA, glow::FLOAT, data);
+    }
+    gl_check!(gl)?;
+    // GL's row 0 is the bottom: swap rows in place.
+    for row in 0..height / 2 {
+        let (top, bottom) = out.split_at_mut((height - 1 - row) * width);
+        top[row * width..(row + 1) * width].swap_with_slice(&mut bottom[..width]);
+    }
+    Ok(())
 }
 
 /// Reads the bound framebuffer's `size` pixels as RGBA8, flipped so that

@@ -1,6 +1,10 @@
 //! The terrain pass: shared grid positions and indices, one vertex buffer
 //! mirroring the tile allocator's staging copy, and per tile only uniforms
 //! and an attribute offset (Polok). Vertex shaders read no textures.
+//!
+//! Two fragment programs share the vertex shader: the display's colours, and
+//! camera-relative positions for the accuracy tool ([`TerrainOutput`]), so
+//! what the accuracy tool measures is the geometry the display draws.
 
 use std::rc::Rc;
 
@@ -15,6 +19,7 @@ use crate::tiles::{TileGrid, TileVertex};
 
 const VERTEX_SOURCE: &str = include_str!("../../shaders/gles/terrain.vert");
 const FRAGMENT_SOURCE: &str = include_str!("../../shaders/gles/terrain.frag");
+const POSITION_SOURCE: &str = include_str!("../../shaders/gles/position.frag");
 
 const GRID: u32 = 0;
 const HEIGHT: u32 = 1;
@@ -32,10 +37,44 @@ struct Locations {
     haze: Option<glow::UniformLocation>,
 }
 
-pub struct TerrainPass {
-    gl: Rc<Gl>,
+/// What the terrain pass writes per pixel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TerrainOutput {
+    /// The display's shaded colours.
+    Colour,
+    /// The camera-relative surface position, into an RGBA32F target.
+    Position,
+}
+
+/// A linked terrain program and its uniform locations (the position program
+/// has no lighting uniforms: those locations are `None`, and setting them is
+/// a no-op).
+struct TerrainProgram {
     program: Program,
     at: Locations,
+}
+
+impl TerrainProgram {
+    fn build(gl: &Rc<Gl>, name: &str, fragment: &str) -> Result<TerrainProgram, GlError> {
+        let attributes = [(GRID, "a_grid"), (HEIGHT, "a_height"), (NORMAL, "a_normal")];
+        let program = Program::build(gl, name, VERTEX_SOURCE, fragment, &attributes)?;
+        let at = Locations {
+            view_projection: program.uniform_location("u_view_projection"),
+            tile: program.uniform_location("u_tile"),
+            morph: program.uniform_location("u_morph"),
+            frame: program.uniform_location("u_frame"),
+            sun: program.uniform_location("u_sun"),
+            awareness: program.uniform_location("u_awareness"),
+            haze: program.uniform_location("u_haze"),
+        };
+        Ok(TerrainProgram { program, at })
+    }
+}
+
+pub struct TerrainPass {
+    gl: Rc<Gl>,
+    colour: TerrainProgram,
+    position: TerrainProgram,
     grid_vertices: Buffer,
     grid_indices: Buffer,
     heights: Buffer,
@@ -47,17 +86,8 @@ impl TerrainPass {
     /// Builds the program, the shared grid of `grid_size` and a height
     /// buffer of `buffer_bytes` (the tile allocator's capacity).
     pub fn new(gl: &Rc<Gl>, grid_size: u32, buffer_bytes: u32) -> Result<TerrainPass, GlError> {
-        let attributes = [(GRID, "a_grid"), (HEIGHT, "a_height"), (NORMAL, "a_normal")];
-        let program = Program::build(gl, "terrain", VERTEX_SOURCE, FRAGMENT_SOURCE, &attributes)?;
-        let at = Locations {
-            view_projection: program.uniform_location("u_view_projection"),
-            tile: program.uniform_location("u_tile"),
-            morph: program.uniform_location("u_morph"),
-            frame: program.uniform_location("u_frame"),
-            sun: program.uniform_location("u_sun"),
-            awareness: program.uniform_location("u_awareness"),
-            haze: program.uniform_location("u_haze"),
-        };
+        let colour = TerrainProgram::build(gl, "terrain", FRAGMENT_SOURCE)?;
+        let position = TerrainProgram::build(gl, "terrain positions", POSITION_SOURCE)?;
         let grid = TileGrid::new(grid_size);
         let vertex_bytes: &[u8] = bytemuck::cast_slice(&grid.vertices);
         let grid_vertices = Buffer::new(gl, BufferTarget::Vertices, vertex_bytes.len(), BufferUsage::Static)?;
@@ -69,8 +99,8 @@ impl TerrainPass {
         let vertex_array = if gl.caps().vertex_array_objects { Some(VertexArray::new(gl)?) } else { None };
         Ok(TerrainPass {
             gl: Rc::clone(gl),
-            program,
-            at,
+            colour,
+            position,
             grid_vertices,
             grid_indices,
             heights,
@@ -89,12 +119,16 @@ impl TerrainPass {
         Ok(())
     }
 
-    /// Draws every tile of `list`. Sets all the state it relies on: depth
-    /// test and writes on, back faces culled, no blending.
+    /// Draws every tile of `list`, writing `output`. Sets all the state it
+    /// relies on: depth test and writes on, back faces culled, no blending.
     #[allow(unsafe_code)]
-    pub fn draw(&self, list: &DrawList) -> Result<(), GlError> {
+    pub fn draw(&self, list: &DrawList, output: TerrainOutput) -> Result<(), GlError> {
         let Some(frame) = list.frame else { return Ok(()) };
         let gl = &self.gl;
+        let program = match output {
+            TerrainOutput::Colour => &self.colour,
+            TerrainOutput::Position => &self.position,
+        };
         // SAFETY: every object bound is live in this context; attribute
         // pointers stay inside the buffers (grid vertices are indexed by the
         // shared indices, each tile's offset leaves room for a whole tile, as
@@ -108,8 +142,8 @@ impl TerrainPass {
             gl.cull_face(glow::BACK);
             gl.front_face(glow::CCW);
             gl.disable(glow::BLEND);
-            self.program.bind();
-            self.set_frame_uniforms(&frame);
+            program.program.bind();
+            set_frame_uniforms(gl, &program.at, &frame);
             if let Some(vertex_array) = &self.vertex_array {
                 vertex_array.bind();
             }
@@ -121,7 +155,7 @@ impl TerrainPass {
             gl.enable_vertex_attrib_array(HEIGHT);
             gl.enable_vertex_attrib_array(NORMAL);
             for tile in &list.tiles {
-                self.draw_tile(tile);
+                self.draw_tile(&program.at, tile);
             }
             gl.disable_vertex_attrib_array(GRID);
             gl.disable_vertex_attrib_array(HEIGHT);
@@ -131,34 +165,34 @@ impl TerrainPass {
     }
 
     #[allow(unsafe_code)]
-    fn set_frame_uniforms(&self, frame: &FrameUniforms) {
-        let gl = &self.gl;
-        let curvature = if frame.curvature { 1.0 / (2.0 * crate::camera::EARTH_RADIUS_M) } else { 0.0 };
-        let sun = frame.sun_direction;
-        let haze = palette::SKY_HORIZON;
-        // SAFETY: the program is bound; locations come from it.
-        unsafe {
-            gl.uniform_matrix_4_f32_slice(self.at.view_projection.as_ref(), false, &frame.view_projection.to_cols_array());
-            gl.uniform_4_f32(self.at.frame.as_ref(), frame.camera_altitude as f32, curvature as f32, 0.0, 0.0);
-            gl.uniform_3_f32(self.at.sun.as_ref(), sun.x, sun.y, sun.z);
-            let awareness = (frame.warning_above_m, frame.caution_below_m, frame.fog_distance_m);
-            gl.uniform_4_f32(self.at.awareness.as_ref(), awareness.0, awareness.1, awareness.2, 0.0);
-            gl.uniform_3_f32(self.at.haze.as_ref(), haze[0], haze[1], haze[2]);
-        }
-    }
-
-    #[allow(unsafe_code)]
-    fn draw_tile(&self, tile: &TileUniforms) {
+    fn draw_tile(&self, at: &Locations, tile: &TileUniforms) {
         let gl = &self.gl;
         let offset = tile.byte_offset as i32;
         // SAFETY: the height buffer is bound; the tile's block holds a whole
         // tile's vertices from `offset`.
         unsafe {
-            gl.uniform_4_f32(self.at.tile.as_ref(), tile.origin[0], tile.origin[1], tile.spacing[0], tile.spacing[1]);
-            gl.uniform_4_f32(self.at.morph.as_ref(), tile.morph[0], tile.morph[1], tile.skirt_depth, 0.0);
+            gl.uniform_4_f32(at.tile.as_ref(), tile.origin[0], tile.origin[1], tile.spacing[0], tile.spacing[1]);
+            gl.uniform_4_f32(at.morph.as_ref(), tile.morph[0], tile.morph[1], tile.skirt_depth, 0.0);
             gl.vertex_attrib_pointer_f32(HEIGHT, 2, glow::FLOAT, false, VERTEX_STRIDE, offset);
             gl.vertex_attrib_pointer_f32(NORMAL, 4, glow::BYTE, true, VERTEX_STRIDE, offset + NORMAL_OFFSET);
             gl.draw_elements(glow::TRIANGLES, self.index_count, glow::UNSIGNED_SHORT, 0);
         }
+    }
+}
+
+/// Sets the per-frame uniforms of the bound program `at` belongs to.
+#[allow(unsafe_code)]
+fn set_frame_uniforms(gl: &Gl, at: &Locations, frame: &FrameUniforms) {
+    let curvature = if frame.curvature { 1.0 / (2.0 * crate::camera::EARTH_RADIUS_M) } else { 0.0 };
+    let sun = frame.sun_direction;
+    let haze = palette::SKY_HORIZON;
+    // SAFETY: the program is bound; locations come from it.
+    unsafe {
+        gl.uniform_matrix_4_f32_slice(at.view_projection.as_ref(), false, &frame.view_projection.to_cols_array());
+        gl.uniform_4_f32(at.frame.as_ref(), frame.camera_altitude as f32, curvature as f32, 0.0, 0.0);
+        gl.uniform_3_f32(at.sun.as_ref(), sun.x, sun.y, sun.z);
+        let awareness = (frame.warning_above_m, frame.caution_below_m, frame.fog_distance_m);
+        gl.uniform_4_f32(at.awareness.as_ref(), awareness.0, awareness.1, awareness.2, 0.0);
+        gl.uniform_3_f32(at.haze.as_ref(), haze[0], haze[1], haze[2]);
     }
 }

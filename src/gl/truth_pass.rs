@@ -20,7 +20,7 @@ use glam::DVec2;
 
 use super::error::GlError;
 use super::handle::Gl;
-use super::terrain_pass::TerrainPass;
+use super::terrain_pass::{TerrainOutput, TerrainPass};
 use crate::camera::Camera;
 use crate::lod::TileKey;
 use crate::render::{DrawList, FrameUniforms, TileUniforms};
@@ -91,9 +91,9 @@ impl TruthPass {
     }
 
     /// Draws every chunk into the bound target with `frame`'s uniforms, seen
-    /// from `camera` (whose position makes the chunks camera-relative). Sets
-    /// the terrain pass's state; does not clear.
-    pub fn draw(&self, frame: &FrameUniforms, camera: &Camera) -> Result<(), GlError> {
+    /// from `camera` (whose position makes the chunks camera-relative),
+    /// writing `output`. Sets the terrain pass's state; does not clear.
+    pub fn draw(&self, frame: &FrameUniforms, camera: &Camera, output: TerrainOutput) -> Result<(), GlError> {
         let eye = camera.position.truncate();
         let tiles = self
             .chunks
@@ -112,7 +112,7 @@ impl TruthPass {
             .collect();
         let indices_per_tile = grid::index_count(CHUNK_CELLS) as u32;
         let list = DrawList { frame: Some(*frame), tiles, indices_per_tile };
-        self.terrain.draw(&list)
+        self.terrain.draw(&list, output)
     }
 }
 

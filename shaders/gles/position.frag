@@ -1,0 +1,16 @@
+#version 100
+// Position output for the accuracy tool: the surface point each pixel shows,
+// relative to the camera in metres (x east, y north, z up, the curvature drop
+// included), into an RGBA32F target. Alpha 1 marks terrain; the target is
+// cleared to alpha 0, so sky reads as 0.
+#ifdef GL_FRAGMENT_PRECISION_HIGH
+precision highp float;
+#else
+precision mediump float;
+#endif
+
+varying vec3 v_position;
+
+void main() {
+    gl_FragColor = vec4(v_position, 1.0);
+}

@@ -1,0 +1,42 @@
+//! The accuracy tool's measurements: how far, in pixels, the surface the LOD
+//! display draws lies from the full-resolution surface, per pixel, over a
+//! set of views; the statistics of that error; and its heat map.
+//!
+//! **What is measured, and why.** Ulrich's bound promises that a tile's
+//! geometric error (a vertical distance `delta` between its surface and the
+//! full-resolution one) projects to at most tau pixels. The measurable
+//! counterpart is, at each pixel, the vertical distance between the two
+//! surfaces at the ground point that pixel shows, projected to the screen
+//! at that point: the on-screen length of the segment from one surface to the
+//! other. It is taken from both sides ([`pixel_error`]), at the ground point
+//! the LOD image shows (the point actually drawn, skirts included) and at the
+//! one the full-resolution image shows (where the LOD surface is read from a
+//! CPU mirror of the drawn tiles, [`LodSurface`]); the pixel's error is the
+//! larger. Measuring only the LOD's own points would miss a ridge the LOD
+//! drew too low, because the LOD image then shows the ground behind it.
+//! Distances between the two images' hit points are not used: along grazing
+//! rays a millimetre of height moves the hit point kilometres, which is no
+//! error of the surface.
+//!
+//! | file | owns |
+//! |---|---|
+//! | `positions` | [`PositionImage`]: a camera-relative surface point per pixel, read back from the GPU |
+//! | `lod_surface` | [`LodSurface`]: the drawn LOD surface evaluated on the CPU, morph included |
+//! | `pixel_error` | [`measure_view`]: per-pixel error and coverage of one view |
+//! | `summary` | [`ErrorSummary`]: percentiles over all views |
+//! | `heat_map` | the error image of a view as colours |
+//! | `run` | [`measure_flight`]: drives a [`crate::display::Display`] and a truth pass over views |
+
+mod heat_map;
+mod lod_surface;
+mod pixel_error;
+mod positions;
+mod run;
+mod summary;
+
+pub use heat_map::{heat_map, HEAT_MISMATCH, HEAT_SKY};
+pub use lod_surface::LodSurface;
+pub use pixel_error::{measure_view, ViewErrors, ViewGeometry};
+pub use positions::PositionImage;
+pub use run::{measure_flight, AccuracyRun, ViewRow, WorstView};
+pub use summary::{percentile, ErrorSummary};

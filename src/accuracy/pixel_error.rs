@@ -1,0 +1,253 @@
+//! [`measure_view`]: the per-pixel screen-space geometric error of one view,
+//! and where the LOD and full-resolution images disagree on terrain versus
+//! sky. The module doc of [`crate::accuracy`] says what is measured and why.
+
+use glam::{DMat4, DVec2, DVec3, DVec4, Vec3};
+use rayon::prelude::*;
+
+use super::{LodSurface, PositionImage};
+use crate::camera::{Camera, EARTH_RADIUS_M};
+use crate::render::FrameUniforms;
+
+/// The exact full-resolution height at a local point, metres.
+pub type ExactHeight<'a> = &'a (dyn Fn(f64, f64) -> Option<f32> + Sync);
+
+/// How camera-relative points reach the screen in one view.
+#[derive(Clone, Copy, Debug)]
+pub struct ViewGeometry {
+    pub eye: DVec3,
+    /// The altitude the shader subtracts (the f32 uniform, widened).
+    pub altitude: f64,
+    pub view_projection: DMat4,
+    pub viewport: [u32; 2],
+    /// 1 / (2 R) when the earth's curvature is drawn, else 0 (the shader's u_frame.y).
+    pub curvature: f64,
+    /// Ulrich's K: pixels per radian at the centre of the screen.
+    pub perspective_scale: f64,
+}
+
+impl ViewGeometry {
+    pub fn new(camera: &Camera, frame: &FrameUniforms) -> ViewGeometry {
+        let m = frame.view_projection.to_cols_array().map(f64::from);
+        ViewGeometry {
+            eye: camera.position,
+            altitude: frame.camera_altitude as f32 as f64,
+            view_projection: DMat4::from_cols_array(&m),
+            viewport: frame.viewport,
+            curvature: if frame.curvature { (1.0 / (2.0 * EARTH_RADIUS_M)) as f32 as f64 } else { 0.0 },
+            perspective_scale: camera.perspective_scale(),
+        }
+    }
+
+    /// The ground point a camera-relative surface point `p` lies over, and
+    /// its height above the datum (undoing the altitude and curvature drop).
+    pub fn ground(&self, p: DVec3) -> (DVec2, f64) {
+        let drop = p.truncate().length_squared() * self.curvature;
+        (self.eye.truncate() + p.truncate(), p.z + self.altitude + drop)
+    }
+
+    /// On-screen length, pixels, of the vertical segment from the
+    /// camera-relative point `p` to `dz` metres above it. Where either end
+    /// is not in front of the camera, Ulrich's `|dz| K / distance` instead.
+    pub fn projected_vertical(&self, p: DVec3, dz: f64) -> f64 {
+        match (self.pixel_of(p), self.pixel_of(p + DVec3::Z * dz)) {
+            (Some(a), Some(b)) => a.distance(b),
+            _ => dz.abs() * self.perspective_scale / p.length().max(1e-3),
+        }
+    }
+
+    fn pixel_of(&self, p: DVec3) -> Option<DVec2> {
+        let clip: DVec4 = self.view_projection * p.extend(1.0);
+        (clip.w > 1e-6).then(|| {
+            let ndc = DVec2::new(clip.x, clip.y) / clip.w;
+            (ndc + 1.0) * 0.5 * DVec2::new(self.viewport[0] as f64, self.viewport[1] as f64)
+        })
+    }
+}
+
+/// One view's measurement; buffers are kept between views.
+#[derive(Clone, Debug, Default)]
+pub struct ViewErrors {
+    /// Per pixel (row-major from the top left): the error in pixels where
+    /// both images show terrain, NaN elsewhere.
+    pub errors_px: Vec<f32>,
+    /// Pixels where both show terrain (and the error was measured).
+    pub terrain_pixels: usize,
+    /// Terrain in the LOD image, sky in the truth, and the reverse.
+    pub lod_only: usize,
+    pub truth_only: usize,
+    /// Terrain pixels whose full-resolution ground point no drawn tile
+    /// covers (a hole in the LOD surface; their error is the LOD side's).
+    pub holes: usize,
+    /// Per LOD terrain pixel, |drawn height - the CPU mirror's height| in
+    /// metres (NaN elsewhere): near 0 except on skirts, a check that the
+    /// mirror measures what the GPU drew.
+    pub mirror_m: Vec<f32>,
+}
+
+#[derive(Clone, Copy, Default)]
+struct Counts {
+    terrain: usize,
+    lod_only: usize,
+    truth_only: usize,
+    holes: usize,
+}
+
+impl std::ops::Add for Counts {
+    type Output = Counts;
+    fn add(self, o: Counts) -> Counts {
+        Counts {
+            terrain: self.terrain + o.terrain,
+            lod_only: self.lod_only + o.lod_only,
+            truth_only: self.truth_only + o.truth_only,
+            holes: self.holes + o.holes,
+        }
+    }
+}
+
+/// Measures one view: `lod` and `truth` are the position images of the LOD
+/// frame and of the full-resolution mesh, `surface` the LOD frame's tiles
+/// (over `staging`), `exact` the full-resolution surface.
+pub fn measure_view(
+    geometry: &ViewGeometry,
+    lod: &PositionImage,
+    truth: &PositionImage,
+    surface: &LodSurface,
+    staging: &[u8],
+    exact: ExactHeight<'_>,
+    out: &mut ViewErrors,
+) {
+    debug_assert_eq!(lod.size, truth.size);
+    let pixels = lod.pixel_count();
+    out.errors_px.clear();
+    out.errors_px.resize(pixels, f32::NAN);
+    out.mirror_m.clear();
+    out.mirror_m.resize(pixels, f32::NAN);
+    let width = (lod.size.x as usize).max(1);
+    let rows = out.errors_px.par_chunks_mut(width).zip(out.mirror_m.par_chunks_mut(width)).enumerate();
+    let counts = rows
+        .map(|(row, (errors, mirror))| {
+            let mut counts = Counts::default();
+            for (col, (error, mirror)) in errors.iter_mut().zip(mirror.iter_mut()).enumerate() {
+                let k = row * width + col;
+                let pixel = Pixel { geometry, surface, staging, exact };
+                match (lod.point(k), truth.point(k)) {
+                    (Some(p), Some(t)) => {
+                        counts.terrain += 1;
+                        let (lod_side, drawn) = pixel.at_lod_point(p);
+                        *mirror = drawn;
+                        let truth_side = pixel.at_truth_point(t);
+                        counts.holes += usize::from(truth_side.is_none());
+                        *error = lod_side.max(truth_side.unwrap_or(0.0)) as f32;
+                    }
+                    (Some(p), None) => {
+                        counts.lod_only += 1;
+                        *mirror = pixel.at_lod_point(p).1;
+                    }
+                    (None, Some(_)) => counts.truth_only += 1,
+                    (None, None) => {}
+                }
+            }
+            counts
+        })
+        .reduce(Counts::default, |a, b| a + b);
+    out.terrain_pixels = counts.terrain;
+    out.lod_only = counts.lod_only;
+    out.truth_only = counts.truth_only;
+    out.holes = counts.holes;
+}
+
+/// What one pixel's measurement reads.
+struct Pixel<'a> {
+    geometry: &'a ViewGeometry,
+    surface: &'a LodSurface,
+    staging: &'a [u8],
+    exact: ExactHeight<'a>,
+}
+
+impl Pixel<'_> {
+    /// At the point the LOD drew: the error in pixels (0 where the ground is
+    /// outside the data) and |drawn - mirror| in metres (NaN without a tile).
+    fn at_lod_point(&self, p: Vec3) -> (f64, f32) {
+        let p = p.as_dvec3();
+        let (ground, drawn) = self.geometry.ground(p);
+        let error = (self.exact)(ground.x, ground.y).map_or(0.0, |h| self.geometry.projected_vertical(p, h as f64 - drawn));
+        let mirror = self.surface.height_at(self.staging, ground.x, ground.y).map_or(f64::NAN, |m| (m - drawn).abs());
+        (error, mirror as f32)
+    }
+
+    /// At the point the full-resolution mesh shows: the LOD surface there
+    /// against the exact one, in pixels (0 where the ground is outside the
+    /// data); `None` where no drawn tile covers it (a hole).
+    fn at_truth_point(&self, t: Vec3) -> Option<f64> {
+        let t = t.as_dvec3();
+        let (ground, _) = self.geometry.ground(t);
+        let Some(h) = (self.exact)(ground.x, ground.y) else { return Some(0.0) };
+        let lod = self.surface.height_at(self.staging, ground.x, ground.y)?;
+        Some(self.geometry.projected_vertical(t, lod - h as f64))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::DrawList;
+    use glam::UVec2;
+
+    /// Looking due north, level, from 1000 m over a flat sea at 0 m.
+    fn geometry() -> (Camera, ViewGeometry) {
+        let camera = Camera {
+            position: DVec3::new(5000.0, 5000.0, 1000.0),
+            heading_deg: 0.0,
+            pitch_deg: 0.0,
+            roll_deg: 0.0,
+            fov_x_deg: 60.0,
+            viewport: [64, 64],
+        };
+        let frame = FrameUniforms {
+            view_projection: camera.projection(1.0, 1e5) * camera.view(),
+            camera_altitude: 1000.0,
+            sun_direction: glam::Vec3::Z,
+            curvature: false,
+            warning_above_m: 0.0,
+            caution_below_m: 0.0,
+            viewport: camera.viewport,
+            fog_distance_m: 1e5,
+        };
+        (camera, ViewGeometry::new(&camera, &frame))
+    }
+
+    #[test]
+    fn a_vertical_segment_straight_ahead_projects_to_ulrichs_length() {
+        let (camera, geometry) = geometry();
+        let p = DVec3::new(0.0, 2000.0, 0.0);
+        let expected = 10.0 * camera.perspective_scale() / 2000.0;
+        assert!((geometry.projected_vertical(p, 10.0) - expected).abs() < 1e-6 * expected);
+        // Behind the camera: Ulrich's formula with the distance.
+        let behind = DVec3::new(0.0, -2000.0, 0.0);
+        assert!((geometry.projected_vertical(behind, 10.0) - expected).abs() < 1e-9);
+    }
+
+    /// One pixel where the LOD drew 10 m above a flat sea at 2 km, and the
+    /// truth shows the sea there: the LOD side's error is Ulrich's; with no
+    /// tile under the truth's point that pixel is also a hole. A pixel of
+    /// terrain in one image only is a coverage mismatch.
+    #[test]
+    fn errors_holes_and_mismatches_of_synthetic_images() {
+        let (camera, geometry) = geometry();
+        let image = |points: [Option<[f32; 3]>; 2]| PositionImage {
+            size: UVec2::new(2, 1),
+            texels: points.iter().map(|p| p.map_or([0.0; 4], |[x, y, z]| [x, y, z, 1.0])).collect(),
+        };
+        let lod = image([Some([0.0, 2000.0, -990.0]), Some([0.0, 3000.0, -1000.0])]);
+        let truth = image([Some([0.0, 2000.0, -1000.0]), None]);
+        let surface = LodSurface::new(&DrawList::default(), 32, [90.0, 90.0], DVec2::ZERO);
+        let sea = |_: f64, _: f64| Some(0.0f32);
+        let mut out = ViewErrors::default();
+        measure_view(&geometry, &lod, &truth, &surface, &[], &sea, &mut out);
+        let expected = 10.0 * camera.perspective_scale() / 2000.0;
+        assert!((out.errors_px[0] as f64 - expected).abs() < 1e-3, "{} vs {expected}", out.errors_px[0]);
+        assert!(out.errors_px[1].is_nan());
+        assert_eq!((out.terrain_pixels, out.lod_only, out.truth_only, out.holes), (1, 1, 0, 1));
+    }
+}

@@ -1,0 +1,149 @@
+//! [`measure_flight`]: the accuracy tool's loop. For each view it settles the
+//! clipmap (the error of the LOD, not of paging, is measured), draws the LOD
+//! frame and the full-resolution truth in colour (timed) and as positions,
+//! and measures the per-pixel error; it keeps the heat map of the worst view.
+
+use glam::DVec2;
+use image::RgbaImage;
+
+use super::pixel_error::ExactHeight;
+use super::{heat_map, measure_view, ErrorSummary, LodSurface, PositionImage, ViewErrors, ViewGeometry};
+use crate::camera::Camera;
+use crate::display::{Display, DisplayError};
+use crate::gl::TruthPass;
+
+/// Clipmap updates allowed per view to page in everything it wants.
+const SETTLE_UPDATES: u32 = 10_000;
+
+/// One view's numbers.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct ViewRow {
+    /// Time along the flight path, seconds.
+    pub t: f64,
+    #[serde(flatten)]
+    pub errors: ErrorSummary,
+    /// Share of all pixels where one image shows terrain and the other sky.
+    pub coverage_mismatch: f64,
+    /// Terrain pixels whose ground point no LOD tile covers.
+    pub holes: usize,
+    /// 99th percentile of |GPU-drawn height - CPU mirror| over LOD terrain
+    /// pixels, metres: the measurement's own check.
+    pub mirror_p99_m: f64,
+    /// Surface triangles (skirts left out, as the truth has none).
+    pub triangles_lod: u64,
+    pub triangles_truth: u64,
+    pub draw_calls_lod: usize,
+    pub draw_calls_truth: usize,
+    /// LOD tiles per level, finest first.
+    pub tiles_per_level: Vec<usize>,
+    /// The LOD frame (paging, tiling, upload, draw, to glFinish) and the truth's draw.
+    pub lod_frame_ms: f64,
+    pub truth_frame_ms: f64,
+}
+
+/// The view with the largest p99.9 error (then the largest maximum).
+pub struct WorstView {
+    pub index: usize,
+    pub heat_map: RgbaImage,
+    /// The LOD display's own picture of that view.
+    pub picture: RgbaImage,
+}
+
+/// Everything measured over the views.
+pub struct AccuracyRun {
+    pub tau_px: f64,
+    /// Over every terrain pixel of every view.
+    pub summary: ErrorSummary,
+    /// Share of all pixels of all views.
+    pub coverage_mismatch: f64,
+    pub holes: usize,
+    pub views: Vec<ViewRow>,
+    pub worst: Option<WorstView>,
+}
+
+/// Measures `views` (times along a path with their cameras) on `display`,
+/// against `truth` drawn in the same context and `exact`, the
+/// full-resolution surface over level-0 posts `spacing_m` apart.
+pub fn measure_flight(
+    display: &mut Display,
+    truth: &TruthPass,
+    exact: ExactHeight<'_>,
+    spacing_m: [f64; 2],
+    views: &[(f64, Camera)],
+) -> Result<AccuracyRun, DisplayError> {
+    let tau_px = display.scene().config().lod.tau_px;
+    let mut images = [PositionImage::default(), PositionImage::default()];
+    let mut errors = ViewErrors::default();
+    let mut all_errors: Vec<f32> = Vec::new();
+    let (mut mismatched, mut pixels, mut holes) = (0usize, 0usize, 0usize);
+    let mut rows: Vec<ViewRow> = Vec::with_capacity(views.len());
+    let mut worst: Option<WorstView> = None;
+    for (t, camera) in views {
+        let row = measure_one(display, truth, exact, spacing_m, *t, camera, &mut images, &mut errors)?;
+        all_errors.extend(errors.errors_px.iter().copied().filter(|e| !e.is_nan()));
+        mismatched += errors.lod_only + errors.truth_only;
+        pixels += errors.errors_px.len();
+        holes += errors.holes;
+        let is_worse = |w: &WorstView| {
+            let best = &rows[w.index].errors;
+            (row.errors.p999_px, row.errors.max_px) > (best.p999_px, best.max_px)
+        };
+        if worst.as_ref().is_none_or(is_worse) {
+            let [lod, truth_positions] = &images;
+            let heat_map = heat_map(&errors.errors_px, lod, truth_positions, tau_px);
+            display.frame(camera)?;
+            worst = Some(WorstView { index: rows.len(), heat_map, picture: display.read_pixels()? });
+        }
+        rows.push(row);
+    }
+    let summary = ErrorSummary::of(&mut all_errors);
+    let coverage_mismatch = if pixels == 0 { 0.0 } else { mismatched as f64 / pixels as f64 };
+    Ok(AccuracyRun { tau_px, summary, coverage_mismatch, holes, views: rows, worst })
+}
+
+#[allow(clippy::too_many_arguments)]
+fn measure_one(
+    display: &mut Display,
+    truth: &TruthPass,
+    exact: ExactHeight<'_>,
+    spacing_m: [f64; 2],
+    t: f64,
+    camera: &Camera,
+    images: &mut [PositionImage; 2],
+    errors: &mut ViewErrors,
+) -> Result<ViewRow, DisplayError> {
+    display.settle(camera, SETTLE_UPDATES)?;
+    let lod_stats = display.frame(camera)?;
+    let [lod, truth_positions] = images;
+    display.render_positions(camera, lod)?;
+    let truth_stats = display.render_truth(camera, truth)?;
+    display.render_truth_positions(camera, truth, truth_positions)?;
+    let geometry = ViewGeometry::new(camera, &display.frame_uniforms(camera));
+    let scene = display.scene();
+    let list = scene.draw_list();
+    let grid_size = scene.config().lod.grid_size;
+    let surface = LodSurface::new(list, grid_size, spacing_m, DVec2::new(camera.position.x, camera.position.y));
+    let (staging, _) = scene.uploads();
+    measure_view(&geometry, lod, truth_positions, &surface, staging, exact, errors);
+    let mut view_errors: Vec<f32> = errors.errors_px.iter().copied().filter(|e| !e.is_nan()).collect();
+    let mut mirror: Vec<f32> = errors.mirror_m.iter().copied().filter(|e| !e.is_nan()).collect();
+    mirror.sort_unstable_by(f32::total_cmp);
+    let mut tiles_per_level = vec![0; list.tiles.iter().map(|t| t.key.level as usize + 1).max().unwrap_or(0)];
+    for tile in &list.tiles {
+        tiles_per_level[tile.key.level as usize] += 1;
+    }
+    Ok(ViewRow {
+        t,
+        errors: ErrorSummary::of(&mut view_errors),
+        coverage_mismatch: (errors.lod_only + errors.truth_only) as f64 / errors.errors_px.len().max(1) as f64,
+        holes: errors.holes,
+        mirror_p99_m: if mirror.is_empty() { 0.0 } else { super::percentile(&mirror, 0.99) },
+        triangles_lod: list.tiles.len() as u64 * 2 * grid_size as u64 * grid_size as u64,
+        triangles_truth: truth_stats.triangles,
+        draw_calls_lod: lod_stats.draw_calls,
+        draw_calls_truth: truth_stats.draw_calls,
+        tiles_per_level,
+        lod_frame_ms: lod_stats.frame_ms,
+        truth_frame_ms: truth_stats.frame_ms,
+    })
+}

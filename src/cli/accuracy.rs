@@ -1,0 +1,185 @@
+//! `ridgeline accuracy`: renders views of a flight with the LOD display and
+//! with the full-resolution mesh in the same context, measures the per-pixel
+//! screen-space geometric error ([`ridgeline::accuracy`] says exactly what
+//! is measured), prints its percentiles and coverage mismatch, writes
+//! `accuracy.json` and the worst view's heat map, and fails when the
+//! measured p99.9 exceeds tau: the bound is only a promise if this confirms it.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use anyhow::{bail, Context, Result};
+use glam::UVec2;
+use ridgeline::accuracy::{measure_flight, AccuracyRun};
+use ridgeline::camera::Camera;
+use ridgeline::dataset;
+use ridgeline::display::{Display, DisplayConfig};
+use ridgeline::gl::{GlBackend, TruthMesh, TruthPass, TruthRegion};
+use ridgeline::node::NodeSource;
+use ridgeline::scene::TerrainSummary;
+use serde_json::json;
+
+use super::progress::Bar;
+
+#[derive(clap::Args)]
+pub struct AccuracyArgs {
+    /// Screen-space error bound in pixels, as `fly --tau`.
+    #[arg(long, default_value_t = 1.0)]
+    pub tau: f64,
+    /// Terrain: a cache name under cache/, or a path to a pyramid; the
+    /// built-in SRTM tile when omitted.
+    #[arg(long)]
+    pub dataset: Option<String>,
+    /// Camera path CSV (as `fly --path`); the built-in approach when omitted.
+    #[arg(long)]
+    pub path: Option<PathBuf>,
+    /// Views, evenly spaced in time along the path (first and last included).
+    #[arg(long, default_value_t = 16)]
+    pub views: u32,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "1280x720", value_parser = super::parse_size)]
+    pub size: UVec2,
+    /// Horizontal field of view in degrees.
+    #[arg(long, default_value_t = 60.0)]
+    pub fov: f64,
+    /// Headless contexts only: egl or osmesa (auto picks EGL).
+    #[arg(long, value_enum, default_value_t = GlBackend::Auto)]
+    pub backend: GlBackend,
+    /// Print the report as one JSON object instead of tables.
+    #[arg(long)]
+    pub json: bool,
+    /// Where accuracy.json, heat_map.png and picture.png (the worst view) go.
+    #[arg(long, default_value = "target/accuracy")]
+    pub out: PathBuf,
+}
+
+pub fn run(args: &AccuracyArgs) -> Result<()> {
+    check_args(args)?;
+    let bar = Bar::new();
+    let pyramid = dataset::open(args.dataset.as_deref(), Path::new("cache"), &bar)?;
+    bar.finish();
+    let path = super::flight_path(args.path.as_deref(), &pyramid)?;
+    let layout = *pyramid.layout();
+    let summary = TerrainSummary::from_pyramid(pyramid.info());
+    let dataset_name = pyramid.path().display().to_string();
+    let pyramid = Arc::new(pyramid);
+    let source: Arc<dyn NodeSource> = pyramid.clone();
+    let mut config = DisplayConfig::new(headless(args.backend), args.size);
+    config.scene.lod.tau_px = args.tau;
+    config.fov_x_deg = args.fov;
+    let grid_size = config.scene.lod.grid_size;
+    let mut display = Display::new(&config, Arc::clone(&source), summary).context("opening a headless display")?;
+    let region = TruthRegion::covering_tiles(&layout, grid_size);
+    let mesh = TruthMesh::load(source.as_ref(), region).with_context(|| format!("{dataset_name}: the full-resolution mesh"))?;
+    let truth = TruthPass::new(display.context().gl(), &mesh).context("uploading the full-resolution mesh")?;
+    let views: Vec<(f64, Camera)> =
+        path.frame_times(args.views.max(1)).map(|t| (t, path.sample(t).camera(args.fov, [args.size.x, args.size.y]))).collect();
+    let exact = |x: f64, y: f64| pyramid.exact_height(x, y);
+    let run = measure_flight(&mut display, &truth, &exact, layout.spacing_m, &views).context("measuring the views")?;
+    let info = display.info();
+    let report = json!({
+        "dataset": dataset_name,
+        "backend": info.backend.name(),
+        "gl_renderer": info.renderer,
+        "size": [args.size.x, args.size.y],
+        "fov_x_deg": args.fov,
+        "tau_px": run.tau_px,
+        "p50_px": run.summary.p50_px,
+        "p99_px": run.summary.p99_px,
+        "p999_px": run.summary.p999_px,
+        "max_px": run.summary.max_px,
+        "mean_px": run.summary.mean_px,
+        "terrain_pixels": run.summary.pixels,
+        "coverage_mismatch": run.coverage_mismatch,
+        "holes": run.holes,
+        "triangles_lod": mean(&run, |v| v.triangles_lod as f64),
+        "triangles_truth": mean(&run, |v| v.triangles_truth as f64),
+        "lod_frame_ms": mean(&run, |v| v.lod_frame_ms),
+        "truth_frame_ms": mean(&run, |v| v.truth_frame_ms),
+        "views": run.views.len(),
+        "worst_view": run.worst.as_ref().map(|w| w.index),
+        "per_view": run.views,
+    });
+    write_outputs(args, &run, &report)?;
+    if args.json {
+        super::print(&(serde_json::to_string_pretty(&report)? + "\n"))?;
+    } else {
+        print_tables(&run)?;
+    }
+    if run.summary.p999_px > run.tau_px {
+        bail!("measured p99.9 error {:.3} px exceeds tau {} px", run.summary.p999_px, run.tau_px);
+    }
+    Ok(())
+}
+
+fn check_args(args: &AccuracyArgs) -> Result<()> {
+    if !(args.tau.is_finite() && args.tau > 0.0) {
+        bail!("--tau {} must be a number of pixels above 0", args.tau);
+    }
+    if !(args.fov.is_finite() && args.fov > 0.0 && args.fov < 179.0) {
+        bail!("--fov {} must be between 0 and 179 degrees", args.fov);
+    }
+    if args.backend == GlBackend::Window {
+        bail!("--backend window: the accuracy tool renders off screen; use egl or osmesa");
+    }
+    Ok(())
+}
+
+/// The accuracy tool draws off screen: `auto` means headless EGL.
+fn headless(backend: GlBackend) -> GlBackend {
+    if backend == GlBackend::Auto { GlBackend::Egl } else { backend }
+}
+
+fn mean(run: &AccuracyRun, f: impl Fn(&ridgeline::accuracy::ViewRow) -> f64) -> f64 {
+    run.views.iter().map(f).sum::<f64>() / run.views.len().max(1) as f64
+}
+
+fn write_outputs(args: &AccuracyArgs, run: &AccuracyRun, report: &serde_json::Value) -> Result<()> {
+    let out = &args.out;
+    std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create the output folder", out.display()))?;
+    write_atomic(&out.join("accuracy.json"), serde_json::to_string_pretty(report)?.as_bytes())?;
+    if let Some(worst) = &run.worst {
+        save_png(&worst.heat_map, &out.join("heat_map.png"))?;
+        save_png(&worst.picture, &out.join("picture.png"))?;
+    }
+    Ok(())
+}
+
+fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let partial = path.with_extension("tmp");
+    std::fs::write(&partial, bytes).with_context(|| format!("{}: cannot write", partial.display()))?;
+    std::fs::rename(&partial, path).with_context(|| format!("{}: cannot rename into place", path.display()))
+}
+
+fn save_png(image: &image::RgbaImage, path: &Path) -> Result<()> {
+    let mut bytes = Vec::new();
+    image.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)?;
+    write_atomic(path, &bytes)
+}
+
+fn print_tables(run: &AccuracyRun) -> Result<()> {
+    use std::fmt::Write as _;
+    let mut out = String::new();
+    writeln!(out, "{:>8} {:>8} {:>8} {:>8} {:>8} {:>9} {:>9} {:>9} {:>9}", "t s", "p50 px", "p99 px", "p99.9 px", "max px", "mismatch", "lod tris", "truth tris", "mirror m")?;
+    for v in &run.views {
+        let e = &v.errors;
+        writeln!(
+            out,
+            "{:>8.1} {:>8.3} {:>8.3} {:>8.3} {:>8.3} {:>8.4}% {:>9} {:>9} {:>9.4}",
+            v.t, e.p50_px, e.p99_px, e.p999_px, e.max_px, 100.0 * v.coverage_mismatch, v.triangles_lod, v.triangles_truth, v.mirror_p99_m
+        )?;
+    }
+    let s = &run.summary;
+    writeln!(out)?;
+    writeln!(out, "  tau               {} px", run.tau_px)?;
+    writeln!(out, "  error             p50 {:.3}, p99 {:.3}, p99.9 {:.3}, max {:.3} px over {} terrain pixels", s.p50_px, s.p99_px, s.p999_px, s.max_px, s.pixels)?;
+    writeln!(out, "  coverage mismatch {:.4}% of pixels, {} holes", 100.0 * run.coverage_mismatch, run.holes)?;
+    let ratio = mean(run, |v| v.triangles_truth as f64) / mean(run, |v| v.triangles_lod as f64).max(1.0);
+    writeln!(out, "  triangles         LOD {:.0}, full resolution {:.0} ({ratio:.2}x)", mean(run, |v| v.triangles_lod as f64), mean(run, |v| v.triangles_truth as f64))?;
+    if let Some(worst) = &run.worst {
+        writeln!(out, "  worst view        t = {:.1} s (heat_map.png, picture.png)", run.views[worst.index].t)?;
+    }
+    let verdict = if s.p999_px <= run.tau_px { "confirmed" } else { "NOT confirmed" };
+    writeln!(out, "  bound             p99.9 {:.3} px <= tau {} px: {verdict}", s.p999_px, run.tau_px)?;
+    super::print(&out)
+}
