@@ -6,7 +6,7 @@ use crate::accuracy::PositionImage;
 use crate::camera::Camera;
 use crate::clipmap::{Clipmap, ClipmapConfig, ClipmapError, LoaderMode, UpdateStats, ViewConfig, ViewId};
 use crate::gl::{
-    ContextRequest, GlBackend, GlContext, GlError, GlInfo, GlRenderer, GlesVersion, OffscreenTarget, TerrainOutput,
+    BaselineFrameStats, ChunkedBaseline, ContextRequest, GlBackend, GlContext, GlError, GlInfo, GlRenderer, GlesVersion, OffscreenTarget, TerrainOutput,
     TruthFrameStats, TruthPass,
 };
 use crate::lod::ranges::RingInputs;
@@ -86,6 +86,9 @@ pub struct Display {
     clipmap: Clipmap,
     view: ViewId,
     summary: TerrainSummary,
+    /// A baseline frame skipped the renderer's uploads: its height buffer
+    /// must be rewritten whole before it draws again.
+    renderer_stale: bool,
 }
 
 impl Display {
@@ -105,7 +108,7 @@ impl Display {
         let scene = Scene::new(config.scene, &terrain)?;
         let mut renderer = GlRenderer::new(context.gl(), config.scene.lod.grid_size, config.scene.buffer_bytes)?;
         renderer.set_sentinel(config.sentinel);
-        Ok(Display { renderer, positions: None, context, scene, clipmap, view, summary })
+        Ok(Display { renderer, positions: None, context, scene, clipmap, view, summary, renderer_stale: false })
     }
 
     pub fn info(&self) -> &GlInfo {
@@ -138,6 +141,25 @@ impl Display {
     /// Pages, tiles, uploads and draws one frame for `camera`, then waits for
     /// the GPU (glFinish) so `frame_ms` is the whole frame.
     pub fn frame(&mut self, camera: &Camera) -> Result<FrameStats, DisplayError> {
+        self.frame_through(camera, None).map(|(stats, _)| stats)
+    }
+
+    /// [`Self::frame`] drawn by plain Chunked LOD instead of the batched
+    /// renderer: the same paging, tiles and sky, then `baseline` uploads each
+    /// new tile by itself and draws every tile from its own buffer.
+    pub fn frame_baseline(
+        &mut self,
+        camera: &Camera,
+        baseline: &mut ChunkedBaseline,
+    ) -> Result<(FrameStats, BaselineFrameStats), DisplayError> {
+        self.frame_through(camera, Some(baseline)).map(|(stats, base)| (stats, base.unwrap_or_default()))
+    }
+
+    fn frame_through(
+        &mut self,
+        camera: &Camera,
+        baseline: Option<&mut ChunkedBaseline>,
+    ) -> Result<(FrameStats, Option<BaselineFrameStats>), DisplayError> {
         let start = Instant::now();
         // Another display on this thread may have made its context current.
         self.context.make_current()?;
@@ -149,19 +171,38 @@ impl Display {
         let tiled = Instant::now();
         self.context.bind_target();
         let (staging, ranges) = self.scene.uploads();
-        self.renderer.upload(staging, ranges)?;
-        self.renderer.draw(self.scene.draw_list())?;
+        let list = self.scene.draw_list();
+        let base = match baseline {
+            None if self.renderer_stale => {
+                self.renderer.upload(staging, &[0..staging.len() as u32])?;
+                self.renderer_stale = false;
+                self.renderer.draw(list)?;
+                None
+            }
+            None => {
+                self.renderer.upload(staging, ranges)?;
+                self.renderer.draw(list)?;
+                None
+            }
+            Some(baseline) => {
+                // Clear and sky only, then the baseline's tiles.
+                self.renderer.draw(&DrawList { frame: list.frame, ..DrawList::default() })?;
+                self.renderer_stale = true;
+                Some(baseline.frame(list, staging)?)
+            }
+        };
         self.renderer.finish();
         let done = Instant::now();
-        Ok(FrameStats {
+        let stats = FrameStats {
             scene: report,
-            draw_calls: self.scene.draw_list().tiles.len(),
+            draw_calls: list.tiles.len(),
             resident_nodes: self.clipmap.atlas().resident_count(),
             nodes_loaded: update.applied,
             clipmap_ms: (paged - start).as_secs_f64() * 1e3,
             gl_ms: (done - tiled).as_secs_f64() * 1e3,
             frame_ms: (done - start).as_secs_f64() * 1e3,
-        })
+        };
+        Ok((stats, base))
     }
 
     /// The frame uniforms the scene draws `camera` with (the same near and

@@ -9,6 +9,10 @@ use super::{LodSurface, PositionImage};
 use crate::camera::{Camera, EARTH_RADIUS_M};
 use crate::render::FrameUniforms;
 
+/// A LOD pixel whose drawn height is further than this from the mirrored
+/// surface shows a skirt (metres; the mirror agrees to millimetres elsewhere).
+pub const SKIRT_TOLERANCE_M: f32 = 0.05;
+
 /// The exact full-resolution height at a local point, metres.
 pub type ExactHeight<'a> = &'a (dyn Fn(f64, f64) -> Option<f32> + Sync);
 
@@ -79,6 +83,10 @@ pub struct ViewErrors {
     /// Terrain pixels whose full-resolution ground point no drawn tile
     /// covers (a hole in the LOD surface; their error is the LOD side's).
     pub holes: usize,
+    /// Terrain pixels (in both images) where the LOD image shows a skirt
+    /// (a crack between tiles filled), and the largest error elsewhere.
+    pub skirt_pixels: usize,
+    pub max_surface_px: f64,
     /// Per LOD terrain pixel, |drawn height - the CPU mirror's height| in
     /// metres (NaN elsewhere): near 0 except on skirts, a check that the
     /// mirror measures what the GPU drew.
@@ -91,6 +99,8 @@ struct Counts {
     lod_only: usize,
     truth_only: usize,
     holes: usize,
+    skirt: usize,
+    max_surface: f64,
 }
 
 impl std::ops::Add for Counts {
@@ -101,6 +111,8 @@ impl std::ops::Add for Counts {
             lod_only: self.lod_only + o.lod_only,
             truth_only: self.truth_only + o.truth_only,
             holes: self.holes + o.holes,
+            skirt: self.skirt + o.skirt,
+            max_surface: self.max_surface.max(o.max_surface),
         }
     }
 }
@@ -139,6 +151,11 @@ pub fn measure_view(
                         let truth_side = pixel.at_truth_point(t);
                         counts.holes += usize::from(truth_side.is_none());
                         *error = lod_side.max(truth_side.unwrap_or(0.0)) as f32;
+                        if drawn > SKIRT_TOLERANCE_M {
+                            counts.skirt += 1;
+                        } else {
+                            counts.max_surface = counts.max_surface.max(*error as f64);
+                        }
                     }
                     (Some(p), None) => {
                         counts.lod_only += 1;
@@ -155,6 +172,8 @@ pub fn measure_view(
     out.lod_only = counts.lod_only;
     out.truth_only = counts.truth_only;
     out.holes = counts.holes;
+    out.skirt_pixels = counts.skirt;
+    out.max_surface_px = counts.max_surface;
 }
 
 /// What one pixel's measurement reads.

@@ -26,6 +26,9 @@ pub struct ViewRow {
     pub coverage_mismatch: f64,
     /// Terrain pixels whose ground point no LOD tile covers.
     pub holes: usize,
+    /// Terrain pixels showing a skirt, and the largest error off skirts.
+    pub skirt_pixels: usize,
+    pub max_surface_px: f64,
     /// 99th percentile of |GPU-drawn height - CPU mirror| over LOD terrain
     /// pixels, metres: the measurement's own check.
     pub mirror_p99_m: f64,
@@ -57,6 +60,9 @@ pub struct AccuracyRun {
     /// Share of all pixels of all views.
     pub coverage_mismatch: f64,
     pub holes: usize,
+    pub skirt_pixels: usize,
+    /// The largest error over pixels that show no skirt.
+    pub max_surface_px: f64,
     pub views: Vec<ViewRow>,
     pub worst: Option<WorstView>,
 }
@@ -98,7 +104,9 @@ pub fn measure_flight(
     }
     let summary = ErrorSummary::of(&mut all_errors);
     let coverage_mismatch = if pixels == 0 { 0.0 } else { mismatched as f64 / pixels as f64 };
-    Ok(AccuracyRun { tau_px, summary, coverage_mismatch, holes, views: rows, worst })
+    let skirt_pixels = rows.iter().map(|r| r.skirt_pixels).sum();
+    let max_surface_px = rows.iter().map(|r| r.max_surface_px).fold(0.0, f64::max);
+    Ok(AccuracyRun { tau_px, summary, coverage_mismatch, holes, skirt_pixels, max_surface_px, views: rows, worst })
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -137,6 +145,8 @@ fn measure_one(
         errors: ErrorSummary::of(&mut view_errors),
         coverage_mismatch: (errors.lod_only + errors.truth_only) as f64 / errors.errors_px.len().max(1) as f64,
         holes: errors.holes,
+        skirt_pixels: errors.skirt_pixels,
+        max_surface_px: errors.max_surface_px,
         mirror_p99_m: if mirror.is_empty() { 0.0 } else { super::percentile(&mirror, 0.99) },
         triangles_lod: list.tiles.len() as u64 * 2 * grid_size as u64 * grid_size as u64,
         triangles_truth: truth_stats.triangles,

@@ -92,6 +92,8 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
         "terrain_pixels": run.summary.pixels,
         "coverage_mismatch": run.coverage_mismatch,
         "holes": run.holes,
+        "skirt_pixels": run.skirt_pixels,
+        "max_surface_px": run.max_surface_px,
         "triangles_lod": mean(&run, |v| v.triangles_lod as f64),
         "triangles_truth": mean(&run, |v| v.triangles_truth as f64),
         "lod_frame_ms": mean(&run, |v| v.lod_frame_ms),
@@ -173,9 +175,12 @@ fn print_tables(run: &AccuracyRun) -> Result<()> {
     writeln!(out)?;
     writeln!(out, "  tau               {} px", run.tau_px)?;
     writeln!(out, "  error             p50 {:.3}, p99 {:.3}, p99.9 {:.3}, max {:.3} px over {} terrain pixels", s.p50_px, s.p99_px, s.p999_px, s.max_px, s.pixels)?;
+    writeln!(out, "  skirts            {} terrain pixels show one; max error off skirts {:.3} px", run.skirt_pixels, run.max_surface_px)?;
     writeln!(out, "  coverage mismatch {:.4}% of pixels, {} holes", 100.0 * run.coverage_mismatch, run.holes)?;
     let ratio = mean(run, |v| v.triangles_truth as f64) / mean(run, |v| v.triangles_lod as f64).max(1.0);
     writeln!(out, "  triangles         LOD {:.0}, full resolution {:.0} ({ratio:.2}x)", mean(run, |v| v.triangles_lod as f64), mean(run, |v| v.triangles_truth as f64))?;
+    let (lod_ms, truth_ms) = (mean(run, |v| v.lod_frame_ms), mean(run, |v| v.truth_frame_ms));
+    writeln!(out, "  frame ms          LOD {lod_ms:.1}, full resolution {truth_ms:.1} ({:.2}x)", truth_ms / lod_ms.max(1e-9))?;
     if let Some(worst) = &run.worst {
         writeln!(out, "  worst view        t = {:.1} s (heat_map.png, picture.png)", run.views[worst.index].t)?;
     }

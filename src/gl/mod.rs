@@ -15,12 +15,14 @@
 //! | `check` | [`gl_check!`](crate::gl_check) |
 //! | `smoke` | [`SmokePass`]: clear and one triangle, proving a context draws |
 //! | `terrain_pass`, `sky_pass` | the terrain tiles (heights as attributes, transforms as uniforms) and the sky |
+//! | `chunked_baseline` | [`ChunkedBaseline`]: plain Chunked LOD, a vertex buffer and an upload per tile (the bench's baseline) |
 //! | `truth_pass` | [`TruthPass`]: the brute-force ground truth, every level-0 post drawn with the terrain shaders |
 //! | `renderer` | [`GlRenderer`]: the GL [`RenderBackend`](crate::render::RenderBackend) |
 //!
 //! unsafe here is allowed per item, each block with a `// SAFETY:` comment.
 
 mod caps;
+mod chunked_baseline;
 pub mod check;
 mod context;
 mod egl;
@@ -37,6 +39,7 @@ mod terrain_pass;
 mod truth_pass;
 mod window;
 
+pub use chunked_baseline::{BaselineFrameStats, ChunkedBaseline};
 pub use caps::{Capabilities, GlApi, GlesVersion, Limits, ReportedVersion};
 pub use context::{ContextRequest, GlBackend, GlContext, GlInfo, OpenedBackend};
 pub use error::{GlError, ShaderStage};

@@ -46,6 +46,16 @@ pub enum TerrainOutput {
     Position,
 }
 
+/// Where each tile's vertex data is.
+#[derive(Clone, Copy)]
+pub enum TileVertices<'a> {
+    /// At the tile's byte offset in the pass's one height buffer (Polok's batching).
+    Shared,
+    /// In a buffer of the tile's own, from byte 0 (plain Chunked LOD: a
+    /// vertex buffer swap per draw); tiles without a buffer are skipped.
+    PerTile(&'a dyn Fn(&TileUniforms) -> Option<&'a Buffer>),
+}
+
 /// A linked terrain program and its uniform locations (the position program
 /// has no lighting uniforms: those locations are `None`, and setting them is
 /// a no-op).
@@ -121,8 +131,13 @@ impl TerrainPass {
 
     /// Draws every tile of `list`, writing `output`. Sets all the state it
     /// relies on: depth test and writes on, back faces culled, no blending.
-    #[allow(unsafe_code)]
     pub fn draw(&self, list: &DrawList, output: TerrainOutput) -> Result<(), GlError> {
+        self.draw_from(list, output, TileVertices::Shared)
+    }
+
+    /// [`Self::draw`] with the tiles' vertex data where `vertices` says.
+    #[allow(unsafe_code)]
+    pub fn draw_from(&self, list: &DrawList, output: TerrainOutput, vertices: TileVertices<'_>) -> Result<(), GlError> {
         let Some(frame) = list.frame else { return Ok(()) };
         let gl = &self.gl;
         let program = match output {
@@ -155,7 +170,17 @@ impl TerrainPass {
             gl.enable_vertex_attrib_array(HEIGHT);
             gl.enable_vertex_attrib_array(NORMAL);
             for tile in &list.tiles {
-                self.draw_tile(&program.at, tile);
+                let offset = match vertices {
+                    TileVertices::Shared => tile.byte_offset,
+                    TileVertices::PerTile(buffer_of) => match buffer_of(tile) {
+                        Some(buffer) => {
+                            buffer.bind();
+                            0
+                        }
+                        None => continue,
+                    },
+                };
+                self.draw_tile(&program.at, tile, offset);
             }
             gl.disable_vertex_attrib_array(GRID);
             gl.disable_vertex_attrib_array(HEIGHT);
@@ -165,11 +190,11 @@ impl TerrainPass {
     }
 
     #[allow(unsafe_code)]
-    fn draw_tile(&self, at: &Locations, tile: &TileUniforms) {
+    fn draw_tile(&self, at: &Locations, tile: &TileUniforms, byte_offset: u32) {
         let gl = &self.gl;
-        let offset = tile.byte_offset as i32;
-        // SAFETY: the height buffer is bound; the tile's block holds a whole
-        // tile's vertices from `offset`.
+        let offset = byte_offset as i32;
+        // SAFETY: the tile's vertex buffer is bound and holds a whole tile's
+        // vertices from `offset`.
         unsafe {
             gl.uniform_4_f32(at.tile.as_ref(), tile.origin[0], tile.origin[1], tile.spacing[0], tile.spacing[1]);
             gl.uniform_4_f32(at.morph.as_ref(), tile.morph[0], tile.morph[1], tile.skirt_depth, 0.0);

@@ -5,7 +5,8 @@
 //! (so they have no area); its south-west corner relative to the camera is
 //! computed in f64 per frame, exactly as tiles are placed, and the frame
 //! uniforms are the scene's, so an image of it compares pixel for pixel with
-//! the LOD image.
+//! the LOD image. Chunks are drawn nearest first, as the display's tiles
+//! are, so that both get the same early depth rejection.
 //!
 //! [`crate::display::Display::render_truth`] draws it into the display's own
 //! context (clear and sky as the display does, then this pass).
@@ -111,7 +112,9 @@ impl TruthPass {
             })
             .collect();
         let indices_per_tile = grid::index_count(CHUNK_CELLS) as u32;
-        let list = DrawList { frame: Some(*frame), tiles, indices_per_tile };
+        let mut list = DrawList { frame: Some(*frame), tiles, indices_per_tile };
+        // As the display does: a fair brute force gets early z too.
+        list.sort_front_to_back(CHUNK_CELLS);
         self.terrain.draw(&list, output)
     }
 }

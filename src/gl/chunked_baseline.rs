@@ -1,0 +1,79 @@
+//! [`ChunkedBaseline`]: plain Chunked LOD (Ulrich), the baseline that Polok's
+//! batching is measured against by `benches/lod.rs`. It draws the same tiles
+//! as the display, with the same shaders, but each tile's vertices live in a
+//! vertex buffer of their own: created and uploaded by its own call when the
+//! tile first appears, deleted when it is no longer drawn, and bound before
+//! each tile's draw. Nothing else differs, so the comparison isolates the
+//! one contiguous buffer and the one transfer per frame.
+
+use std::collections::{HashMap, HashSet};
+use std::rc::Rc;
+
+use super::error::GlError;
+use super::handle::Gl;
+use super::objects::{Buffer, BufferTarget, BufferUsage};
+use super::terrain_pass::{TerrainOutput, TerrainPass, TileVertices};
+use crate::lod::TileKey;
+use crate::render::DrawList;
+use crate::tiles::vertex::tile_bytes;
+
+/// What one baseline frame transferred.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct BaselineFrameStats {
+    /// Buffer uploads (one per tile that appeared).
+    pub uploads: usize,
+    pub bytes_uploaded: u64,
+    /// Vertex buffers alive after the frame.
+    pub buffers: usize,
+}
+
+/// One vertex buffer per drawn tile version (a tile regenerated from better
+/// data is placed anew by the allocator, so its byte offset names the version).
+pub struct ChunkedBaseline {
+    gl: Rc<Gl>,
+    pass: TerrainPass,
+    buffers: HashMap<(TileKey, u32), Buffer>,
+    wanted: HashSet<(TileKey, u32)>,
+    tile_bytes: usize,
+}
+
+impl ChunkedBaseline {
+    pub fn new(gl: &Rc<Gl>, grid_size: u32) -> Result<ChunkedBaseline, GlError> {
+        let tile_bytes = tile_bytes(grid_size);
+        Ok(ChunkedBaseline {
+            gl: Rc::clone(gl),
+            // The pass's own height buffer is unused: one tile's worth.
+            pass: TerrainPass::new(gl, grid_size, tile_bytes)?,
+            buffers: HashMap::new(),
+            wanted: HashSet::new(),
+            tile_bytes: tile_bytes as usize,
+        })
+    }
+
+    /// Uploads the tiles of `list` that have no buffer yet from `staging`
+    /// (the scene's staging copy), frees the buffers of tiles no longer
+    /// drawn, and draws the tiles into the bound target (not cleared).
+    pub fn frame(&mut self, list: &DrawList, staging: &[u8]) -> Result<BaselineFrameStats, GlError> {
+        self.wanted.clear();
+        self.wanted.extend(list.tiles.iter().map(|t| (t.key, t.byte_offset)));
+        self.buffers.retain(|key, _| self.wanted.contains(key));
+        let mut stats = BaselineFrameStats::default();
+        for tile in &list.tiles {
+            let key = (tile.key, tile.byte_offset);
+            if self.buffers.contains_key(&key) {
+                continue;
+            }
+            let start = tile.byte_offset as usize;
+            let buffer = Buffer::new(&self.gl, BufferTarget::Vertices, self.tile_bytes, BufferUsage::Static)?;
+            buffer.upload_range(0, &staging[start..start + self.tile_bytes])?;
+            self.buffers.insert(key, buffer);
+            stats.uploads += 1;
+            stats.bytes_uploaded += self.tile_bytes as u64;
+        }
+        let buffers = &self.buffers;
+        let buffer_of = |tile: &crate::render::TileUniforms| buffers.get(&(tile.key, tile.byte_offset));
+        self.pass.draw_from(list, TerrainOutput::Colour, TileVertices::PerTile(&buffer_of))?;
+        stats.buffers = self.buffers.len();
+        Ok(stats)
+    }
+}
