@@ -16,6 +16,10 @@
 //! directly; `min` and `max` are exact over the posts. `delta` cannot be
 //! brute-forced for coarse nodes (a root node covers 2^48 samples), so it is a
 //! conservative bound from the octaves, see [`ProceduralEarth::delta_bound`].
+//!
+//! [`ProceduralEarth::shifted`] moves the same terrain to another place of the
+//! grid, so that a test can draw one landscape both at the origin and 10^7 m
+//! out and compare the pictures.
 
 use crate::node::{NodeData, NodeError, NodeId, NodeLayout, NodeSource};
 
@@ -91,6 +95,8 @@ pub struct ProceduralEarth {
     octaves: Vec<Octave>,
     /// `delta` of every node of each level (see [`Self::delta_bound`]).
     delta_by_level: Vec<f32>,
+    /// Level-0 posts added to every sample index (see [`Self::shifted`]).
+    offset: [i64; 2],
 }
 
 impl ProceduralEarth {
@@ -115,12 +121,23 @@ impl ProceduralEarth {
         let octaves = octaves_for(cells, seed);
         let delta_by_level = (0..levels).map(|lod| level_delta_bound(&octaves, lod)).collect();
         let base_m = (HEIGHT_RANGE_M[0] + HEIGHT_RANGE_M[1]) / 2.0;
-        Ok(ProceduralEarth { layout, base_m, octaves, delta_by_level })
+        Ok(ProceduralEarth { layout, base_m, octaves, delta_by_level, offset: [0, 0] })
+    }
+
+    /// The same terrain moved `posts` level-0 posts west and south: sample
+    /// `(i, j)` of the result is sample `(i + posts[0], j + posts[1])` of
+    /// `self`, the layout and the deltas unchanged. With `posts` a multiple of
+    /// a level's node span, the nodes of that level and finer are those of
+    /// `self` moved by whole nodes.
+    pub fn shifted(mut self, posts: [u32; 2]) -> Self {
+        self.offset = [self.offset[0] + posts[0] as i64, self.offset[1] + posts[1] as i64];
+        self
     }
 
     /// Level-0 sample `(i, j)`, clamped to the data (the edge extends).
     pub fn sample(&self, i: i64, j: i64) -> f32 {
         let last = self.layout.samples[0] as i64 - 1;
+        let (i, j) = (i.saturating_add(self.offset[0]), j.saturating_add(self.offset[1]));
         let (i, j) = (i.clamp(0, last) as u32, j.clamp(0, last) as u32);
         let mut height = self.base_m;
         for octave in &self.octaves {
@@ -297,6 +314,22 @@ mod tests {
         }
         assert!((slope - FADE_SLOPE_MAX).abs() < 1e-6 && slope <= FADE_SLOPE_MAX);
         assert!((curvature - FADE_CURVATURE_MAX).abs() < 1e-6 && curvature <= FADE_CURVATURE_MAX);
+    }
+
+    #[test]
+    fn a_shifted_earth_has_the_same_nodes_whole_nodes_away() {
+        let params = EarthParams { node_size: 8, levels: 6, border: 2, spacing_m: 30.0, seed: 3 };
+        let base = ProceduralEarth::new(params).unwrap();
+        let shifted = base.clone().shifted([48, 16]);
+        assert_eq!(shifted.sample(5, 7), base.sample(53, 23));
+        let read = |earth: &ProceduralEarth, id: NodeId| {
+            let mut data = NodeData::default();
+            earth.read_node(id, &mut data).unwrap();
+            data
+        };
+        // 48 and 16 posts are 3 and 1 nodes of level 1 (span 16).
+        assert_eq!(read(&shifted, NodeId::new(1, 2, 4)), read(&base, NodeId::new(1, 5, 5)));
+        assert_ne!(read(&shifted, NodeId::new(1, 2, 4)), read(&base, NodeId::new(1, 2, 4)));
     }
 
     #[test]
