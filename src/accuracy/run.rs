@@ -1,6 +1,7 @@
 //! [`measure_flight`]: the accuracy tool's loop. For each view it settles the
 //! clipmap (the error of the LOD, not of paging, is measured), draws the LOD
-//! frame and the full-resolution truth in colour (timed) and as positions,
+//! frame (once to make its tiles, then timed) and the full-resolution truth
+//! in colour (timed) and as positions,
 //! and measures the per-pixel error; it keeps the heat map of the worst view.
 
 use glam::DVec2;
@@ -39,7 +40,9 @@ pub struct ViewRow {
     pub draw_calls_truth: usize,
     /// LOD tiles per level, finest first.
     pub tiles_per_level: Vec<usize>,
-    /// The LOD frame (paging, tiling, upload, draw, to glFinish) and the truth's draw.
+    /// The LOD frame (paging, tiling, upload, draw, to glFinish) drawn at the
+    /// view's pose after a first frame there made its tiles, and the truth's
+    /// draw right after it.
     pub lod_frame_ms: f64,
     pub truth_frame_ms: f64,
 }
@@ -84,6 +87,12 @@ pub fn measure_flight(
     let (mut mismatched, mut pixels, mut holes) = (0usize, 0usize, 0usize);
     let mut rows: Vec<ViewRow> = Vec::with_capacity(views.len());
     let mut worst: Option<WorstView> = None;
+    if let Some((_, first)) = views.first() {
+        // Warm-up, untimed: shaders compile and buffers fault in on first use.
+        display.settle(first, SETTLE_UPDATES)?;
+        display.frame(first)?;
+        display.render_truth(first, truth)?;
+    }
     for (t, camera) in views {
         let row = measure_one(display, truth, exact, spacing_m, *t, camera, &mut images, &mut errors)?;
         all_errors.extend(errors.errors_px.iter().copied().filter(|e| !e.is_nan()));
@@ -121,6 +130,9 @@ fn measure_one(
     errors: &mut ViewErrors,
 ) -> Result<ViewRow, DisplayError> {
     display.settle(camera, SETTLE_UPDATES)?;
+    // The first frame at a new pose makes and uploads its tiles; the timed
+    // one is the steady frame a display shows there.
+    display.frame(camera)?;
     let lod_stats = display.frame(camera)?;
     let [lod, truth_positions] = images;
     display.render_positions(camera, lod)?;
