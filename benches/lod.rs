@@ -211,8 +211,14 @@ fn measure_point(
         let mut display = display_for(point, pyramid);
         let mut baseline = ChunkedBaseline::new(display.context().gl(), point.lod.grid_size).expect("baseline");
         let (frames, transfers) = fly(&mut display, Some(&mut baseline), path, flight_frames);
-        let uploads = transfers.iter().map(|t| t.uploads as f64).sum::<f64>() / transfers.len().max(1) as f64;
-        (Some(FlightRow::of(&frames)), Some(uploads))
+        let n = transfers.len().max(1) as f64;
+        let uploads = transfers.iter().map(|t| t.uploads as f64).sum::<f64>() / n;
+        // The scene's own upload figures are what the batched renderer
+        // would have sent; the baseline's are its per-tile uploads.
+        let mut row = FlightRow::of(&frames);
+        row.bytes_uploaded = transfers.iter().map(|t| t.bytes_uploaded as f64).sum::<f64>() / n;
+        row.transfers = uploads;
+        (Some(row), Some(uploads))
     } else {
         (None, None)
     };

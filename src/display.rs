@@ -174,8 +174,7 @@ impl Display {
         let list = self.scene.draw_list();
         let base = match baseline {
             None if self.renderer_stale => {
-                self.renderer.upload(staging, &[0..staging.len() as u32])?;
-                self.renderer_stale = false;
+                Self::catch_up(&mut self.renderer, staging, &mut self.renderer_stale)?;
                 self.renderer.draw(list)?;
                 None
             }
@@ -188,7 +187,7 @@ impl Display {
                 // Clear and sky only, then the baseline's tiles.
                 self.renderer.draw(&DrawList { frame: list.frame, ..DrawList::default() })?;
                 self.renderer_stale = true;
-                Some(baseline.frame(list, staging)?)
+                Some(baseline.frame(list, staging, ranges)?)
             }
         };
         self.renderer.finish();
@@ -241,8 +240,18 @@ impl Display {
             return Err(GlError::InvalidRequest(why.to_owned()).into());
         }
         self.bind_positions()?;
+        Self::catch_up(&mut self.renderer, self.scene.uploads().0, &mut self.renderer_stale)?;
         self.renderer.draw_positions(self.scene.draw_list())?;
         self.read_positions(out)
+    }
+
+    /// After baseline frames skipped the renderer's uploads, rewrites its
+    /// whole height buffer from `staging` (once).
+    fn catch_up(renderer: &mut GlRenderer, staging: &[u8], stale: &mut bool) -> Result<(), GlError> {
+        if std::mem::take(stale) {
+            renderer.upload(staging, &[0..staging.len() as u32])?;
+        }
+        Ok(())
     }
 
     /// Draws `camera`'s view of the ground truth as camera-relative positions

@@ -29,3 +29,29 @@ fn baseline_draws_the_display_picture_and_uploads_each_tile_once() {
     let (batched_second, _) = render(&mut display, &second);
     assert!(batched_second == baseline_second, "the batched renderer catches up on the skipped uploads");
 }
+
+/// While nodes page in a few per frame, tiles are regenerated from better
+/// data, often at their old offsets: the baseline must rewrite those
+/// buffers, frame for frame drawing what the batched display draws.
+#[test]
+fn baseline_rewrites_tiles_regenerated_in_place() {
+    let mut config = config(GlBackend::Egl, GlesVersion::Es3);
+    config.load_budget = 2;
+    let mut batched = open(&config).expect("headless EGL display");
+    let mut chunked = open(&config).expect("second headless EGL display");
+    let mut baseline = ChunkedBaseline::new(chunked.context().gl(), config.scene.lod.grid_size).expect("baseline");
+    let start = VIEWS[0].camera();
+    let mut paging_frames = 0;
+    for k in 0..16 {
+        let mut camera = start;
+        camera.position.x += 150.0 * k as f64;
+        batched.context_mut().make_current().expect("current");
+        let stats = batched.frame(&camera).expect("batched frame");
+        let expected = batched.read_pixels().expect("read");
+        chunked.context_mut().make_current().expect("current");
+        let (_, base) = chunked.frame_baseline(&camera, &mut baseline).expect("baseline frame");
+        paging_frames += usize::from(stats.nodes_loaded > 0 && base.uploads > 0);
+        assert!(chunked.read_pixels().expect("read") == expected, "frame {k}: the baseline draws stale heights");
+    }
+    assert!(paging_frames >= 8, "nodes paged in and tiles were rewritten in {paging_frames} of 16 frames");
+}

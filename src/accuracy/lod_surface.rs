@@ -2,14 +2,17 @@
 //! any ground point, from the frame's draw list and the tile vertices in the
 //! allocator's staging copy (byte for byte what the GPU holds). Each vertex
 //! is morphed as `shaders/gles/terrain.vert` does ([`crate::lod::morph`]),
-//! from the same f32 uniforms, and the cell is split south-west to
-//! north-east as the shared grid's indices are ([`cell_surface`]).
-//! Skirts are not part of the surface.
+//! from the same f32 uniforms, and lowered by the earth's curvature as the
+//! shader lowers it, per vertex (so the drawn triangles sag below the
+//! curved surface between vertices, as the GPU's do); the cell is split
+//! south-west to north-east as the shared grid's indices are
+//! ([`cell_surface`]). Skirts are not part of the surface.
 
 use std::collections::HashMap;
 
 use glam::DVec2;
 
+use crate::camera::EARTH_RADIUS_M;
 use crate::lod::morph::{morph_factor, morphed_height};
 use crate::lod::TileKey;
 use crate::node::cell_surface;
@@ -25,7 +28,9 @@ pub struct LodSurface {
     /// Level-0 post spacing, metres east and north.
     spacing_m: [f64; 2],
     eye: DVec2,
+    /// The shader's f32 altitude and 1 / (2 R) (0 for a flat earth), widened.
     altitude: f64,
+    curvature: f64,
 }
 
 impl LodSurface {
@@ -34,13 +39,14 @@ impl LodSurface {
     pub fn new(list: &DrawList, grid_size: u32, spacing_m: [f64; 2], eye: DVec2) -> LodSurface {
         let tiles: HashMap<TileKey, TileUniforms> = list.tiles.iter().map(|t| (t.key, *t)).collect();
         let levels = list.tiles.iter().map(|t| t.key.level + 1).max().unwrap_or(0);
-        let altitude = list.frame.map_or(0.0, |f| f.camera_altitude);
-        LodSurface { tiles, levels, grid_size, spacing_m, eye, altitude }
+        let altitude = list.frame.map_or(0.0, |f| f.camera_altitude as f32 as f64);
+        let curvature = list.frame.map_or(0.0, |f| if f.curvature { (1.0 / (2.0 * EARTH_RADIUS_M)) as f32 as f64 } else { 0.0 });
+        LodSurface { tiles, levels, grid_size, spacing_m, eye, altitude, curvature }
     }
 
     /// Height of the drawn surface at the local point `(x_m, y_m)`, metres
-    /// above the datum (before the curvature drop); `None` where no tile was
-    /// drawn.
+    /// above the datum with the curvature drop taken off (what the GPU drew
+    /// there plus the camera altitude); `None` where no tile was drawn.
     pub fn height_at(&self, staging: &[u8], x_m: f64, y_m: f64) -> Option<f64> {
         let g = self.grid_size as f64;
         (0..self.levels).find_map(|level| {
@@ -49,8 +55,16 @@ impl LodSurface {
             if u < 0.0 || v < 0.0 {
                 return None;
             }
-            let key = TileKey::new(level, (u / g).floor() as u32, (v / g).floor() as u32);
-            let tile = self.tiles.get(&key)?;
+            let (tx, ty) = ((u / g).floor() as u32, (v / g).floor() as u32);
+            // A point exactly on a tile's east or north edge belongs to the
+            // tile beyond, or, at the edge of the tiled area, to this one.
+            let beside = |t: u32, w: f64| if t > 0 && w == t as f64 * g { [t, t - 1] } else { [t, t] };
+            let (xs, ys) = (beside(tx, u), beside(ty, v));
+            let keys = [(xs[0], ys[0]), (xs[1], ys[0]), (xs[0], ys[1]), (xs[1], ys[1])];
+            let (key, tile) = keys.iter().find_map(|&(x, y)| {
+                let key = TileKey::new(level, x, y);
+                self.tiles.get(&key).map(|tile| (key, tile))
+            })?;
             let local = [u - key.x as f64 * g, v - key.y as f64 * g];
             Some(self.tile_surface(staging, tile, local))
         })
@@ -65,7 +79,8 @@ impl LodSurface {
         cell_surface(h(i, j), h(i + 1, j), h(i, j + 1), h(i + 1, j + 1), fu, fv)
     }
 
-    /// Post `(i, j)`'s drawn height: the shader's morph, with its f32 inputs.
+    /// Post `(i, j)`'s drawn height: the shader's morph and curvature drop,
+    /// with its f32 inputs (the altitude is added back).
     fn vertex_height(&self, staging: &[u8], tile: &TileUniforms, i: u32, j: u32) -> f64 {
         let index = (i + j * (self.grid_size + 1)) as usize;
         let at = tile.byte_offset as usize + index * std::mem::size_of::<TileVertex>();
@@ -74,7 +89,7 @@ impl LodSurface {
         let y = (tile.origin[1] + j as f32 * tile.spacing[1]) as f64;
         let distance = (x * x + y * y + (vertex.height as f64 - self.altitude).powi(2)).sqrt();
         let factor = morph_factor(distance, tile.morph[0] as f64, tile.morph[1] as f64);
-        morphed_height(vertex.height, vertex.target, factor)
+        morphed_height(vertex.height, vertex.target, factor) - (x * x + y * y) * self.curvature
     }
 
     /// The camera's ground position the tiles were placed relative to.

@@ -43,11 +43,18 @@ impl ViewGeometry {
         }
     }
 
-    /// The ground point a camera-relative surface point `p` lies over, and
-    /// its height above the datum (undoing the altitude and curvature drop).
+    /// The ground point a camera-relative drawn point `p` lies over, and
+    /// its height with the altitude added back (the curvature drop stays:
+    /// both surfaces are compared as drawn).
     pub fn ground(&self, p: DVec3) -> (DVec2, f64) {
-        let drop = p.truncate().length_squared() * self.curvature;
-        (self.eye.truncate() + p.truncate(), p.z + self.altitude + drop)
+        (self.eye.truncate() + p.truncate(), p.z + self.altitude)
+    }
+
+    /// The full-resolution surface as drawn over the ground point `g`:
+    /// `exact` lowered by the curvature drop there (between the truth's own
+    /// vertices the drop sags by under a millimetre, left out).
+    pub fn drawn_truth(&self, g: DVec2, exact: f32) -> f64 {
+        exact as f64 - (g - self.eye.truncate()).length_squared() * self.curvature
     }
 
     /// On-screen length, pixels, of the vertical segment from the
@@ -190,7 +197,8 @@ impl Pixel<'_> {
     fn at_lod_point(&self, p: Vec3) -> (f64, f32) {
         let p = p.as_dvec3();
         let (ground, drawn) = self.geometry.ground(p);
-        let error = (self.exact)(ground.x, ground.y).map_or(0.0, |h| self.geometry.projected_vertical(p, h as f64 - drawn));
+        let truth = (self.exact)(ground.x, ground.y).map(|h| self.geometry.drawn_truth(ground, h));
+        let error = truth.map_or(0.0, |h| self.geometry.projected_vertical(p, h - drawn));
         let mirror = self.surface.height_at(self.staging, ground.x, ground.y).map_or(f64::NAN, |m| (m - drawn).abs());
         (error, mirror as f32)
     }
@@ -203,7 +211,7 @@ impl Pixel<'_> {
         let (ground, _) = self.geometry.ground(t);
         let Some(h) = (self.exact)(ground.x, ground.y) else { return Some(0.0) };
         let lod = self.surface.height_at(self.staging, ground.x, ground.y)?;
-        Some(self.geometry.projected_vertical(t, lod - h as f64))
+        Some(self.geometry.projected_vertical(t, lod - self.geometry.drawn_truth(ground, h)))
     }
 }
 

@@ -7,6 +7,7 @@
 //! one contiguous buffer and the one transfer per frame.
 
 use std::collections::{HashMap, HashSet};
+use std::ops::Range;
 use std::rc::Rc;
 
 use super::error::GlError;
@@ -27,8 +28,9 @@ pub struct BaselineFrameStats {
     pub buffers: usize,
 }
 
-/// One vertex buffer per drawn tile version (a tile regenerated from better
-/// data is placed anew by the allocator, so its byte offset names the version).
+/// One vertex buffer per drawn tile. A tile regenerated from better data may
+/// land at its old offset, so the frame's dirty ranges (what the batched
+/// renderer would upload) tell which existing buffers to rewrite.
 pub struct ChunkedBaseline {
     gl: Rc<Gl>,
     pass: TerrainPass,
@@ -50,23 +52,31 @@ impl ChunkedBaseline {
         })
     }
 
-    /// Uploads the tiles of `list` that have no buffer yet from `staging`
-    /// (the scene's staging copy), frees the buffers of tiles no longer
-    /// drawn, and draws the tiles into the bound target (not cleared).
-    pub fn frame(&mut self, list: &DrawList, staging: &[u8]) -> Result<BaselineFrameStats, GlError> {
+    /// Uploads, each by itself, the tiles of `list` that have no buffer yet
+    /// or whose bytes lie in the frame's `dirty` ranges of `staging` (the
+    /// scene's staging copy); frees the buffers of tiles no longer drawn; and
+    /// draws the tiles into the bound target (not cleared).
+    pub fn frame(&mut self, list: &DrawList, staging: &[u8], dirty: &[Range<u32>]) -> Result<BaselineFrameStats, GlError> {
         self.wanted.clear();
         self.wanted.extend(list.tiles.iter().map(|t| (t.key, t.byte_offset)));
         self.buffers.retain(|key, _| self.wanted.contains(key));
         let mut stats = BaselineFrameStats::default();
         for tile in &list.tiles {
             let key = (tile.key, tile.byte_offset);
-            if self.buffers.contains_key(&key) {
+            let (start, end) = (tile.byte_offset, tile.byte_offset + self.tile_bytes as u32);
+            let rewritten = dirty.iter().any(|range| range.start < end && start < range.end);
+            if self.buffers.contains_key(&key) && !rewritten {
                 continue;
             }
-            let start = tile.byte_offset as usize;
-            let buffer = Buffer::new(&self.gl, BufferTarget::Vertices, self.tile_bytes, BufferUsage::Static)?;
-            buffer.upload_range(0, &staging[start..start + self.tile_bytes])?;
-            self.buffers.insert(key, buffer);
+            let bytes = &staging[start as usize..end as usize];
+            match self.buffers.get(&key) {
+                Some(buffer) => buffer.upload_range(0, bytes)?,
+                None => {
+                    let buffer = Buffer::new(&self.gl, BufferTarget::Vertices, self.tile_bytes, BufferUsage::Static)?;
+                    buffer.upload_range(0, bytes)?;
+                    self.buffers.insert(key, buffer);
+                }
+            }
             stats.uploads += 1;
             stats.bytes_uploaded += self.tile_bytes as u64;
         }
