@@ -224,7 +224,7 @@ impl Display {
         self.context.bind_target();
         // A list without tiles: the renderer clears and draws the sky only.
         self.renderer.draw(&DrawList { frame: Some(frame), ..DrawList::default() })?;
-        truth.draw(&frame, camera, TerrainOutput::Colour)?;
+        truth.draw(&frame, TerrainOutput::Colour)?;
         self.renderer.finish();
         let frame_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(TruthFrameStats { triangles: truth.triangles(), draw_calls: truth.draw_calls(), frame_ms })
@@ -266,7 +266,7 @@ impl Display {
         let frame = self.frame_uniforms(camera);
         self.bind_positions()?;
         self.renderer.draw_positions(&DrawList { frame: Some(frame), ..DrawList::default() })?;
-        truth.draw(&frame, camera, TerrainOutput::Position)?;
+        truth.draw(&frame, TerrainOutput::Position)?;
         self.read_positions(out)
     }
 

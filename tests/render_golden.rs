@@ -181,12 +181,13 @@ fn centre_tile(display: &ridgeline::display::Display, camera: &ridgeline::camera
     let relative = (hit - camera.position).truncate().as_vec2();
     let side = display.scene().config().lod.grid_size as f32;
     let list = display.scene().draw_list();
-    // Tile origins are relative to the camera.
+    // Tile corners are relative to the camera.
+    let posts = list.frame.expect("a drawn frame").posts;
     list.tiles
         .iter()
         .position(|t| {
-            let min = glam::Vec2::from(t.origin);
-            let max = min + glam::Vec2::from(t.spacing) * side;
+            let min = glam::Vec2::from(t.post_position(&posts, 0.0, 0.0));
+            let max = glam::Vec2::from(t.post_position(&posts, side, side));
             relative.cmpge(min).all() && relative.cmplt(max).all()
         })
         .expect("a drawn tile holds the centre of the picture")

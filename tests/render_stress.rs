@@ -6,11 +6,11 @@
 //! [`SHIFT_POSTS`] posts ([`ProceduralEarth::shifted`]), a whole tile and a
 //! whole node of every level the views draw, so both displays must select
 //! the same tiles (moved by whole tiles) from the same data. Positions are
-//! made relative to the camera in f64 before they become f32, so the tile
-//! uniforms, every vertex the shader places and every pixel must agree (one
-//! colour step allowed; measured: none differs). The far view redrawn with
-//! its tile origins computed the naive way (f32 absolute coordinates minus
-//! the f32 camera) must fail the same checks.
+//! numbered in posts from an anchor post next to the camera (in integers,
+//! before they become f32), so the tile uniforms, every vertex the shader
+//! places and every pixel must agree (one colour step allowed; measured:
+//! none differs). The far view redrawn with its posts placed the naive way
+//! (f32 absolute post numbers and the f32 camera) must fail the same checks.
 //!
 //! Soak: 10^4 frames at 64 x 36 around a closed circuit over the earth,
 //! paged by the loader thread as when flying, in a process of its own. Each
@@ -25,7 +25,7 @@ mod gl_common;
 mod render_common;
 
 use gl_common::{child_test, run_child, take_turn};
-use glam::{DVec2, DVec3, UVec2};
+use glam::{DVec3, UVec2};
 use image::RgbaImage;
 use render_common::compare::{difference_image, save_evidence};
 use render_common::{redraw, render};
@@ -36,7 +36,7 @@ use ridgeline::gl::GlBackend;
 use ridgeline::lod::TileKey;
 use ridgeline::node::NodeSource;
 use ridgeline::procedural::{EarthParams, ProceduralEarth};
-use ridgeline::render::{palette, DrawList, TileUniforms};
+use ridgeline::render::{palette, DrawList, PostFrame, TileUniforms};
 use ridgeline::scene::TerrainSummary;
 use ridgeline::tiles::grid::vertex_count;
 use ridgeline::tiles::TileVertex;
@@ -126,6 +126,8 @@ fn near_views(earth: &ProceduralEarth) -> [EarthView; 2] {
 /// the morph target and the normals) as the GPU buffer holds them.
 struct Drawn {
     uniforms: TileUniforms,
+    /// The frame's post numbering.
+    posts: PostFrame,
     vertices: Vec<TileVertex>,
 }
 
@@ -140,7 +142,7 @@ fn drawn(display: &Display, list: &DrawList) -> BTreeMap<TileKey, Drawn> {
             let start = tile.byte_offset as usize;
             let bytes = &staging[start..start + count * size];
             let vertices = bytes.chunks_exact(size).map(bytemuck::pod_read_unaligned).collect();
-            (tile.key, Drawn { uniforms: *tile, vertices })
+            (tile.key, Drawn { uniforms: *tile, posts: list.frame.expect("a drawn frame").posts, vertices })
         })
         .collect()
 }
@@ -149,10 +151,9 @@ fn drawn(display: &Display, list: &DrawList) -> BTreeMap<TileKey, Drawn> {
 /// camera, computed as it does in f32 (before morphing, which only blends
 /// heights by this position's distance).
 fn shader_position(tile: &Drawn, grid: u32, i: u32, j: u32, altitude: f64) -> [f32; 3] {
-    let [ox, oy] = tile.uniforms.origin;
-    let [sx, sy] = tile.uniforms.spacing;
+    let [x, y] = tile.uniforms.post_position(&tile.posts, i as f32, j as f32);
     let height = tile.vertices[(i + j * (grid + 1)) as usize].height;
-    [ox + i as f32 * sx, oy + j as f32 * sy, height - altitude as f32]
+    [x, y, height - altitude as f32]
 }
 
 /// The same post computed exactly in f64 from the tile key and the camera.
@@ -172,7 +173,7 @@ struct Agreement {
     against_exact_m: f64,
     vertices: usize,
     near_vertices: usize,
-    /// Tiles whose uniforms other than the origin, or whose vertex data, differ.
+    /// Tiles whose uniforms (relative to each view's anchor) or vertex data differ.
     other_differences: Vec<TileKey>,
 }
 
@@ -189,7 +190,7 @@ fn agreement(far: &BTreeMap<TileKey, Drawn>, far_eye: DVec3, near: &BTreeMap<Til
     for (key, near_tile) in near {
         let far_tile = moved[key];
         let (a, b) = (far_tile.uniforms, near_tile.uniforms);
-        if a.spacing != b.spacing || a.morph != b.morph || a.skirt_depth != b.skirt_depth || far_tile.vertices != near_tile.vertices {
+        if a.first_post != b.first_post || a.post_step != b.post_step || a.morph != b.morph || a.skirt_depth != b.skirt_depth || far_tile.vertices != near_tile.vertices {
             result.other_differences.push(*key);
         }
         for j in 0..=grid {
@@ -221,14 +222,16 @@ fn moved_back(key: TileKey, grid: u32) -> TileKey {
     TileKey::new(key.level, key.x - shift, key.y - shift)
 }
 
-/// The fault this test exists for: tile origins placed in f32 absolute
-/// coordinates (corner and camera each narrowed to f32, then subtracted).
+/// The fault this test exists for: posts placed in f32 absolute
+/// coordinates (absolute post numbers and the camera each narrowed to f32).
 fn origins_in_f32_absolute(list: &mut DrawList, eye: DVec3, grid: u32) {
-    let spacing_m = earth_params(EARTH_THIN).spacing_m;
+    if let Some(frame) = &mut list.frame {
+        frame.posts.anchor = [0, 0];
+        frame.posts.offset = [eye.x as f32, eye.y as f32];
+    }
     for tile in &mut list.tiles {
-        let span = ((grid as u64) << tile.key.level) as f64 * spacing_m;
-        let corner = DVec2::new(tile.key.x as f64, tile.key.y as f64) * span;
-        tile.origin = [corner.x as f32 - eye.x as f32, corner.y as f32 - eye.y as f32];
+        let span = (grid as u64) << tile.key.level;
+        tile.first_post = [(tile.key.x as u64 * span) as f32, (tile.key.y as u64 * span) as f32];
     }
 }
 

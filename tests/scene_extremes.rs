@@ -63,7 +63,7 @@ fn extreme_terrain_draws_without_cracks() {
             for tile in &list.tiles {
                 let level_delta = deltas.get(tile.key.level as usize + 1).copied().unwrap_or(0.0);
                 assert!(tile.skirt_depth as f64 >= 2.0 * level_delta, "{name}: skirt {} under delta {level_delta}", tile.skirt_depth);
-                assert!(tile.origin.iter().chain(&tile.spacing).chain(&tile.morph).all(|v| v.is_finite()));
+                assert!(tile.first_post.iter().chain([&tile.post_step]).chain(&tile.morph).all(|v| v.is_finite()));
             }
             worst = worst.max(worst_edge_disagreement(list, staging, cam.position.z, config.lod.grid_size));
         }

@@ -75,3 +75,36 @@ fn a_small_buffer_coarsens_instead_of_failing() {
     assert!(report.tiles > 0 && report.tiles < wanted.tiles);
     assert!(report.allocator_used_bytes <= 1 << 20);
 }
+
+/// The near plane follows the nearest tile drawn, not the highest peak of
+/// the data: below the highest summit but high above the valley, a 0.5 m
+/// near plane would leave a 24-bit depth buffer blind to hundreds of metres
+/// at the horizon. Low over the ground it comes back in front of it.
+#[test]
+fn the_near_plane_follows_the_nearest_tile() {
+    let terrain = terrain();
+    let mut scene = Scene::new(SceneConfig::default(), terrain).expect("scene");
+    let near = |scene: &Scene, cam: &ridgeline::camera::Camera| {
+        let m = scene.frame_uniforms(cam, terrain).view_projection.to_cols_array();
+        // Perspective: near = m[14] / (m[10] - 1) for glam's right-handed GL projection.
+        let (c, d) = (m[10] as f64, m[14] as f64);
+        d / (c - 1.0)
+    };
+    // The lowest ground on a 5 km lattice, away from the data's edges.
+    let pyramid = scene_common::pyramid();
+    let lattice = (2..14).flat_map(|i| (2..18).map(move |j| (i as f64 * 5000.0, j as f64 * 5000.0)));
+    let height = |&(x, y): &(f64, f64)| pyramid.exact_height(x, y).expect("inside the data") as f64;
+    let (x, y) = lattice.min_by(|a, b| height(a).total_cmp(&height(b))).expect("points");
+    let ground = height(&(x, y));
+    let summit = pyramid.info().stats.height_max as f64;
+    let high = camera(x, y, ground + 1000.0, 0.0, -5.0);
+    assert!(high.position.z < summit, "the view is below the highest summit ({summit} m)");
+    scene.frame(&high, terrain).expect("frame");
+    let high_near = near(&scene, &high);
+    let low = camera(x, y, ground + 20.0, 0.0, -5.0);
+    scene.frame(&low, terrain).expect("frame");
+    let low_near = near(&scene, &low);
+    println!("near plane {high_near:.1} m at {:.0} m above the ground, {low_near:.2} m at 20 m", high.position.z - ground);
+    assert!(high_near > 100.0, "near plane {high_near} m");
+    assert!((0.5..16.0).contains(&low_near), "near plane {low_near} m must stay in front of the ground 20 m below");
+}

@@ -16,7 +16,7 @@ fn check_frame(scene: &mut Scene, cam: &ridgeline::camera::Camera) -> usize {
     let frame = list.frame.expect("frame uniforms");
     assert!(frame.view_projection.is_finite(), "{cam:?}: projection not finite");
     for tile in &list.tiles {
-        let values = [tile.origin[0], tile.origin[1], tile.spacing[0], tile.spacing[1], tile.morph[0], tile.morph[1], tile.skirt_depth];
+        let values = [tile.first_post[0], tile.first_post[1], tile.post_step, tile.morph[0], tile.morph[1], tile.skirt_depth];
         assert!(values.iter().all(|v| v.is_finite()), "{cam:?}: tile {:?} has {values:?}", tile.key);
     }
     assert!(report.allocator_used_bytes <= scene.config().buffer_bytes as u64);

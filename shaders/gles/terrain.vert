@@ -1,7 +1,9 @@
 #version 100
 // Terrain tile vertex shader, GLSL ES 1.00. No texture reads: heights arrive
 // as attributes from the tile's own block of the vertex buffer (Polok), the
-// tile's placement as uniforms. Positions are relative to the camera.
+// tile's placement as uniforms. Positions are relative to the camera, from
+// integer post numbers counted from an anchor post next to it: a post two
+// tiles share gets the same bits from both, so edges are watertight.
 //
 // The morph mirrors src/lod/morph.rs line for line: the factor grows from 0 at
 // u_morph.x to 1 at u_morph.y with the vertex's distance to the camera,
@@ -12,7 +14,8 @@ attribute vec2 a_height;  // this level's height, the parent level's height
 attribute vec4 a_normal;  // normal xy at this level, at the parent level
 
 uniform mat4 u_view_projection;
-uniform vec4 u_tile;      // south-west corner relative to the camera (xy), post spacing (zw)
+uniform vec4 u_tile;      // south-west post numbered from the anchor (xy), level-0 posts per cell (z), unused
+uniform vec4 u_posts;     // level-0 post spacing (xy), camera minus anchor post (zw), metres
 uniform vec4 u_morph;     // morph start, morph end, skirt depth, unused
 uniform vec4 u_frame;     // camera altitude, 1 / (2 R) or 0 for a flat earth, unused, unused
 
@@ -23,7 +26,7 @@ varying float v_distance;
 varying vec3 v_position;     // camera-relative, for the accuracy tool's position output
 
 void main() {
-    vec2 position = u_tile.xy + a_grid.xy * u_tile.zw;
+    vec2 position = (u_tile.xy + a_grid.xy * u_tile.z) * u_posts.xy - u_posts.zw;
     float altitude = u_frame.x;
     float distance = length(vec3(position, a_height.x - altitude));
     float morph = clamp((distance - u_morph.x) / (u_morph.y - u_morph.x), 0.0, 1.0);

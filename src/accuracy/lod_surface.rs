@@ -16,7 +16,7 @@ use crate::camera::EARTH_RADIUS_M;
 use crate::lod::morph::{morph_factor, morphed_height};
 use crate::lod::TileKey;
 use crate::node::cell_surface;
-use crate::render::{DrawList, TileUniforms};
+use crate::render::{DrawList, PostFrame, TileUniforms};
 use crate::tiles::TileVertex;
 
 /// The drawn tiles of one frame, indexed by key.
@@ -28,6 +28,7 @@ pub struct LodSurface {
     /// Level-0 post spacing, metres east and north.
     spacing_m: [f64; 2],
     eye: DVec2,
+    posts: PostFrame,
     /// The shader's f32 altitude and 1 / (2 R) (0 for a flat earth), widened.
     altitude: f64,
     curvature: f64,
@@ -41,7 +42,8 @@ impl LodSurface {
         let levels = list.tiles.iter().map(|t| t.key.level + 1).max().unwrap_or(0);
         let altitude = list.frame.map_or(0.0, |f| f.camera_altitude as f32 as f64);
         let curvature = list.frame.map_or(0.0, |f| if f.curvature { (1.0 / (2.0 * EARTH_RADIUS_M)) as f32 as f64 } else { 0.0 });
-        LodSurface { tiles, levels, grid_size, spacing_m, eye, altitude, curvature }
+        let posts = list.frame.map_or(PostFrame::default(), |f| f.posts);
+        LodSurface { tiles, levels, grid_size, spacing_m, eye, posts, altitude, curvature }
     }
 
     /// Height of the drawn surface at the local point `(x_m, y_m)`, metres
@@ -85,8 +87,7 @@ impl LodSurface {
         let index = (i + j * (self.grid_size + 1)) as usize;
         let at = tile.byte_offset as usize + index * std::mem::size_of::<TileVertex>();
         let vertex: TileVertex = bytemuck::pod_read_unaligned(&staging[at..at + std::mem::size_of::<TileVertex>()]);
-        let x = (tile.origin[0] + i as f32 * tile.spacing[0]) as f64;
-        let y = (tile.origin[1] + j as f32 * tile.spacing[1]) as f64;
+        let [x, y] = tile.post_position(&self.posts, i as f32, j as f32).map(f64::from);
         let distance = (x * x + y * y + (vertex.height as f64 - self.altitude).powi(2)).sqrt();
         let factor = morph_factor(distance, tile.morph[0] as f64, tile.morph[1] as f64);
         morphed_height(vertex.height, vertex.target, factor) - (x * x + y * y) * self.curvature

@@ -240,6 +240,7 @@ mod tests {
             caution_below_m: 0.0,
             viewport: camera.viewport,
             fog_distance_m: 1e5,
+            posts: crate::render::PostFrame::new(camera.position.truncate(), [90.0, 90.0]),
         };
         (camera, ViewGeometry::new(&camera, &frame))
     }

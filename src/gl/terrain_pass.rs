@@ -30,6 +30,7 @@ const NORMAL_OFFSET: i32 = 8;
 struct Locations {
     view_projection: Option<glow::UniformLocation>,
     tile: Option<glow::UniformLocation>,
+    posts: Option<glow::UniformLocation>,
     morph: Option<glow::UniformLocation>,
     frame: Option<glow::UniformLocation>,
     sun: Option<glow::UniformLocation>,
@@ -71,6 +72,7 @@ impl TerrainProgram {
         let at = Locations {
             view_projection: program.uniform_location("u_view_projection"),
             tile: program.uniform_location("u_tile"),
+            posts: program.uniform_location("u_posts"),
             morph: program.uniform_location("u_morph"),
             frame: program.uniform_location("u_frame"),
             sun: program.uniform_location("u_sun"),
@@ -196,7 +198,7 @@ impl TerrainPass {
         // SAFETY: the tile's vertex buffer is bound and holds a whole tile's
         // vertices from `offset`.
         unsafe {
-            gl.uniform_4_f32(at.tile.as_ref(), tile.origin[0], tile.origin[1], tile.spacing[0], tile.spacing[1]);
+            gl.uniform_4_f32(at.tile.as_ref(), tile.first_post[0], tile.first_post[1], tile.post_step, 0.0);
             gl.uniform_4_f32(at.morph.as_ref(), tile.morph[0], tile.morph[1], tile.skirt_depth, 0.0);
             gl.vertex_attrib_pointer_f32(HEIGHT, 2, glow::FLOAT, false, VERTEX_STRIDE, offset);
             gl.vertex_attrib_pointer_f32(NORMAL, 4, glow::BYTE, true, VERTEX_STRIDE, offset + NORMAL_OFFSET);
@@ -215,6 +217,8 @@ fn set_frame_uniforms(gl: &Gl, at: &Locations, frame: &FrameUniforms) {
     unsafe {
         gl.uniform_matrix_4_f32_slice(at.view_projection.as_ref(), false, &frame.view_projection.to_cols_array());
         gl.uniform_4_f32(at.frame.as_ref(), frame.camera_altitude as f32, curvature as f32, 0.0, 0.0);
+        let posts = &frame.posts;
+        gl.uniform_4_f32(at.posts.as_ref(), posts.spacing[0], posts.spacing[1], posts.offset[0], posts.offset[1]);
         gl.uniform_3_f32(at.sun.as_ref(), sun.x, sun.y, sun.z);
         let awareness = (frame.warning_above_m, frame.caution_below_m, frame.fog_distance_m);
         gl.uniform_4_f32(at.awareness.as_ref(), awareness.0, awareness.1, awareness.2, 0.0);

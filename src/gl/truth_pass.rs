@@ -2,9 +2,9 @@
 //! vertex, with no LOD, no morph, no skirts and no culling, by the terrain
 //! pass itself. Each chunk of the [`TruthMesh`] is a tile of
 //! [`CHUNK_CELLS`] cells whose morph never starts and whose skirts hang 0 m
-//! (so they have no area); its south-west corner relative to the camera is
-//! computed in f64 per frame, exactly as tiles are placed, and the frame
-//! uniforms are the scene's, so an image of it compares pixel for pixel with
+//! (so they have no area); its south-west post is numbered from the frame's
+//! anchor post, exactly as tiles are placed, and the frame uniforms are the
+//! scene's, so an image of it compares pixel for pixel with
 //! the LOD image. Chunks are drawn nearest first, as the display's tiles
 //! are, so that both get the same early depth rejection.
 //!
@@ -17,12 +17,10 @@ pub use mesh::{TruthChunk, TruthError, TruthMesh, TruthRegion, CHUNK_CELLS, CHUN
 
 use std::rc::Rc;
 
-use glam::DVec2;
 
 use super::error::GlError;
 use super::handle::Gl;
 use super::terrain_pass::{TerrainOutput, TerrainPass};
-use crate::camera::Camera;
 use crate::lod::TileKey;
 use crate::render::{DrawList, FrameUniforms, TileUniforms};
 use crate::tiles::grid;
@@ -43,8 +41,8 @@ pub struct TruthFrameStats {
 
 struct ChunkDraw {
     key: TileKey,
-    /// South-west post in the local frame, metres (f64: made camera-relative per frame).
-    origin_m: DVec2,
+    /// South-west level-0 post (numbered from the frame's anchor per frame).
+    first_post: [i64; 2],
     /// Where the chunk's vertices start in the vertex buffer.
     byte_offset: u32,
 }
@@ -53,7 +51,6 @@ struct ChunkDraw {
 pub struct TruthPass {
     terrain: TerrainPass,
     chunks: Vec<ChunkDraw>,
-    spacing_m: [f32; 2],
     triangles: u64,
 }
 
@@ -74,11 +71,11 @@ impl TruthPass {
             .enumerate()
             .map(|(k, chunk)| ChunkDraw {
                 key: TileKey::new(0, chunk.first_post[0] / CHUNK_CELLS, chunk.first_post[1] / CHUNK_CELLS),
-                origin_m: DVec2::from(mesh.chunk_origin_m(chunk)),
+                first_post: [0, 1].map(|k| mesh.region.first[k] + chunk.first_post[k] as i64),
                 byte_offset: k as u32 * tile_bytes(CHUNK_CELLS),
             })
             .collect();
-        Ok(TruthPass { terrain, chunks, spacing_m: mesh.spacing_m.map(|s| s as f32), triangles: mesh.triangles() })
+        Ok(TruthPass { terrain, chunks, triangles: mesh.triangles() })
     }
 
     /// Surface triangles drawn per frame (all of them: nothing is culled).
@@ -91,20 +88,18 @@ impl TruthPass {
         self.chunks.len()
     }
 
-    /// Draws every chunk into the bound target with `frame`'s uniforms, seen
-    /// from `camera` (whose position makes the chunks camera-relative),
+    /// Draws every chunk into the bound target with `frame`'s uniforms
+    /// (whose post numbering places the chunks relative to the camera),
     /// writing `output`. Sets the terrain pass's state; does not clear.
-    pub fn draw(&self, frame: &FrameUniforms, camera: &Camera, output: TerrainOutput) -> Result<(), GlError> {
-        let eye = camera.position.truncate();
+    pub fn draw(&self, frame: &FrameUniforms, output: TerrainOutput) -> Result<(), GlError> {
         let tiles = self
             .chunks
             .iter()
             .map(|chunk| {
-                let origin = chunk.origin_m - eye;
                 TileUniforms {
                     key: chunk.key,
-                    origin: [origin.x as f32, origin.y as f32],
-                    spacing: self.spacing_m,
+                    first_post: frame.posts.number(chunk.first_post),
+                    post_step: 1.0,
                     morph: NO_MORPH,
                     skirt_depth: 0.0,
                     byte_offset: chunk.byte_offset,
@@ -122,6 +117,7 @@ impl TruthPass {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::camera::Camera;
     use crate::clipmap::LoaderMode;
     use crate::display::{Display, DisplayConfig};
     use crate::gl::GlBackend;

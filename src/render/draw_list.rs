@@ -2,10 +2,12 @@
 //! shader cannot share: the tile's transform, its morph range and skirt depth,
 //! and where its vertex data starts (Polok: transforms in uniforms).
 //!
-//! Every position is relative to the camera and computed in f64 before it is
-//! narrowed to f32, so nothing jitters far from the origin.
+//! Positions are placed on integer level-0 post numbers counted from an
+//! anchor post next to the camera ([`PostFrame`]): the shader computes a
+//! vertex as `(post number) * spacing - (camera minus anchor)` in f32, so a
+//! post shared by two tiles gets the same bits from both (watertight edges),
+//! and every number stays small however far the camera is from the origin.
 
-use crate::camera::Camera;
 use crate::lod::{LevelRanges, TileKey};
 use crate::tiles::TileDraw;
 use glam::{DVec2, Mat4, Vec3};
@@ -29,21 +31,60 @@ pub struct FrameUniforms {
     pub viewport: [u32; 2],
     /// Distance at which fog has fully hidden the terrain, metres.
     pub fog_distance_m: f32,
+    /// Where level-0 posts are relative to the camera.
+    pub posts: PostFrame,
+}
+
+/// The frame's post numbering: post `(i, j)` of the data (level 0) is
+/// numbered `(i, j) - anchor`, and lies at `number * spacing - offset`
+/// metres from the camera.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PostFrame {
+    /// The level-0 post at or south-west of the camera (not sent to the GPU).
+    pub anchor: [i64; 2],
+    /// Level-0 post spacing, metres east and north.
+    pub spacing: [f32; 2],
+    /// Camera position minus the anchor post, metres (in `[0, spacing)`).
+    pub offset: [f32; 2],
+}
+
+impl PostFrame {
+    /// The numbering for a camera at `eye` over posts `spacing_m` apart.
+    pub fn new(eye: DVec2, spacing_m: [f64; 2]) -> PostFrame {
+        let anchor = [0, 1].map(|k| (eye[k] / spacing_m[k]).floor());
+        let offset = [0, 1].map(|k| (eye[k] - anchor[k] * spacing_m[k]) as f32);
+        PostFrame { anchor: anchor.map(|a| a as i64), spacing: spacing_m.map(|s| s as f32), offset }
+    }
+
+    /// The number of level-0 post `post`, as the f32 the shader takes
+    /// (exact below 2^24 posts from the camera).
+    pub fn number(&self, post: [i64; 2]) -> [f32; 2] {
+        [(post[0] - self.anchor[0]) as f32, (post[1] - self.anchor[1]) as f32]
+    }
 }
 
 /// Per-tile uniforms.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TileUniforms {
     pub key: TileKey,
-    /// South-west corner of the tile relative to the camera, metres.
-    pub origin: [f32; 2],
-    /// Metres between the tile's posts, east and north.
-    pub spacing: [f32; 2],
+    /// The tile's south-west post, numbered from the frame's anchor.
+    pub first_post: [f32; 2],
+    /// Level-0 posts between the tile's posts (2^level).
+    pub post_step: f32,
     /// Morph start and end distances (equal and huge for no morph).
     pub morph: [f32; 2],
     /// How far skirt vertices hang below the edge, metres.
     pub skirt_depth: f32,
     pub byte_offset: u32,
+}
+
+impl TileUniforms {
+    /// Camera-relative position of the tile's post `(i, j)`, metres, as
+    /// `terrain.vert` computes it.
+    pub fn post_position(&self, posts: &PostFrame, i: f32, j: f32) -> [f32; 2] {
+        let at = |k: usize, n: f32| (self.first_post[k] + n * self.post_step) * posts.spacing[k] - posts.offset[k];
+        [at(0, i), at(1, j)]
+    }
 }
 
 /// Everything drawn in one frame; buffers are kept and reused.
@@ -70,13 +111,12 @@ impl DrawList {
         DrawList { frame: None, tiles: Vec::with_capacity(tiles), indices_per_tile: 0 }
     }
 
-    /// Rebuilds the list for `camera` from the tile cache's draws.
-    pub fn build(&mut self, camera: &Camera, frame: FrameUniforms, draws: &[TileDraw], ranges: &LevelRanges, geometry: TileGeometry<'_>) {
+    /// Rebuilds the list for `frame` (its camera) from the tile cache's draws.
+    pub fn build(&mut self, frame: FrameUniforms, draws: &[TileDraw], ranges: &LevelRanges, geometry: TileGeometry<'_>) {
         self.frame = Some(frame);
         self.tiles.clear();
-        let eye = DVec2::new(camera.position.x, camera.position.y);
         for draw in draws {
-            self.tiles.push(tile_uniforms(draw, eye, ranges, &geometry));
+            self.tiles.push(tile_uniforms(draw, &frame.posts, ranges, &geometry));
         }
         self.sort_front_to_back(geometry.grid_size);
     }
@@ -87,31 +127,27 @@ impl DrawList {
     /// took the default flight from about 125 to 70 ms a frame. In place, so
     /// no allocation.
     pub fn sort_front_to_back(&mut self, grid_size: u32) {
-        let cells = grid_size as f32;
-        let distance = |tile: &TileUniforms| centre_distance_squared(tile, cells);
+        let Some(frame) = self.frame else { return };
+        let half = grid_size as f32 / 2.0;
+        let distance = |tile: &TileUniforms| {
+            let [x, y] = tile.post_position(&frame.posts, half, half);
+            x * x + y * y
+        };
         self.tiles.sort_unstable_by(|a, b| distance(a).total_cmp(&distance(b)));
     }
 }
 
-/// Squared ground distance from the camera to a tile's centre.
-fn centre_distance_squared(tile: &TileUniforms, cells: f32) -> f32 {
-    let centre = |k: usize| tile.origin[k] + 0.5 * tile.spacing[k] * cells;
-    centre(0) * centre(0) + centre(1) * centre(1)
-}
-
-fn tile_uniforms(draw: &TileDraw, eye: DVec2, ranges: &LevelRanges, geometry: &TileGeometry<'_>) -> TileUniforms {
+fn tile_uniforms(draw: &TileDraw, posts: &PostFrame, ranges: &LevelRanges, geometry: &TileGeometry<'_>) -> TileUniforms {
     let key = draw.key;
-    let scale = (1u64 << key.level) as f64;
-    let spacing = DVec2::new(geometry.spacing_m[0], geometry.spacing_m[1]) * scale;
-    let span = geometry.grid_size as f64;
-    let corner = DVec2::new(key.x as f64 * span, key.y as f64 * span) * spacing;
-    let origin = corner - eye;
+    let step = 1i64 << key.level;
+    let span = geometry.grid_size as i64 * step;
+    let first_post = posts.number([key.x as i64 * span, key.y as i64 * span]);
     let (start, end) = ranges.morph(key.level);
     let morph = if start.is_finite() { [start as f32, end as f32] } else { [f32::MAX, f32::MAX] };
     TileUniforms {
         key,
-        origin: [origin.x as f32, origin.y as f32],
-        spacing: [spacing.x as f32, spacing.y as f32],
+        first_post,
+        post_step: step as f32,
         morph,
         skirt_depth: skirt_depth(draw, geometry.delta_per_level),
         byte_offset: draw.byte_offset,
@@ -132,17 +168,47 @@ pub fn skirt_depth(draw: &TileDraw, delta_per_level: &[f64]) -> f32 {
 mod tests {
     use super::*;
 
-    fn tile(x: u32, origin: [f32; 2]) -> TileUniforms {
+    fn tile(x: u32, first_post: [f32; 2]) -> TileUniforms {
         let key = TileKey::new(0, x, 0);
-        TileUniforms { key, origin, spacing: [10.0, 10.0], morph: [0.0, 1.0], skirt_depth: 1.0, byte_offset: 0 }
+        TileUniforms { key, first_post, post_step: 1.0, morph: [0.0, 1.0], skirt_depth: 1.0, byte_offset: 0 }
+    }
+
+    fn frame(posts: PostFrame) -> FrameUniforms {
+        FrameUniforms {
+            view_projection: Mat4::IDENTITY,
+            camera_altitude: 0.0,
+            sun_direction: Vec3::Z,
+            curvature: false,
+            warning_above_m: 0.0,
+            caution_below_m: 0.0,
+            viewport: [1, 1],
+            fog_distance_m: 1.0,
+            posts,
+        }
     }
 
     #[test]
     fn tiles_are_drawn_nearest_first() {
-        // Tiles of 4 cells (40 m): centres at 1020, -20 (the camera's tile), 220 and 5020 m east.
-        let mut list = DrawList { tiles: vec![tile(0, [1000.0, -20.0]), tile(1, [-40.0, -20.0]), tile(2, [200.0, -20.0]), tile(3, [5000.0, -20.0])], ..DrawList::default() };
+        // Posts 10 m apart, the camera 5 m east of the anchor; tiles of 4
+        // cells with centres 1015, -25 (the camera's tile), 215 and 5015 m east.
+        let posts = PostFrame { anchor: [0, 0], spacing: [10.0, 10.0], offset: [5.0, 0.0] };
+        let tiles = vec![tile(0, [100.0, -2.0]), tile(1, [-4.0, -2.0]), tile(2, [20.0, -2.0]), tile(3, [500.0, -2.0])];
+        let mut list = DrawList { frame: Some(frame(posts)), tiles, ..DrawList::default() };
         list.sort_front_to_back(4);
         let order: Vec<u32> = list.tiles.iter().map(|t| t.key.x).collect();
         assert_eq!(order, [1, 2, 0, 3]);
+    }
+
+    #[test]
+    fn a_post_numbered_from_the_anchor_lands_where_f64_puts_it() {
+        let spacing = [71.38, 92.62];
+        let eye = DVec2::new(1.0e7 + 12.3, -3.0e6 - 45.6);
+        let posts = PostFrame::new(eye, spacing);
+        assert!(posts.offset.iter().zip(spacing).all(|(o, s)| (0.0..s as f32).contains(o)));
+        let post = [posts.anchor[0] + 700, posts.anchor[1] - 300];
+        let tile = TileUniforms { first_post: posts.number(post), ..tile(0, [0.0, 0.0]) };
+        let [x, y] = tile.post_position(&posts, 0.0, 0.0);
+        let exact = [post[0] as f64 * spacing[0] - eye.x, post[1] as f64 * spacing[1] - eye.y];
+        assert!((x as f64 - exact[0]).abs() < 0.01 && (y as f64 - exact[1]).abs() < 0.01, "{x} {y} vs {exact:?}");
     }
 }

@@ -56,8 +56,8 @@ pub fn edge_heights(list: &DrawList, staging: &[u8], altitude: f64, grid: u32) -
         let vertices: Vec<TileVertex> = bytes.chunks_exact(std::mem::size_of::<TileVertex>()).map(bytemuck::pod_read_unaligned).collect();
         let drawn = |i: u32, j: u32| {
             let v = vertices[(i + j * (grid + 1)) as usize];
-            let x = tile.origin[0] as f64 + i as f64 * tile.spacing[0] as f64;
-            let y = tile.origin[1] as f64 + j as f64 * tile.spacing[1] as f64;
+            let posts = list.frame.expect("a built list has its frame").posts;
+            let [x, y] = tile.post_position(&posts, i as f32, j as f32).map(f64::from);
             let distance = (x * x + y * y + (v.height as f64 - altitude).powi(2)).sqrt();
             morphed_height(v.height, v.target, morph_factor(distance, tile.morph[0] as f64, tile.morph[1] as f64))
         };
