@@ -1,5 +1,6 @@
 //! The accuracy tool on the GPU, over the built-in terrain at the test size:
-//! the measured error stays within tau where the bound promises it, the
+//! the measured error stays within tau where the bound promises it (at
+//! p99.9, as the issue asks, and at every pixel), the
 //! CPU mirror of the drawn surface agrees with what the GPU drew (morph
 //! included), the measurement sees the error of coarse tiles, and the LOD
 //! and full-resolution images cover the same pixels.
@@ -63,6 +64,8 @@ fn measured_error_confirms_tau_and_grows_with_it() {
     }
     let [fine, medium, coarse] = [&runs[0], &runs[1], &runs[2]];
     assert!(fine.summary.p999_px <= 1.0 && medium.summary.p999_px <= 4.0, "the bound holds where it is promised");
+    // And at every pixel: the bound is a guarantee, not a percentile.
+    assert!(fine.summary.max_px <= 1.0 && medium.summary.max_px <= 4.0, "max {} and {} px", fine.summary.max_px, medium.summary.max_px);
     // Coarse tiles are seen as error: the measurement is not blind.
     assert!(coarse.summary.p99_px > 4.0 * fine.summary.p99_px, "tau 16 draws measurably coarser terrain");
     assert!(coarse.summary.max_px > fine.summary.max_px);

@@ -19,6 +19,11 @@ use crate::node::cell_surface;
 use crate::render::{DrawList, PostFrame, TileUniforms};
 use crate::tiles::TileVertex;
 
+/// How close to a tile edge, in posts, a drawn point counts as on it (a
+/// skirt's points lie on the edge's vertical plane; 2/1000 of a post is
+/// a few centimetres, above f32 rounding at 100 km).
+pub const EDGE_TOLERANCE_POSTS: f64 = 2e-3;
+
 /// The drawn tiles of one frame, indexed by key.
 #[derive(Debug, Default)]
 pub struct LodSurface {
@@ -50,6 +55,20 @@ impl LodSurface {
     /// above the datum with the curvature drop taken off (what the GPU drew
     /// there plus the camera altitude); `None` where no tile was drawn.
     pub fn height_at(&self, staging: &[u8], x_m: f64, y_m: f64) -> Option<f64> {
+        let (tile, local) = self.locate(x_m, y_m)?;
+        Some(self.tile_surface(staging, tile, local))
+    }
+
+    /// Whether `(x_m, y_m)` lies on the edge of the drawn tile there (within
+    /// [`EDGE_TOLERANCE_POSTS`]), where skirts hang.
+    pub fn on_tile_edge(&self, x_m: f64, y_m: f64) -> bool {
+        let g = self.grid_size as f64;
+        self.locate(x_m, y_m).is_some_and(|(_, [u, v])| u.min(g - u).min(v).min(g - v) < EDGE_TOLERANCE_POSTS)
+    }
+
+    /// The drawn tile over `(x_m, y_m)` and the point's position in it, in
+    /// posts of the tile's level from its south-west corner.
+    fn locate(&self, x_m: f64, y_m: f64) -> Option<(&TileUniforms, [f64; 2])> {
         let g = self.grid_size as f64;
         (0..self.levels).find_map(|level| {
             let post = [self.spacing_m[0] * (1u64 << level) as f64, self.spacing_m[1] * (1u64 << level) as f64];
@@ -63,12 +82,10 @@ impl LodSurface {
             let beside = |t: u32, w: f64| if t > 0 && w == t as f64 * g { [t, t - 1] } else { [t, t] };
             let (xs, ys) = (beside(tx, u), beside(ty, v));
             let keys = [(xs[0], ys[0]), (xs[1], ys[0]), (xs[0], ys[1]), (xs[1], ys[1])];
-            let (key, tile) = keys.iter().find_map(|&(x, y)| {
+            keys.iter().find_map(|&(x, y)| {
                 let key = TileKey::new(level, x, y);
-                self.tiles.get(&key).map(|tile| (key, tile))
-            })?;
-            let local = [u - key.x as f64 * g, v - key.y as f64 * g];
-            Some(self.tile_surface(staging, tile, local))
+                self.tiles.get(&key).map(|tile| (tile, [u - x as f64 * g, v - y as f64 * g]))
+            })
         })
     }
 

@@ -9,10 +9,11 @@
 //! surfaces at the ground point that pixel shows, projected to the screen
 //! at that point: the on-screen length of the segment from one surface to the
 //! other. It is taken from both sides ([`pixel_error`]), at the ground point
-//! the LOD image shows (the point actually drawn, skirts included) and at the
-//! one the full-resolution image shows (where the LOD surface is read from a
-//! CPU mirror of the drawn tiles, [`LodSurface`]); the pixel's error is the
-//! larger. Measuring only the LOD's own points would miss a ridge the LOD
+//! the LOD image shows and at the one the full-resolution image shows; the
+//! LOD surface there is read from a CPU mirror of the drawn tiles
+//! ([`LodSurface`], checked against the drawn points), except where the
+//! LOD image shows a skirt, which is measured as drawn; the pixel's error is
+//! the larger. Measuring only the LOD's own points would miss a ridge the LOD
 //! drew too low, because the LOD image then shows the ground behind it.
 //! Distances between the two images' hit points are not used: along grazing
 //! rays a millimetre of height moves the hit point kilometres, which is no

@@ -9,9 +9,10 @@ use super::{LodSurface, PositionImage};
 use crate::camera::{Camera, EARTH_RADIUS_M};
 use crate::render::FrameUniforms;
 
-/// A LOD pixel whose drawn height is further than this from the mirrored
-/// surface shows a skirt (metres; the mirror agrees to millimetres elsewhere).
-pub const SKIRT_TOLERANCE_M: f32 = 0.05;
+/// A LOD pixel on a tile edge drawn further than this below the mirrored
+/// surface shows a skirt (metres; the mirror agrees to millimetres on
+/// surfaces seen at an angle).
+pub const SKIRT_TOLERANCE_M: f64 = 0.05;
 
 /// The exact full-resolution height at a local point, metres.
 pub type ExactHeight<'a> = &'a (dyn Fn(f64, f64) -> Option<f32> + Sync);
@@ -153,12 +154,12 @@ pub fn measure_view(
                 match (lod.point(k), truth.point(k)) {
                     (Some(p), Some(t)) => {
                         counts.terrain += 1;
-                        let (lod_side, drawn) = pixel.at_lod_point(p);
-                        *mirror = drawn;
+                        let lod_side = pixel.at_lod_point(p);
+                        *mirror = lod_side.mirror_m;
                         let truth_side = pixel.at_truth_point(t);
                         counts.holes += usize::from(truth_side.is_none());
-                        *error = lod_side.max(truth_side.unwrap_or(0.0)) as f32;
-                        if drawn > SKIRT_TOLERANCE_M {
+                        *error = lod_side.error_px.max(truth_side.unwrap_or(0.0)) as f32;
+                        if lod_side.skirt {
                             counts.skirt += 1;
                         } else {
                             counts.max_surface = counts.max_surface.max(*error as f64);
@@ -166,7 +167,7 @@ pub fn measure_view(
                     }
                     (Some(p), None) => {
                         counts.lod_only += 1;
-                        *mirror = pixel.at_lod_point(p).1;
+                        *mirror = pixel.at_lod_point(p).mirror_m;
                     }
                     (None, Some(_)) => counts.truth_only += 1,
                     (None, None) => {}
@@ -191,16 +192,37 @@ struct Pixel<'a> {
     exact: ExactHeight<'a>,
 }
 
+/// What the LOD image shows at a pixel.
+struct LodSide {
+    /// Error in pixels (0 where the ground is outside the data).
+    error_px: f64,
+    /// |drawn height - mirrored surface| in metres (NaN without a tile).
+    mirror_m: f32,
+    /// The pixel shows a skirt.
+    skirt: bool,
+}
+
 impl Pixel<'_> {
-    /// At the point the LOD drew: the error in pixels (0 where the ground is
-    /// outside the data) and |drawn - mirror| in metres (NaN without a tile).
-    fn at_lod_point(&self, p: Vec3) -> (f64, f32) {
+    /// At the ground point under the point the LOD drew. The LOD surface
+    /// there is read from the mirror, not from the drawn point's height:
+    /// where a ray grazes a far silhouette the interpolated point may sit
+    /// 100 m along the ray from where its height belongs (the same in the
+    /// truth image, bit for bit), which is no error of the surface. A skirt
+    /// (on a tile edge, drawn below the surface) is measured as drawn: it is
+    /// what the pixel shows.
+    fn at_lod_point(&self, p: Vec3) -> LodSide {
         let p = p.as_dvec3();
         let (ground, drawn) = self.geometry.ground(p);
+        let mirror = self.surface.height_at(self.staging, ground.x, ground.y);
+        let skirt = mirror.is_some_and(|m| drawn < m - SKIRT_TOLERANCE_M && self.surface.on_tile_edge(ground.x, ground.y));
+        let shown = match mirror {
+            Some(m) if !skirt => m,
+            _ => drawn,
+        };
         let truth = (self.exact)(ground.x, ground.y).map(|h| self.geometry.drawn_truth(ground, h));
-        let error = truth.map_or(0.0, |h| self.geometry.projected_vertical(p, h - drawn));
-        let mirror = self.surface.height_at(self.staging, ground.x, ground.y).map_or(f64::NAN, |m| (m - drawn).abs());
-        (error, mirror as f32)
+        let error_px = truth.map_or(0.0, |h| self.geometry.projected_vertical(p, h - shown));
+        let mirror_m = mirror.map_or(f64::NAN, |m| (m - drawn).abs()) as f32;
+        LodSide { error_px, mirror_m, skirt }
     }
 
     /// At the point the full-resolution mesh shows: the LOD surface there
@@ -241,6 +263,7 @@ mod tests {
             viewport: camera.viewport,
             fog_distance_m: 1e5,
             posts: crate::render::PostFrame::new(camera.position.truncate(), [90.0, 90.0]),
+            slices: crate::render::DepthSlices::new(&camera, 1.0, 1e5),
         };
         (camera, ViewGeometry::new(&camera, &frame))
     }

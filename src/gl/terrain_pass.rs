@@ -92,6 +92,7 @@ pub struct TerrainPass {
     heights: Buffer,
     vertex_array: Option<VertexArray>,
     index_count: i32,
+    grid_size: u32,
 }
 
 impl TerrainPass {
@@ -118,6 +119,7 @@ impl TerrainPass {
             heights,
             vertex_array,
             index_count: grid.indices.len() as i32,
+            grid_size,
         })
     }
 
@@ -171,24 +173,51 @@ impl TerrainPass {
             self.heights.bind();
             gl.enable_vertex_attrib_array(HEIGHT);
             gl.enable_vertex_attrib_array(NORMAL);
-            for tile in &list.tiles {
-                let offset = match vertices {
-                    TileVertices::Shared => tile.byte_offset,
-                    TileVertices::PerTile(buffer_of) => match buffer_of(tile) {
-                        Some(buffer) => {
-                            buffer.bind();
-                            0
-                        }
-                        None => continue,
-                    },
-                };
-                self.draw_tile(&program.at, tile, offset);
+            // Far slice first; then a clear depth for the near slice.
+            let slices = &frame.slices;
+            if let Some(far) = slices.far {
+                self.draw_slice(&program.at, list, &frame, far, false, vertices);
+                gl.clear(glow::DEPTH_BUFFER_BIT);
             }
+            self.draw_slice(&program.at, list, &frame, slices.near, true, vertices);
             gl.disable_vertex_attrib_array(GRID);
             gl.disable_vertex_attrib_array(HEIGHT);
             gl.disable_vertex_attrib_array(NORMAL);
         }
         gl_check!(gl)
+    }
+
+    /// Draws the tiles of `list` that reach into one depth slice
+    /// (`near_slice` or the far one) with its `view_projection`.
+    #[allow(unsafe_code)]
+    fn draw_slice(
+        &self,
+        at: &Locations,
+        list: &DrawList,
+        frame: &FrameUniforms,
+        view_projection: glam::Mat4,
+        near_slice: bool,
+        vertices: TileVertices<'_>,
+    ) {
+        // SAFETY: the terrain program is bound and its location comes from it.
+        unsafe { self.gl.uniform_matrix_4_f32_slice(at.view_projection.as_ref(), false, &view_projection.to_cols_array()) };
+        for tile in &list.tiles {
+            let (in_near, in_far) = frame.slices.tile_slices(tile, &frame.posts, self.grid_size as f32, frame.camera_altitude);
+            if !(if near_slice { in_near } else { in_far }) {
+                continue;
+            }
+            let offset = match vertices {
+                TileVertices::Shared => tile.byte_offset,
+                TileVertices::PerTile(buffer_of) => match buffer_of(tile) {
+                    Some(buffer) => {
+                        buffer.bind();
+                        0
+                    }
+                    None => continue,
+                },
+            };
+            self.draw_tile(at, tile, offset);
+        }
     }
 
     #[allow(unsafe_code)]
@@ -215,7 +244,6 @@ fn set_frame_uniforms(gl: &Gl, at: &Locations, frame: &FrameUniforms) {
     let haze = palette::SKY_HORIZON;
     // SAFETY: the program is bound; locations come from it.
     unsafe {
-        gl.uniform_matrix_4_f32_slice(at.view_projection.as_ref(), false, &frame.view_projection.to_cols_array());
         gl.uniform_4_f32(at.frame.as_ref(), frame.camera_altitude as f32, curvature as f32, 0.0, 0.0);
         let posts = &frame.posts;
         gl.uniform_4_f32(at.posts.as_ref(), posts.spacing[0], posts.spacing[1], posts.offset[0], posts.offset[1]);

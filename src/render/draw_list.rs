@@ -10,6 +10,7 @@
 
 use crate::lod::{LevelRanges, TileKey};
 use crate::tiles::TileDraw;
+use crate::camera::Camera;
 use glam::{DVec2, Mat4, Vec3};
 
 /// Uniforms shared by every tile of a frame.
@@ -33,6 +34,77 @@ pub struct FrameUniforms {
     pub fog_distance_m: f32,
     /// Where level-0 posts are relative to the camera.
     pub posts: PostFrame,
+    /// The depth range cut in two where one 24-bit range cannot resolve it.
+    pub slices: DepthSlices,
+}
+
+/// A 24-bit depth buffer resolves `d^2 / (near 2^24)` metres at distance `d`:
+/// with the near plane at a metre (flying low) that is 280 m at 68 km, and far
+/// ridges fight over pixels. Then the terrain is drawn in two depth ranges,
+/// far first, the depth buffer cleared between: `[split, far]` and
+/// `[near, split]` with `split = sqrt(near far)`, each resolving the other's
+/// worst case far better (0.7 m at 68 km for a 1 m near plane and a 150 km
+/// far one).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DepthSlices {
+    /// Projection times view for `[near, split]` (the whole range when there is no far slice).
+    pub near: Mat4,
+    /// Projection times view for `[split * SLICE_OVERLAP, far]`, if cut.
+    pub far: Option<Mat4>,
+    /// Distance between the slices, metres (the far plane when not cut).
+    pub split_m: f32,
+    /// View depth over distance, at least, for a point in view: the cosine
+    /// of half the diagonal field of view.
+    pub min_depth_share: f32,
+}
+
+/// The far slice starts this share of the split in front of it, so the
+/// slices overlap instead of leaving a hairline between their planes.
+pub const SLICE_OVERLAP: f32 = 0.99;
+/// Cut the range when one range resolves less than this at the far plane, metres.
+const DEPTH_RESOLUTION_M: f64 = 1.0;
+
+impl DepthSlices {
+    /// The slices for `camera` between `near` and `far` metres.
+    pub fn new(camera: &Camera, near: f32, far: f32) -> DepthSlices {
+        let view = camera.view();
+        let (n, f) = (near as f64, far as f64);
+        let half_x = (camera.fov_x_deg.to_radians() / 2.0).tan();
+        let half_y = (camera.fov_y() / 2.0).tan();
+        let min_depth_share = (1.0 / (1.0 + half_x * half_x + half_y * half_y).sqrt()) as f32;
+        if f * f / (n * (1u64 << 24) as f64) <= DEPTH_RESOLUTION_M {
+            return DepthSlices { near: camera.projection(near, far) * view, far: None, split_m: far, min_depth_share };
+        }
+        let split = (n * f).sqrt() as f32;
+        DepthSlices {
+            near: camera.projection(near, split) * view,
+            far: Some(camera.projection(split * SLICE_OVERLAP, far) * view),
+            split_m: split,
+            min_depth_share,
+        }
+    }
+
+    /// Whether a tile of `cells` cells is drawn in the near slice and in the
+    /// far slice. Conservative: the near slice takes tiles whose nearest
+    /// point could be in view at a depth below the split (view depth is at
+    /// least `min_depth_share` of the distance; heights are left out, which
+    /// only lowers the distance); the far slice takes every tile that could
+    /// reach beyond the split, with any height the data can have.
+    pub fn tile_slices(&self, tile: &TileUniforms, posts: &PostFrame, cells: f32, altitude: f64) -> (bool, bool) {
+        let Some(_) = self.far else { return (true, false) };
+        let [x0, y0] = tile.post_position(posts, 0.0, 0.0);
+        let [x1, y1] = tile.post_position(posts, cells, cells);
+        // Horizontal distance from the camera to the tile's rectangle, and to its far corner.
+        let nearest = |lo: f32, hi: f32| if lo > 0.0 { lo } else if hi < 0.0 { -hi } else { 0.0 };
+        let (dx, dy) = (nearest(x0.min(x1), x0.max(x1)), nearest(y0.min(y1), y0.max(y1)));
+        let min_distance = (dx * dx + dy * dy).sqrt() as f64;
+        let far_x = x0.abs().max(x1.abs()) as f64;
+        let far_y = y0.abs().max(y1.abs()) as f64;
+        let vertical = altitude.abs() + crate::procedural::HEIGHT_RANGE_M[1].abs() + crate::procedural::HEIGHT_RANGE_M[0].abs();
+        let max_distance = (far_x * far_x + far_y * far_y + vertical * vertical).sqrt();
+        let split = self.split_m as f64;
+        (min_distance * (self.min_depth_share as f64) < split, max_distance > split * SLICE_OVERLAP as f64)
+    }
 }
 
 /// The frame's post numbering: post `(i, j)` of the data (level 0) is
@@ -184,7 +256,33 @@ mod tests {
             viewport: [1, 1],
             fog_distance_m: 1.0,
             posts,
+            slices: DepthSlices { near: Mat4::IDENTITY, far: None, split_m: 1.0, min_depth_share: 1.0 },
         }
+    }
+
+    #[test]
+    fn low_views_cut_the_depth_range_and_tiles_go_where_they_reach() {
+        use glam::DVec3;
+        let camera = Camera {
+            position: DVec3::new(0.0, 0.0, 1020.0),
+            heading_deg: 0.0,
+            pitch_deg: 0.0,
+            roll_deg: 0.0,
+            fov_x_deg: 60.0,
+            viewport: [1280, 720],
+        };
+        assert!(DepthSlices::new(&camera, 2000.0, 150_000.0).far.is_none(), "a 2 km near plane resolves 150 km alone");
+        let slices = DepthSlices::new(&camera, 1.0, 150_000.0);
+        assert!(slices.far.is_some());
+        assert!((slices.split_m - 387.3).abs() < 0.1, "split {}", slices.split_m);
+        let posts = PostFrame { anchor: [0, 0], spacing: [10.0, 10.0], offset: [5.0, 5.0] };
+        // 4-cell tiles (40 m): under the camera, 2 km ahead, 100 km ahead.
+        let under = TileUniforms { first_post: [-2.0, -2.0], ..tile(0, [0.0, 0.0]) };
+        let ahead = TileUniforms { first_post: [0.0, 200.0], ..tile(1, [0.0, 0.0]) };
+        let far = TileUniforms { first_post: [0.0, 10_000.0], ..tile(2, [0.0, 0.0]) };
+        assert_eq!(slices.tile_slices(&under, &posts, 4.0, 1020.0), (true, true), "1 km above it, it may reach past the split");
+        assert_eq!(slices.tile_slices(&ahead, &posts, 4.0, 1020.0), (false, true));
+        assert_eq!(slices.tile_slices(&far, &posts, 4.0, 1020.0), (false, true));
     }
 
     #[test]

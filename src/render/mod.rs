@@ -7,7 +7,7 @@ pub mod draw_list;
 pub mod null;
 pub mod palette;
 
-pub use draw_list::{DrawList, FrameUniforms, PostFrame, TileUniforms};
+pub use draw_list::{DepthSlices, DrawList, FrameUniforms, PostFrame, TileUniforms};
 pub use null::NullBackend;
 
 use std::ops::Range;

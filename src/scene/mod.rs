@@ -17,7 +17,7 @@ use crate::lod::ranges::RingInputs;
 use crate::lod::select::View;
 use crate::lod::{LevelRanges, LodConfig, LodError, TileSelector};
 use crate::render::draw_list::TileGeometry;
-use crate::render::draw_list::PostFrame;
+use crate::render::draw_list::{DepthSlices, PostFrame};
 use crate::render::{palette, DrawList, FrameUniforms};
 use crate::tiles::{grid, TileCache, TileCacheConfig, TileError};
 use std::time::Instant;
@@ -244,6 +244,7 @@ impl Scene {
             viewport: camera.viewport,
             fog_distance_m: far,
             posts: PostFrame::new(camera.position.truncate(), terrain.layout().spacing_m),
+            slices: DepthSlices::new(camera, near, far),
         }
     }
 }
