@@ -133,8 +133,10 @@ impl TerrainPass {
         Ok(())
     }
 
-    /// Draws every tile of `list`, writing `output`. Sets all the state it
-    /// relies on: depth test and writes on, back faces culled, no blending.
+    /// Draws every tile of `list`, writing `output`, in the frame's depth
+    /// slices (far first, depth cleared between). Sets all the state it
+    /// relies on: depth test and writes on, back faces culled, no blending,
+    /// no scissor.
     pub fn draw(&self, list: &DrawList, output: TerrainOutput) -> Result<(), GlError> {
         self.draw_from(list, output, TileVertices::Shared)
     }
@@ -161,6 +163,8 @@ impl TerrainPass {
             gl.cull_face(glow::BACK);
             gl.front_face(glow::CCW);
             gl.disable(glow::BLEND);
+            // The depth clear between slices must reach the whole target.
+            gl.disable(glow::SCISSOR_TEST);
             program.program.bind();
             set_frame_uniforms(gl, &program.at, &frame);
             if let Some(vertex_array) = &self.vertex_array {
@@ -202,7 +206,7 @@ impl TerrainPass {
         // SAFETY: the terrain program is bound and its location comes from it.
         unsafe { self.gl.uniform_matrix_4_f32_slice(at.view_projection.as_ref(), false, &view_projection.to_cols_array()) };
         for tile in &list.tiles {
-            let (in_near, in_far) = frame.slices.tile_slices(tile, &frame.posts, self.grid_size as f32, frame.camera_altitude);
+            let (in_near, in_far) = frame.slices.tile_slices(tile, &frame.posts, self.grid_size as f32);
             if !(if near_slice { in_near } else { in_far }) {
                 continue;
             }

@@ -8,9 +8,9 @@
 //! post shared by two tiles gets the same bits from both (watertight edges),
 //! and every number stays small however far the camera is from the origin.
 
+use crate::camera::Camera;
 use crate::lod::{LevelRanges, TileKey};
 use crate::tiles::TileDraw;
-use crate::camera::Camera;
 use glam::{DVec2, Mat4, Vec3};
 
 /// Uniforms shared by every tile of a frame.
@@ -56,6 +56,9 @@ pub struct DepthSlices {
     /// View depth over distance, at least, for a point in view: the cosine
     /// of half the diagonal field of view.
     pub min_depth_share: f32,
+    /// The largest height difference between the camera and any terrain
+    /// the data holds, metres.
+    pub max_drop_m: f32,
 }
 
 /// The far slice starts this share of the split in front of it, so the
@@ -65,15 +68,19 @@ pub const SLICE_OVERLAP: f32 = 0.99;
 const DEPTH_RESOLUTION_M: f64 = 1.0;
 
 impl DepthSlices {
-    /// The slices for `camera` between `near` and `far` metres.
-    pub fn new(camera: &Camera, near: f32, far: f32) -> DepthSlices {
+    /// The slices for `camera` between `near` and `far` metres, over data
+    /// whose heights lie in `heights` (lowest, highest).
+    pub fn new(camera: &Camera, near: f32, far: f32, heights: (f32, f32)) -> DepthSlices {
         let view = camera.view();
         let (n, f) = (near as f64, far as f64);
         let half_x = (camera.fov_x_deg.to_radians() / 2.0).tan();
         let half_y = (camera.fov_y() / 2.0).tan();
         let min_depth_share = (1.0 / (1.0 + half_x * half_x + half_y * half_y).sqrt()) as f32;
+        let z = camera.position.z;
+        let max_drop_m = (z - heights.0 as f64).abs().max((z - heights.1 as f64).abs()) as f32;
         if f * f / (n * (1u64 << 24) as f64) <= DEPTH_RESOLUTION_M {
-            return DepthSlices { near: camera.projection(near, far) * view, far: None, split_m: far, min_depth_share };
+            let near = camera.projection(near, far) * view;
+            return DepthSlices { near, far: None, split_m: far, min_depth_share, max_drop_m };
         }
         let split = (n * f).sqrt() as f32;
         DepthSlices {
@@ -81,6 +88,7 @@ impl DepthSlices {
             far: Some(camera.projection(split * SLICE_OVERLAP, far) * view),
             split_m: split,
             min_depth_share,
+            max_drop_m,
         }
     }
 
@@ -89,9 +97,11 @@ impl DepthSlices {
     /// point could be in view at a depth below the split (view depth is at
     /// least `min_depth_share` of the distance; heights are left out, which
     /// only lowers the distance); the far slice takes every tile that could
-    /// reach beyond the split, with any height the data can have.
-    pub fn tile_slices(&self, tile: &TileUniforms, posts: &PostFrame, cells: f32, altitude: f64) -> (bool, bool) {
-        let Some(_) = self.far else { return (true, false) };
+    /// reach beyond the split, with any height the data holds.
+    pub fn tile_slices(&self, tile: &TileUniforms, posts: &PostFrame, cells: f32) -> (bool, bool) {
+        if self.far.is_none() {
+            return (true, false);
+        }
         let [x0, y0] = tile.post_position(posts, 0.0, 0.0);
         let [x1, y1] = tile.post_position(posts, cells, cells);
         // Horizontal distance from the camera to the tile's rectangle, and to its far corner.
@@ -100,7 +110,7 @@ impl DepthSlices {
         let min_distance = (dx * dx + dy * dy).sqrt() as f64;
         let far_x = x0.abs().max(x1.abs()) as f64;
         let far_y = y0.abs().max(y1.abs()) as f64;
-        let vertical = altitude.abs() + crate::procedural::HEIGHT_RANGE_M[1].abs() + crate::procedural::HEIGHT_RANGE_M[0].abs();
+        let vertical = self.max_drop_m as f64;
         let max_distance = (far_x * far_x + far_y * far_y + vertical * vertical).sqrt();
         let split = self.split_m as f64;
         (min_distance * (self.min_depth_share as f64) < split, max_distance > split * SLICE_OVERLAP as f64)
@@ -256,7 +266,7 @@ mod tests {
             viewport: [1, 1],
             fog_distance_m: 1.0,
             posts,
-            slices: DepthSlices { near: Mat4::IDENTITY, far: None, split_m: 1.0, min_depth_share: 1.0 },
+            slices: DepthSlices { near: Mat4::IDENTITY, far: None, split_m: 1.0, min_depth_share: 1.0, max_drop_m: 0.0 },
         }
     }
 
@@ -271,8 +281,10 @@ mod tests {
             fov_x_deg: 60.0,
             viewport: [1280, 720],
         };
-        assert!(DepthSlices::new(&camera, 2000.0, 150_000.0).far.is_none(), "a 2 km near plane resolves 150 km alone");
-        let slices = DepthSlices::new(&camera, 1.0, 150_000.0);
+        // Terrain from 0 to 20 m: the camera is 1000 m or more above it.
+        let heights = (0.0, 20.0);
+        assert!(DepthSlices::new(&camera, 2000.0, 150_000.0, heights).far.is_none(), "a 2 km near plane resolves 150 km alone");
+        let slices = DepthSlices::new(&camera, 1.0, 150_000.0, heights);
         assert!(slices.far.is_some());
         assert!((slices.split_m - 387.3).abs() < 0.1, "split {}", slices.split_m);
         let posts = PostFrame { anchor: [0, 0], spacing: [10.0, 10.0], offset: [5.0, 5.0] };
@@ -280,9 +292,9 @@ mod tests {
         let under = TileUniforms { first_post: [-2.0, -2.0], ..tile(0, [0.0, 0.0]) };
         let ahead = TileUniforms { first_post: [0.0, 200.0], ..tile(1, [0.0, 0.0]) };
         let far = TileUniforms { first_post: [0.0, 10_000.0], ..tile(2, [0.0, 0.0]) };
-        assert_eq!(slices.tile_slices(&under, &posts, 4.0, 1020.0), (true, true), "1 km above it, it may reach past the split");
-        assert_eq!(slices.tile_slices(&ahead, &posts, 4.0, 1020.0), (false, true));
-        assert_eq!(slices.tile_slices(&far, &posts, 4.0, 1020.0), (false, true));
+        assert_eq!(slices.tile_slices(&under, &posts, 4.0), (true, true), "1 km above it, it may reach past the split");
+        assert_eq!(slices.tile_slices(&ahead, &posts, 4.0), (false, true));
+        assert_eq!(slices.tile_slices(&far, &posts, 4.0), (false, true));
     }
 
     #[test]

@@ -169,8 +169,8 @@ impl Scene {
         let tile_size_m = grid_size as f64 * layout.spacing_m[0].max(layout.spacing_m[1]);
         // Culling uses the widest frustum (the conservative near plane);
         // drawing uses one pushed out to the nearest selected tile.
-        let culling = self.uniforms_with_near(camera, terrain, 0.0);
-        let frustum = Frustum::from_view_projection(culling.view_projection);
+        let (near, far) = clip_planes(camera, terrain);
+        let frustum = Frustum::from_view_projection(camera.projection(near, far) * camera.view());
         let mut report = FrameReport::default();
         let mut lod = self.config.lod;
         let mut nearest_m: f64;
@@ -228,12 +228,8 @@ impl Scene {
     /// distance `d` (560 m at 68 km with a 0.5 m near plane: far ridges
     /// then fought over pixels; 1.5 m with the near plane at 180 m).
     pub fn frame_uniforms(&self, camera: &Camera, terrain: &dyn TerrainData) -> FrameUniforms {
-        self.uniforms_with_near(camera, terrain, self.near_m)
-    }
-
-    fn uniforms_with_near(&self, camera: &Camera, terrain: &dyn TerrainData, near_m: f32) -> FrameUniforms {
         let (near, far) = clip_planes(camera, terrain);
-        let near = near.max(near_m.min(far / 10.0));
+        let near = near.max(self.near_m.min(far / 10.0));
         FrameUniforms {
             view_projection: camera.projection(near, far) * camera.view(),
             camera_altitude: camera.position.z,
@@ -244,7 +240,7 @@ impl Scene {
             viewport: camera.viewport,
             fog_distance_m: far,
             posts: PostFrame::new(camera.position.truncate(), terrain.layout().spacing_m),
-            slices: DepthSlices::new(camera, near, far),
+            slices: DepthSlices::new(camera, near, far, terrain.height_range()),
         }
     }
 }
