@@ -196,11 +196,6 @@ fn measure_point(
 ) -> PointResult {
     let mut display = display_for(point, pyramid);
     let truth = TruthPass::new(display.context().gl(), mesh).expect("truth pass");
-    // Warm-up: compile, fault in buffers.
-    let first = &views[0].1;
-    display.settle(first, 10_000).expect("settle");
-    display.frame(first).expect("warm-up frame");
-    display.render_truth(first, &truth).expect("warm-up truth");
     let exact = |x: f64, y: f64| pyramid.exact_height(x, y);
     let run = measure_flight(&mut display, &truth, &exact, pyramid.layout().spacing_m, views).expect("accuracy views");
     let (flight, _) = fly(&mut display, None, path, flight_frames);

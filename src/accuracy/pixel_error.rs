@@ -145,12 +145,12 @@ pub fn measure_view(
     out.mirror_m.resize(pixels, f32::NAN);
     let width = (lod.size.x as usize).max(1);
     let rows = out.errors_px.par_chunks_mut(width).zip(out.mirror_m.par_chunks_mut(width)).enumerate();
+    let pixel = Pixel { geometry, surface, staging, exact };
     let counts = rows
         .map(|(row, (errors, mirror))| {
             let mut counts = Counts::default();
             for (col, (error, mirror)) in errors.iter_mut().zip(mirror.iter_mut()).enumerate() {
                 let k = row * width + col;
-                let pixel = Pixel { geometry, surface, staging, exact };
                 match (lod.point(k), truth.point(k)) {
                     (Some(p), Some(t)) => {
                         counts.terrain += 1;

@@ -71,7 +71,7 @@ impl TruthPass {
             .enumerate()
             .map(|(k, chunk)| ChunkDraw {
                 key: TileKey::new(0, chunk.first_post[0] / CHUNK_CELLS, chunk.first_post[1] / CHUNK_CELLS),
-                first_post: [0, 1].map(|k| mesh.region.first[k] + chunk.first_post[k] as i64),
+                first_post: mesh.chunk_first_post(chunk),
                 byte_offset: k as u32 * tile_bytes(CHUNK_CELLS),
             })
             .collect();

@@ -81,8 +81,6 @@ pub const CHUNK_TRIANGLES: u64 = 2 * CHUNK_CELLS as u64 * CHUNK_CELLS as u64;
 pub struct TruthMesh {
     /// The region drawn: the one asked for, widened to whole chunks.
     pub region: TruthRegion,
-    /// Metres between level-0 posts, east and north.
-    pub spacing_m: [f64; 2],
     pub chunks: Vec<TruthChunk>,
 }
 
@@ -108,7 +106,7 @@ impl TruthMesh {
             .flat_map(|y| starts(region.posts[0]).map(move |x| [x, y]))
             .map(|first_post| heights.chunk(first_post, layout.spacing_m))
             .collect();
-        Ok(TruthMesh { region, spacing_m: layout.spacing_m, chunks })
+        Ok(TruthMesh { region, chunks })
     }
 
     /// Surface triangles of the whole mesh.
@@ -116,10 +114,9 @@ impl TruthMesh {
         self.chunks.len() as u64 * CHUNK_TRIANGLES
     }
 
-    /// Position of the chunk's south-west post in the local frame, metres.
-    pub fn chunk_origin_m(&self, chunk: &TruthChunk) -> [f64; 2] {
-        let post = |axis: usize| self.region.first[axis] as f64 + chunk.first_post[axis] as f64;
-        [post(0) * self.spacing_m[0], post(1) * self.spacing_m[1]]
+    /// The chunk's south-west post, in level-0 posts of the data.
+    pub fn chunk_first_post(&self, chunk: &TruthChunk) -> [i64; 2] {
+        [0, 1].map(|axis| self.region.first[axis] + chunk.first_post[axis] as i64)
     }
 }
 
@@ -280,7 +277,7 @@ mod tests {
             }
         }
         let last = mesh.chunks.last().unwrap();
-        assert_eq!(mesh.chunk_origin_m(last), [384.0 * spacing, 384.0 * spacing]);
+        assert_eq!(mesh.chunk_first_post(last), [384, 384]);
     }
 
     #[test]
