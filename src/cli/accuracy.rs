@@ -9,7 +9,6 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use anyhow::{bail, Context, Result};
-use glam::UVec2;
 use ridgeline::accuracy::{measure_flight, AccuracyRun};
 use ridgeline::camera::Camera;
 use ridgeline::dataset;
@@ -23,25 +22,11 @@ use super::progress::Bar;
 
 #[derive(clap::Args)]
 pub struct AccuracyArgs {
-    /// Screen-space error bound in pixels, as `fly --tau`.
-    #[arg(long, default_value_t = 1.0)]
-    pub tau: f64,
-    /// Terrain: a cache name under cache/, or a path to a pyramid; the
-    /// built-in SRTM tile when omitted.
-    #[arg(long)]
-    pub dataset: Option<String>,
-    /// Camera path CSV (as `fly --path`); the built-in approach when omitted.
-    #[arg(long)]
-    pub path: Option<PathBuf>,
+    #[command(flatten)]
+    pub view: super::ViewArgs,
     /// Views, evenly spaced in time along the path (first and last included).
     #[arg(long, default_value_t = 16)]
     pub views: u32,
-    /// Image size, WIDTHxHEIGHT.
-    #[arg(long, default_value = "1280x720", value_parser = super::parse_size)]
-    pub size: UVec2,
-    /// Horizontal field of view in degrees.
-    #[arg(long, default_value_t = 60.0)]
-    pub fov: f64,
     /// Headless contexts only: egl or osmesa (auto picks EGL).
     #[arg(long, value_enum, default_value_t = GlBackend::Auto)]
     pub backend: GlBackend,
@@ -56,24 +41,24 @@ pub struct AccuracyArgs {
 pub fn run(args: &AccuracyArgs) -> Result<()> {
     check_args(args)?;
     let bar = Bar::new();
-    let pyramid = dataset::open(args.dataset.as_deref(), Path::new("cache"), &bar)?;
+    let pyramid = dataset::open(args.view.dataset.as_deref(), Path::new("cache"), &bar)?;
     bar.finish();
-    let path = super::flight_path(args.path.as_deref(), &pyramid)?;
+    let path = super::flight_path(args.view.path.as_deref(), &pyramid)?;
     let layout = *pyramid.layout();
     let summary = TerrainSummary::from_pyramid(pyramid.info());
     let dataset_name = pyramid.path().display().to_string();
     let pyramid = Arc::new(pyramid);
     let source: Arc<dyn NodeSource> = pyramid.clone();
-    let mut config = DisplayConfig::new(headless(args.backend), args.size);
-    config.scene.lod.tau_px = args.tau;
-    config.fov_x_deg = args.fov;
+    let mut config = DisplayConfig::new(headless(args.backend), args.view.size);
+    config.scene.lod.tau_px = args.view.tau;
+    config.fov_x_deg = args.view.fov;
     let grid_size = config.scene.lod.grid_size;
     let mut display = Display::new(&config, Arc::clone(&source), summary).context("opening a headless display")?;
     let region = TruthRegion::covering_tiles(&layout, grid_size);
     let mesh = TruthMesh::load(source.as_ref(), region).with_context(|| format!("{dataset_name}: the full-resolution mesh"))?;
     let truth = TruthPass::new(display.context().gl(), &mesh).context("uploading the full-resolution mesh")?;
     let views: Vec<(f64, Camera)> =
-        path.frame_times(args.views.max(1)).map(|t| (t, path.sample(t).camera(args.fov, [args.size.x, args.size.y]))).collect();
+        path.frame_times(args.views.max(1)).map(|t| (t, path.sample(t).camera(args.view.fov, [args.view.size.x, args.view.size.y]))).collect();
     let exact = |x: f64, y: f64| pyramid.exact_height(x, y);
     let run = measure_flight(&mut display, &truth, &exact, layout.spacing_m, &views).context("measuring the views")?;
     let info = display.info();
@@ -81,8 +66,8 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
         "dataset": dataset_name,
         "backend": info.backend.name(),
         "gl_renderer": info.renderer,
-        "size": [args.size.x, args.size.y],
-        "fov_x_deg": args.fov,
+        "size": [args.view.size.x, args.view.size.y],
+        "fov_x_deg": args.view.fov,
         "tau_px": run.tau_px,
         "p50_px": run.summary.p50_px,
         "p99_px": run.summary.p99_px,
@@ -115,12 +100,7 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
 }
 
 fn check_args(args: &AccuracyArgs) -> Result<()> {
-    if !(args.tau.is_finite() && args.tau > 0.0) {
-        bail!("--tau {} must be a number of pixels above 0", args.tau);
-    }
-    if !(args.fov.is_finite() && args.fov > 0.0 && args.fov < 179.0) {
-        bail!("--fov {} must be between 0 and 179 degrees", args.fov);
-    }
+    args.view.check()?;
     if args.backend == GlBackend::Window {
         bail!("--backend window: the accuracy tool renders off screen; use egl or osmesa");
     }
@@ -139,24 +119,12 @@ fn mean(run: &AccuracyRun, f: impl Fn(&ridgeline::accuracy::ViewRow) -> f64) -> 
 fn write_outputs(args: &AccuracyArgs, run: &AccuracyRun, report: &serde_json::Value) -> Result<()> {
     let out = &args.out;
     std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create the output folder", out.display()))?;
-    write_atomic(&out.join("accuracy.json"), serde_json::to_string_pretty(report)?.as_bytes())?;
+    super::write_beside(&out.join("accuracy.json"), serde_json::to_string_pretty(report)?.as_bytes())?;
     if let Some(worst) = &run.worst {
-        save_png(&worst.heat_map, &out.join("heat_map.png"))?;
-        save_png(&worst.picture, &out.join("picture.png"))?;
+        super::save_png(&worst.heat_map, &out.join("heat_map.png"))?;
+        super::save_png(&worst.picture, &out.join("picture.png"))?;
     }
     Ok(())
-}
-
-fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let partial = path.with_extension("tmp");
-    std::fs::write(&partial, bytes).with_context(|| format!("{}: cannot write", partial.display()))?;
-    std::fs::rename(&partial, path).with_context(|| format!("{}: cannot rename into place", path.display()))
-}
-
-fn save_png(image: &image::RgbaImage, path: &Path) -> Result<()> {
-    let mut bytes = Vec::new();
-    image.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)?;
-    write_atomic(path, &bytes)
 }
 
 fn print_tables(run: &AccuracyRun) -> Result<()> {

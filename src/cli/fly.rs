@@ -8,7 +8,6 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
-use glam::UVec2;
 use ridgeline::dataset;
 use ridgeline::display::{Display, DisplayConfig, FrameStats};
 use ridgeline::flight::FlightPath;
@@ -21,25 +20,11 @@ use super::progress::Bar;
 
 #[derive(clap::Args)]
 pub struct FlyArgs {
-    /// Terrain: a cache name under cache/, or a path to a pyramid; the
-    /// built-in SRTM tile when omitted.
-    #[arg(long)]
-    pub dataset: Option<String>,
-    /// Camera path CSV: t,x,y,alt,heading,pitch,roll (or lat,lon for x,y).
-    #[arg(long)]
-    pub path: Option<PathBuf>,
+    #[command(flatten)]
+    pub view: super::ViewArgs,
     /// Headless: frames at evenly spaced times along the path.
     #[arg(long, default_value_t = 120)]
     pub frames: u32,
-    /// Image or window size, WIDTHxHEIGHT.
-    #[arg(long, default_value = "1280x720", value_parser = super::parse_size)]
-    pub size: UVec2,
-    /// Screen-space error bound in pixels.
-    #[arg(long, default_value_t = 1.0)]
-    pub tau: f64,
-    /// Horizontal field of view in degrees.
-    #[arg(long, default_value_t = 60.0)]
-    pub fov: f64,
     #[arg(long, value_enum, default_value_t = GlBackend::Auto)]
     pub backend: GlBackend,
     /// Ask for an OpenGL ES 2.0 context (the low-end path).
@@ -65,29 +50,24 @@ pub struct FlyArgs {
 }
 
 pub fn run(args: &FlyArgs) -> Result<()> {
-    if !(args.tau.is_finite() && args.tau > 0.0) {
-        bail!("--tau {} must be a number of pixels above 0", args.tau);
-    }
-    if !(args.fov.is_finite() && args.fov > 0.0 && args.fov < 179.0) {
-        bail!("--fov {} must be between 0 and 179 degrees", args.fov);
-    }
+    args.view.check()?;
     if !(args.warning_above.is_finite() && args.caution_below.is_finite() && args.caution_below >= 0.0) {
         bail!("--warning-above and --caution-below must be finite metres, the caution band not negative");
     }
     let bar = Bar::new();
-    let pyramid = dataset::open(args.dataset.as_deref(), Path::new("cache"), &bar)?;
+    let pyramid = dataset::open(args.view.dataset.as_deref(), Path::new("cache"), &bar)?;
     bar.finish();
-    let path = super::flight_path(args.path.as_deref(), &pyramid)?;
+    let path = super::flight_path(args.view.path.as_deref(), &pyramid)?;
     let summary = TerrainSummary::from_pyramid(pyramid.info());
     let dataset_name = pyramid.path().display().to_string();
     let source: Arc<dyn NodeSource> = Arc::new(pyramid);
-    let mut config = DisplayConfig::new(args.backend, args.size);
+    let mut config = DisplayConfig::new(args.backend, args.view.size);
     config.version = if args.es2 { GlesVersion::Es2 } else { GlesVersion::Es3 };
-    config.scene.lod.tau_px = args.tau;
+    config.scene.lod.tau_px = args.view.tau;
     config.scene.warning_above_m = args.warning_above;
     config.scene.caution_below_m = args.caution_below;
     config.scene.curvature = !args.flat_earth;
-    config.fov_x_deg = args.fov;
+    config.fov_x_deg = args.view.fov;
     let mut display = Display::new(&config, source, summary).context("opening the display")?;
     let info = display.info().clone();
     println!("ridgeline fly: {} on {} ({}), {}", dataset_name, info.backend.name(), info.version, info.renderer);
@@ -121,19 +101,19 @@ fn fly_headless(args: &FlyArgs, display: &mut Display, path: &FlightPath) -> Res
     let frames = args.frames.max(1);
     // Start-up: page in the terrain around the first pose, as a display would
     // before it is shown, so the first frame is not drawn from the root alone.
-    let first = path.sample(path.start_time()).camera(args.fov, [args.size.x, args.size.y]);
+    let first = path.sample(path.start_time()).camera(args.view.fov, [args.view.size.x, args.view.size.y]);
     display.settle(&first, 10_000)?;
     let every = (frames / args.snapshots.max(1)).max(1);
     let mut rows = Vec::with_capacity(frames as usize);
     for (k, t) in path.frame_times(frames).enumerate() {
         let k = k as u32;
-        let camera = path.sample(t).camera(args.fov, [args.size.x, args.size.y]);
+        let camera = path.sample(t).camera(args.view.fov, [args.view.size.x, args.view.size.y]);
         let stats = display.frame(&camera).with_context(|| format!("frame {k} at t = {t:.2} s"))?;
         let last = k + 1 == frames;
         if k % every == 0 || last {
             let image = display.read_pixels()?;
             let name = if last { "last.png".to_string() } else { format!("frame_{k:05}.png") };
-            save_png(&image, &args.out.join(name))?;
+            super::save_png(&image, &args.out.join(name))?;
         }
         rows.push(Row { frame: k, t, stats });
     }
@@ -150,7 +130,7 @@ fn fly_window(args: &FlyArgs, display: &mut Display, path: &FlightPath) -> Resul
             break;
         }
         let t = path.start_time() + elapsed;
-        let camera = path.sample(t).camera(args.fov, [args.size.x, args.size.y]);
+        let camera = path.sample(t).camera(args.view.fov, [args.view.size.x, args.view.size.y]);
         let stats = display.frame(&camera)?;
         display.present()?;
         rows.push(Row { frame: rows.len() as u32, t, stats });
@@ -159,14 +139,6 @@ fn fly_window(args: &FlyArgs, display: &mut Display, path: &FlightPath) -> Resul
         }
     }
     Ok(rows)
-}
-
-/// Writes the image beside its final name and renames it into place.
-fn save_png(image: &image::RgbaImage, path: &Path) -> Result<()> {
-    let partial = path.with_extension("png.tmp");
-    image.save_with_format(&partial, image::ImageFormat::Png).with_context(|| format!("{}: cannot write", partial.display()))?;
-    std::fs::rename(&partial, path).with_context(|| format!("{}: cannot rename into place", path.display()))?;
-    Ok(())
 }
 
 fn write_stats(args: &FlyArgs, info: &ridgeline::gl::GlInfo, dataset: &str, rows: &[Row]) -> Result<()> {
@@ -206,15 +178,13 @@ fn write_stats(args: &FlyArgs, info: &ridgeline::gl::GlInfo, dataset: &str, rows
         "shading_language_version": info.shading_language_version,
         "requested": if info.requested == GlesVersion::Es2 { "es2" } else { "es3" },
         "dataset": dataset,
-        "size": [args.size.x, args.size.y],
-        "tau_px": args.tau,
-        "fov_x_deg": args.fov,
+        "size": [args.view.size.x, args.view.size.y],
+        "tau_px": args.view.tau,
+        "fov_x_deg": args.view.fov,
         "frames": frames,
     });
     let path = args.out.join("stats.json");
-    let partial = args.out.join("stats.json.tmp");
-    std::fs::write(&partial, serde_json::to_string_pretty(&report)?).with_context(|| format!("{}: cannot write", partial.display()))?;
-    std::fs::rename(&partial, &path).with_context(|| format!("{}: cannot rename into place", path.display()))?;
+    super::write_beside(&path, serde_json::to_string_pretty(&report)?.as_bytes())?;
     println!("wrote {} and {} images", path.display(), rows.len().min(args.snapshots as usize + 1));
     Ok(())
 }

@@ -27,6 +27,60 @@ pub fn print(text: &str) -> anyhow::Result<()> {
     }
 }
 
+/// What `fly` and `accuracy` both take: the terrain, the camera path and
+/// how the view is drawn.
+#[derive(clap::Args)]
+pub struct ViewArgs {
+    /// Terrain: a cache name under cache/, or a path to a pyramid; the
+    /// built-in SRTM tile when omitted.
+    #[arg(long)]
+    pub dataset: Option<String>,
+    /// Camera path CSV: t,x,y,alt,heading,pitch,roll (or lat,lon for x,y);
+    /// the built-in approach when omitted.
+    #[arg(long)]
+    pub path: Option<std::path::PathBuf>,
+    /// Image or window size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+    pub size: UVec2,
+    /// Screen-space error bound in pixels.
+    #[arg(long, default_value_t = 1.0)]
+    pub tau: f64,
+    /// Horizontal field of view in degrees.
+    #[arg(long, default_value_t = 60.0)]
+    pub fov: f64,
+}
+
+impl ViewArgs {
+    /// Refuses a tau or field of view no view can be drawn with.
+    fn check(&self) -> Result<()> {
+        if !(self.tau.is_finite() && self.tau > 0.0) {
+            anyhow::bail!("--tau {} must be a number of pixels above 0", self.tau);
+        }
+        if !(self.fov.is_finite() && self.fov > 0.0 && self.fov < 179.0) {
+            anyhow::bail!("--fov {} must be between 0 and 179 degrees", self.fov);
+        }
+        Ok(())
+    }
+}
+
+/// Writes `bytes` beside `path` and renames them into place, so a reader
+/// never sees half a file.
+fn write_beside(path: &Path, bytes: &[u8]) -> Result<()> {
+    use anyhow::Context as _;
+    let mut partial = path.as_os_str().to_owned();
+    partial.push(".tmp");
+    let partial = std::path::PathBuf::from(partial);
+    std::fs::write(&partial, bytes).with_context(|| format!("{}: cannot write", partial.display()))?;
+    std::fs::rename(&partial, path).with_context(|| format!("{}: cannot rename into place", path.display()))
+}
+
+/// Writes `image` as a PNG at `path`, beside and renamed.
+fn save_png(image: &image::RgbaImage, path: &Path) -> Result<()> {
+    let mut bytes = Vec::new();
+    image.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)?;
+    write_beside(path, &bytes)
+}
+
 /// Parses `--size WIDTHxHEIGHT`.
 fn parse_size(text: &str) -> Result<UVec2, String> {
     let (w, h) = text.split_once(['x', 'X']).ok_or_else(|| format!("size `{text}` is not WIDTHxHEIGHT"))?;
