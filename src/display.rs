@@ -173,13 +173,11 @@ impl Display {
         let (staging, ranges) = self.scene.uploads();
         let list = self.scene.draw_list();
         let base = match baseline {
-            None if self.renderer_stale => {
-                Self::catch_up(&mut self.renderer, staging, &mut self.renderer_stale)?;
-                self.renderer.draw(list)?;
-                None
-            }
             None => {
-                self.renderer.upload(staging, ranges)?;
+                // After baseline frames the whole buffer, else this frame's ranges.
+                if !Self::catch_up(&mut self.renderer, staging, &mut self.renderer_stale)? {
+                    self.renderer.upload(staging, ranges)?;
+                }
                 self.renderer.draw(list)?;
                 None
             }
@@ -246,12 +244,13 @@ impl Display {
     }
 
     /// After baseline frames skipped the renderer's uploads, rewrites its
-    /// whole height buffer from `staging` (once).
-    fn catch_up(renderer: &mut GlRenderer, staging: &[u8], stale: &mut bool) -> Result<(), GlError> {
-        if std::mem::take(stale) {
+    /// whole height buffer from `staging` (once); tells whether it did.
+    fn catch_up(renderer: &mut GlRenderer, staging: &[u8], stale: &mut bool) -> Result<bool, GlError> {
+        let stale = std::mem::take(stale);
+        if stale {
             renderer.upload(staging, &[0..staging.len() as u32])?;
         }
-        Ok(())
+        Ok(stale)
     }
 
     /// Draws `camera`'s view of the ground truth as camera-relative positions
