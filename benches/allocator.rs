@@ -11,7 +11,9 @@ mod support;
 use rand::prelude::*;
 use rand_distr::{Distribution as _, Normal};
 use ridgeline::allocator::worst_case::{self, Moves};
-use ridgeline::allocator::{AllocatorConfig, ContiguousAllocator, GeneratorId, Request, VertexFormat};
+use ridgeline::allocator::{
+    AllocatorConfig, ContiguousAllocator, GeneratorId, Request, VertexFormat,
+};
 use serde_json::{json, Value};
 use std::time::Instant;
 use support::{mean_sd, print_table, BenchArgs, Panel, Series};
@@ -102,7 +104,9 @@ impl Pick {
     fn choose(self, rng: &mut StdRng, out: &mut Vec<u32>) {
         out.clear();
         match self {
-            Pick::Count(k) => out.extend(rand::seq::index::sample(rng, BLOCKS as usize, k as usize).iter().map(|i| i as u32)),
+            Pick::Count(k) => out.extend(
+                rand::seq::index::sample(rng, BLOCKS as usize, k as usize).iter().map(|i| i as u32),
+            ),
             Pick::Chance(p) => out.extend((0..BLOCKS).filter(|_| rng.random_bool(p))),
         }
     }
@@ -156,7 +160,8 @@ fn run(experiment: Experiment, seed: u64) -> Outcome {
         // Expiring held-back blocks is part of the cost of frames in flight.
         let start = Instant::now();
         alloc.begin_frame();
-        let pieces = alloc.allocate(&requests).expect("capacity is 16x the data").dirty_ranges().len();
+        let pieces =
+            alloc.allocate(&requests).expect("capacity is 16x the data").dirty_ranges().len();
         let elapsed = start.elapsed().as_secs_f64();
         done += requests.len() as u64;
         if done <= experiment.warmup_blocks {
@@ -242,7 +247,11 @@ fn table2(scale: &Scale) -> (Vec<Value>, Vec<Value>, Panel) {
         let best = rows
             .iter()
             .filter(|r| r.0.name() == distribution.name())
-            .min_by(|a, b| (a.2.mean.0 - distribution.paper()).abs().total_cmp(&(b.2.mean.0 - distribution.paper()).abs()))
+            .min_by(|a, b| {
+                (a.2.mean.0 - distribution.paper())
+                    .abs()
+                    .total_cmp(&(b.2.mean.0 - distribution.paper()).abs())
+            })
             .expect("rows for every distribution");
         let error = best.2.mean.0 / distribution.paper() - 1.0;
         matches.push(json!({
@@ -259,7 +268,9 @@ fn table2(scale: &Scale) -> (Vec<Value>, Vec<Value>, Panel) {
     }
     let mut json_rows = Vec::new();
     for (distribution, pick, s) in &rows {
-        let matched = matches.iter().any(|m| m["distribution"] == distribution.name() && m["protocol"] == pick.name());
+        let matched = matches
+            .iter()
+            .any(|m| m["distribution"] == distribution.name() && m["protocol"] == pick.name());
         let paper = matched.then(|| distribution.paper());
         table.push(vec![
             distribution.name().to_string(),
@@ -267,7 +278,9 @@ fn table2(scale: &Scale) -> (Vec<Value>, Vec<Value>, Panel) {
             format!("{:.1}", s.blocks_per_step),
             format!("{:.1} ± {:.1}", s.mean.0, s.mean.1),
             format!("{:.1} ± {:.1}", s.peak.0, s.peak.1),
-            paper.map(|p| format!("{p:.2} ({:+.1}%)", (s.mean.0 / p - 1.0) * 100.0)).unwrap_or_default(),
+            paper
+                .map(|p| format!("{p:.2} ({:+.1}%)", (s.mean.0 / p - 1.0) * 100.0))
+                .unwrap_or_default(),
         ]);
         json_rows.push(json!({
             "distribution": distribution.name(),
@@ -317,7 +330,11 @@ fn gaussian_sensitivity(scale: &Scale) -> Vec<Value> {
         };
         let s = summarise(experiment, scale.seeds);
         let error = s.mean.0 / 1866.08 - 1.0;
-        table.push(vec![format!("{sigma}"), format!("{:.1} ± {:.1}", s.mean.0, s.mean.1), format!("{:+.1}%", error * 100.0)]);
+        table.push(vec![
+            format!("{sigma}"),
+            format!("{:.1} ± {:.1}", s.mean.0, s.mean.1),
+            format!("{:+.1}%", error * 100.0),
+        ]);
         rows.push(json!({ "sigma_s": sigma, "protocol": "k=3/step", "mean_workspace_s": s.mean.0, "relative_error_to_paper": error }));
     }
     print_table(

@@ -69,18 +69,34 @@ fn flight(earth: &ProceduralEarth, frames: u32) -> Vec<DVec3> {
             } else {
                 3000.0 - (3000.0 - 150.0) * (progress - 0.75) / 0.25
             };
-            let ground = earth.exact_height(at.x, at.y).expect("the flight stays over the earth") as f64;
+            let ground =
+                earth.exact_height(at.x, at.y).expect("the flight stays over the earth") as f64;
             at.extend(ground + agl)
         })
         .collect()
 }
 
-fn run(name: &'static str, earth: &Arc<ProceduralEarth>, path: &[DVec3], map: bool, loader: LoaderMode, paced: bool) -> Run {
+fn run(
+    name: &'static str,
+    earth: &Arc<ProceduralEarth>,
+    path: &[DVec3],
+    map: bool,
+    loader: LoaderMode,
+    paced: bool,
+) -> Run {
     let config = ClipmapConfig { atlas_slots: SLOTS, budget: BUDGET, loader };
     let mut clipmap = Clipmap::new(earth.clone(), config).expect("clipmap");
     let pfd = clipmap.add_view(PFD, path[0]).expect("pfd view");
-    let map = map.then(|| clipmap.add_view(MAP, path[0] + DVec3::Z * MAP_ABOVE_M).expect("map view"));
-    let mut record = Run { name, update_us: vec![], applied: vec![], missing: vec![], wanted: vec![], height_at_ns: 0.0 };
+    let map =
+        map.then(|| clipmap.add_view(MAP, path[0] + DVec3::Z * MAP_ABOVE_M).expect("map view"));
+    let mut record = Run {
+        name,
+        update_us: vec![],
+        applied: vec![],
+        missing: vec![],
+        wanted: vec![],
+        height_at_ns: 0.0,
+    };
     let pace = Duration::from_secs_f64(1.0 / FPS);
     for &at in path {
         let frame_start = Instant::now();
@@ -143,13 +159,32 @@ fn summarise(run: &Run) -> Summary {
 fn print_table(summaries: &[Summary]) {
     println!(
         "\n{:<34} {:>6} {:>9} {:>9} {:>9} {:>9} {:>10} {:>9} {:>8} {:>8} {:>11}",
-        "clipmap update per frame", "frames", "mean µs", "p50 µs", "p99 µs", "max µs", "loads/fr", "max load", "wanted", "missing", "height_at ns"
+        "clipmap update per frame",
+        "frames",
+        "mean µs",
+        "p50 µs",
+        "p99 µs",
+        "max µs",
+        "loads/fr",
+        "max load",
+        "wanted",
+        "missing",
+        "height_at ns"
     );
     for s in summaries {
         println!(
             "{:<34} {:>6} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>10.2} {:>9} {:>8.0} {:>8.0} {:>11.0}",
-            s.name, s.frames, s.mean_us, s.p50_us, s.p99_us, s.max_us, s.loads_per_frame_mean,
-            s.loads_per_frame_max, s.wanted_mean, s.missing_mean, s.height_at_ns
+            s.name,
+            s.frames,
+            s.mean_us,
+            s.p50_us,
+            s.p99_us,
+            s.max_us,
+            s.loads_per_frame_mean,
+            s.loads_per_frame_max,
+            s.wanted_mean,
+            s.missing_mean,
+            s.height_at_ns
         );
     }
 }
@@ -160,7 +195,8 @@ fn plot(runs: &[Run], path: &Path) -> Result<(), Box<dyn std::error::Error>> {
     let (top, bottom) = root.split_vertically(420);
     let frames = runs[0].update_us.len() as u32;
     let floor = 10.0;
-    let ceiling = runs.iter().flat_map(|r| r.update_us.iter()).copied().fold(floor * 10.0, f64::max) * 1.5;
+    let ceiling =
+        runs.iter().flat_map(|r| r.update_us.iter()).copied().fold(floor * 10.0, f64::max) * 1.5;
     let mut chart = ChartBuilder::on(&top)
         .caption("clipmap update per frame along the flight", ("sans-serif", 20))
         .margin(10)
@@ -171,9 +207,10 @@ fn plot(runs: &[Run], path: &Path) -> Result<(), Box<dyn std::error::Error>> {
     let colours = [BLUE, RED, GREEN, MAGENTA, BLACK];
     for (run, colour) in runs.iter().zip(colours) {
         let points = run.update_us.iter().enumerate().map(|(f, &us)| (f as u32, us.max(floor)));
-        chart.draw_series(LineSeries::new(points, colour))?.label(run.name).legend(move |(x, y)| {
-            PathElement::new(vec![(x, y), (x + 20, y)], colour)
-        });
+        chart
+            .draw_series(LineSeries::new(points, colour))?
+            .label(run.name)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
     }
     chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
     let most = runs.iter().flat_map(|r| r.missing.iter()).copied().max().unwrap_or(1).max(1);

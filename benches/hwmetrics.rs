@@ -43,7 +43,8 @@ const PAPER_OPERATIONS: [(Operation, &str, Option<f64>); 6] = [
     (Operation::ConstantAttribute, "Vertex attrib reconfig (constant)", Some(7.54)),
     (Operation::AttributePointer, "Vertex attrib pointer reconfig", Some(23.38)),
 ];
-const PAPER_UPLOADS: [f64; 11] = [185.78, 152.96, 138.12, 159.77, 167.38, 167.63, 156.29, 155.50, 154.46, 153.44, 150.62];
+const PAPER_UPLOADS: [f64; 11] =
+    [185.78, 152.96, 138.12, 159.77, 167.38, 167.63, 156.29, 155.50, 154.46, 153.44, 150.62];
 const PAPER_SD_MS: f64 = 0.314375;
 
 /// Run length and terrain size from the command line.
@@ -61,7 +62,9 @@ impl Settings {
             args.iter()
                 .position(|a| a == flag)
                 .and_then(|i| args.get(i + 1))
-                .map(|v| v.parse().unwrap_or_else(|_| panic!("{flag} takes a positive whole number")))
+                .map(|v| {
+                    v.parse().unwrap_or_else(|_| panic!("{flag} takes a positive whole number"))
+                })
                 .unwrap_or(default)
                 .max(1)
         };
@@ -93,8 +96,10 @@ impl Suite {
         scene.set_viewport(viewport);
         let mut measure = |operation| measure::pairs(scene, operation, length).expect("GL frame");
         let raster = (viewport[0] > 2).then(|| measure(Operation::TinyViewport));
-        let operations: Vec<Pairs> = PAPER_OPERATIONS.iter().map(|(op, _, _)| measure(*op)).collect();
-        let uploads: Vec<Pairs> = batches.iter().map(|&batch| measure(Operation::TileUpload { batch })).collect();
+        let operations: Vec<Pairs> =
+            PAPER_OPERATIONS.iter().map(|(op, _, _)| measure(*op)).collect();
+        let uploads: Vec<Pairs> =
+            batches.iter().map(|&batch| measure(Operation::TileUpload { batch })).collect();
         let baselines: Vec<f64> = raster
             .iter()
             .chain(&operations)
@@ -106,7 +111,11 @@ impl Suite {
     }
 
     fn significant(&self, cost_ms: f64) -> &'static str {
-        if cost_ms.abs() > self.sd_ms { "yes" } else { "no" }
+        if cost_ms.abs() > self.sd_ms {
+            "yes"
+        } else {
+            "no"
+        }
     }
 
     fn name(&self) -> String {
@@ -145,9 +154,11 @@ impl Suite {
             .iter()
             .zip(&self.uploads)
             .enumerate()
-            .map(|(i, (b, p))| json!({"batch_tiles": b, "cost_ms": ms(p), "in_subdata_ms": p.upload_secs() * 1e3,
+            .map(|(i, (b, p))| {
+                json!({"batch_tiles": b, "cost_ms": ms(p), "in_subdata_ms": p.upload_secs() * 1e3,
                 "paper_ms": PAPER_UPLOADS.get(i), "baseline_blocks_ms": blocks_ms(&p.baseline),
-                "operation_blocks_ms": blocks_ms(&p.measured)}))
+                "operation_blocks_ms": blocks_ms(&p.measured)})
+            })
             .collect();
         json!({"viewport": self.viewport, "baseline_ms": self.baseline_ms, "baseline_sd_ms": self.sd_ms,
             "tiny_viewport_cost_ms": self.raster.as_ref().map(ms), "operations": op_rows, "uploads": upload_rows})
@@ -205,7 +216,11 @@ impl Report {
             .iter()
             .flat_map(|suite| {
                 let cost = pick(suite).cost_secs() * 1e3;
-                [format!("{cost:+.2}"), format!("{:+.2}", cost * 1e3 / per as f64), suite.significant(cost).to_owned()]
+                [
+                    format!("{cost:+.2}"),
+                    format!("{:+.2}", cost * 1e3 / per as f64),
+                    suite.significant(cost).to_owned(),
+                ]
             })
             .collect()
     }
@@ -233,7 +248,10 @@ impl Report {
             .collect();
         let header = self.header(&["operation"], &["paper ms"]);
         print_table(
-            &format!("Per-tile operations on {} tiles: frame time minus paired baseline", self.tiles),
+            &format!(
+                "Per-tile operations on {} tiles: frame time minus paired baseline",
+                self.tiles
+            ),
             &header.iter().map(String::as_str).collect::<Vec<_>>(),
             &rows,
         );
@@ -255,7 +273,10 @@ impl Report {
             .collect();
         let header = self.header(&["batch", "KiB/run"], &["in SubData ms", "paper ms"]);
         print_table(
-            &format!("Tile upload, {} of {} tiles per frame ({TILE_BYTES} B per tile)", self.quarter, self.tiles),
+            &format!(
+                "Tile upload, {} of {} tiles per frame ({TILE_BYTES} B per tile)",
+                self.quarter, self.tiles
+            ),
             &header.iter().map(String::as_str).collect::<Vec<_>>(),
             &rows,
         );
@@ -270,7 +291,8 @@ impl Report {
         // The same rule on the time inside glBufferSubData, whose noise is
         // its own spread between blocks (pooled over the batch sizes).
         let subdata: Vec<f64> = suite.uploads.iter().map(|p| p.upload_secs() * 1e3).collect();
-        let pooled = suite.uploads.iter().map(Pairs::upload_variance).sum::<f64>() / suite.uploads.len() as f64;
+        let pooled = suite.uploads.iter().map(Pairs::upload_variance).sum::<f64>()
+            / suite.uploads.len() as f64;
         let subdata_sd_ms = pooled.sqrt() * 1e3;
         let local_cap = choose_cap(batches, &subdata, subdata_sd_ms);
         println!("same rule on the time inside glBufferSubData (pooled sd {subdata_sd_ms:.3} ms): cap {local_cap} tiles");
@@ -282,7 +304,8 @@ impl Report {
         // runs) and the paper's column decides. Where both matter, runs
         // shorter than either cap lose time on one of the two drivers, and
         // longer ones gain nothing on either.
-        let (fastest, slowest) = subdata.iter().fold((f64::MAX, 0.0f64), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+        let (fastest, slowest) =
+            subdata.iter().fold((f64::MAX, 0.0f64), |(lo, hi), &v| (lo.min(v), hi.max(v)));
         let frame_ms = self.suites[0].baseline_ms;
         let local_matters = slowest - fastest > 0.01 * frame_ms;
         let cap = if local_matters { local_cap.max(paper_cap) } else { paper_cap };
@@ -294,18 +317,24 @@ impl Report {
                 slowest - fastest
             )
         };
-        println!("recommended default transfer cap: {cap} tiles = {} bytes ({why})", cap * TILE_BYTES);
+        println!(
+            "recommended default transfer cap: {cap} tiles = {} bytes ({why})",
+            cap * TILE_BYTES
+        );
         cap
     }
 
     fn write(&self, settings: &Settings, batches: &[u32], cap: u32, elapsed: f64) {
-        let path = support::write_json("hwmetrics", &json!({
-            "quick": settings.quick, "tiles": self.tiles, "grid": GRID, "tile_bytes": TILE_BYTES,
-            "uploads_per_frame": self.quarter, "frames_per_block": settings.length.frames,
-            "pairs": settings.length.pairs, "paper_sd_ms": PAPER_SD_MS,
-            "suites": self.suites.iter().map(|s| s.to_json(batches)).collect::<Vec<_>>(),
-            "transfer_cap_tiles": cap, "transfer_cap_bytes": cap * TILE_BYTES, "seconds": elapsed,
-        }));
+        let path = support::write_json(
+            "hwmetrics",
+            &json!({
+                "quick": settings.quick, "tiles": self.tiles, "grid": GRID, "tile_bytes": TILE_BYTES,
+                "uploads_per_frame": self.quarter, "frames_per_block": settings.length.frames,
+                "pairs": settings.length.pairs, "paper_sd_ms": PAPER_SD_MS,
+                "suites": self.suites.iter().map(|s| s.to_json(batches)).collect::<Vec<_>>(),
+                "transfer_cap_tiles": cap, "transfer_cap_bytes": cap * TILE_BYTES, "seconds": elapsed,
+            }),
+        );
         let points = |values: Vec<f64>| batches.iter().map(|&b| b as f64).zip(values).collect();
         let mut series: Vec<Series> = self
             .suites
@@ -319,15 +348,24 @@ impl Report {
             label: "inside glBufferSubData".to_owned(),
             points: points(self.suites[1].uploads.iter().map(|p| p.upload_secs() * 1e3).collect()),
         });
-        series.push(Series { label: "paper (Tegra 2, 1024 tiles)".to_owned(), points: points(PAPER_UPLOADS.to_vec()) });
-        let svg = support::write_svg("hwmetrics", &[Panel {
-            title: format!("Tile upload cost per frame ({} of {} tiles)", self.quarter, self.tiles),
-            x_label: "batch (tiles per glBufferSubData)".to_owned(),
-            y_label: "ms per frame".to_owned(),
-            log_x: true,
-            log_y: false,
-            series,
-        }]);
+        series.push(Series {
+            label: "paper (Tegra 2, 1024 tiles)".to_owned(),
+            points: points(PAPER_UPLOADS.to_vec()),
+        });
+        let svg = support::write_svg(
+            "hwmetrics",
+            &[Panel {
+                title: format!(
+                    "Tile upload cost per frame ({} of {} tiles)",
+                    self.quarter, self.tiles
+                ),
+                x_label: "batch (tiles per glBufferSubData)".to_owned(),
+                y_label: "ms per frame".to_owned(),
+                log_x: true,
+                log_y: false,
+                series,
+            }],
+        );
         println!("wrote {} and {}", path.display(), svg.display());
     }
 }

@@ -40,15 +40,20 @@ struct Row {
 
 fn main() {
     let quick = BenchArgs::parse().quick;
-    let (sizes, repeats): (&[u32], usize) = if quick { (&[1024, 2048], 2) } else { (&[1024, 2048, 4096, 8192], 3) };
+    let (sizes, repeats): (&[u32], usize) =
+        if quick { (&[1024, 2048], 2) } else { (&[1024, 2048, 4096, 8192], 3) };
     let scratch = support::out_dir().join("import-scratch");
     std::fs::create_dir_all(&scratch).expect("create the scratch directory");
     let threads = rayon::current_num_threads();
     let rows: Vec<Row> = sizes.iter().map(|&size| measure(size, repeats, &scratch)).collect();
     std::fs::remove_dir_all(&scratch).ok();
-    let title = format!("import, {threads} threads, best of {repeats} interleaved repeats{}", if quick { " (quick)" } else { "" });
+    let title = format!(
+        "import, {threads} threads, best of {repeats} interleaved repeats{}",
+        if quick { " (quick)" } else { "" }
+    );
     print_rows(&title, &rows);
-    let report = serde_json::json!({ "bench": "import", "quick": quick, "threads": threads, "rows": rows });
+    let report =
+        serde_json::json!({ "bench": "import", "quick": quick, "threads": threads, "rows": rows });
     let json = support::write_json("import", &report);
     let svg = support::write_svg("import", &panels(&rows));
     println!("\nwrote {} and {}", json.display(), svg.display());
@@ -58,7 +63,8 @@ fn measure(size: u32, repeats: usize, scratch: &Path) -> Row {
     let grid = pyramid::synthetic_grid(size).expect("bench sizes are valid");
     let input_bytes = grid.heights.len() * 4;
     let raw_path = scratch.join(format!("raw-{size}.f32"));
-    std::fs::write(&raw_path, bytemuck::cast_slice::<f32, u8>(&grid.heights)).expect("write raw input");
+    std::fs::write(&raw_path, bytemuck::cast_slice::<f32, u8>(&grid.heights))
+        .expect("write raw input");
     let cache = scratch.join(format!("cache-{size}"));
     std::fs::create_dir_all(&cache).expect("cache dir");
     let path: PathBuf = cache.join(pyramid::FILE_NAME);
@@ -73,7 +79,9 @@ fn measure(size: u32, repeats: usize, scratch: &Path) -> Row {
             let mut file = std::fs::File::open(&raw_path).expect("open raw");
             file.read_exact(&mut raw).expect("read raw");
         });
-        let (build, built) = timed_value(|| pyramid::build(&grid, &BuildOptions::default(), &Silent).expect("build"));
+        let (build, built) = timed_value(|| {
+            pyramid::build(&grid, &BuildOptions::default(), &Silent).expect("build")
+        });
         let write = timed(|| pyramid::write_atomic(&built, &path, &Silent).expect("write"));
         let open = timed(|| drop(Pyramid::open(&path).expect("open")));
         for (best, now) in times.iter_mut().zip([raw_read, build, write, open]) {
@@ -117,16 +125,30 @@ fn timed_value<T>(f: impl FnOnce() -> T) -> (Duration, T) {
 
 fn print_rows(title: &str, rows: &[Row]) {
     let header = [
-        "size", "input MB", "pyramid MB", "raw MB/s", "build MB/s", "write MB/s", "open MB/s", "build/raw",
-        "write/raw", "import/raw", "open/raw",
+        "size",
+        "input MB",
+        "pyramid MB",
+        "raw MB/s",
+        "build MB/s",
+        "write MB/s",
+        "open MB/s",
+        "build/raw",
+        "write/raw",
+        "import/raw",
+        "open/raw",
     ];
     let cells: Vec<Vec<String>> = rows
         .iter()
         .map(|r| {
-            let mut cells = vec![r.size.to_string(), format!("{:.1}", r.input_mb), format!("{:.1}", r.pyramid_mb)];
+            let mut cells = vec![
+                r.size.to_string(),
+                format!("{:.1}", r.input_mb),
+                format!("{:.1}", r.pyramid_mb),
+            ];
             let speeds = [r.raw_read_mb_s, r.build_mb_s, r.write_mb_s, r.open_verify_mb_s];
             cells.extend(speeds.iter().map(|v| format!("{v:.0}")));
-            let ratios = [r.build_over_raw, r.write_over_raw, r.import_over_raw, r.open_verify_over_raw];
+            let ratios =
+                [r.build_over_raw, r.write_over_raw, r.import_over_raw, r.open_verify_over_raw];
             cells.extend(ratios.iter().map(|v| format!("{v:.1}")));
             cells
         })

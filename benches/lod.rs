@@ -30,7 +30,9 @@ use ridgeline::clipmap::LoaderMode;
 use ridgeline::dataset;
 use ridgeline::display::{Display, DisplayConfig, FrameStats};
 use ridgeline::flight::{builtin_approach, FlightPath};
-use ridgeline::gl::{BaselineFrameStats, ChunkedBaseline, GlBackend, TruthMesh, TruthPass, TruthRegion};
+use ridgeline::gl::{
+    BaselineFrameStats, ChunkedBaseline, GlBackend, TruthMesh, TruthPass, TruthRegion,
+};
 use ridgeline::lod::LodConfig;
 use ridgeline::node::NodeSource;
 use ridgeline::pyramid::{Pyramid, Silent};
@@ -63,10 +65,20 @@ struct LodConfigRow {
 }
 
 impl Point {
-    fn new(name: &'static str, tau_px: f64, alter: impl Fn(&mut LodConfig), baseline: bool) -> Point {
+    fn new(
+        name: &'static str,
+        tau_px: f64,
+        alter: impl Fn(&mut LodConfig),
+        baseline: bool,
+    ) -> Point {
         let mut lod = LodConfig { tau_px, ..LodConfig::default() };
         alter(&mut lod);
-        let row = LodConfigRow { tau_px, grid_size: lod.grid_size, morph_range: lod.morph_range, view_distance: lod.view_distance };
+        let row = LodConfigRow {
+            tau_px,
+            grid_size: lod.grid_size,
+            morph_range: lod.morph_range,
+            view_distance: lod.view_distance,
+        };
         Point { name, lod: row, baseline }
     }
 
@@ -80,8 +92,10 @@ impl Point {
 
 fn points() -> Vec<Point> {
     let keep = |_: &mut LodConfig| {};
-    let mut points: Vec<Point> =
-        [0.5, 1.0, 2.0, 4.0, 8.0].into_iter().map(|tau| Point::new("tau sweep", tau, keep, true)).collect();
+    let mut points: Vec<Point> = [0.5, 1.0, 2.0, 4.0, 8.0]
+        .into_iter()
+        .map(|tau| Point::new("tau sweep", tau, keep, true))
+        .collect();
     // Beyond the sweep: how low the frame time goes as triangles vanish (the fill floor).
     for tau in [16.0, 64.0] {
         points.push(Point::new("coarse", tau, keep, false));
@@ -119,7 +133,12 @@ impl FlightRow {
             draw_calls: mean(&|s| s.draw_calls as f64),
             bytes_uploaded: mean(&|s| s.scene.bytes_uploaded as f64),
             transfers: mean(&|s| s.scene.transfers as f64),
-            cpu_ms: mean(&|s| s.clipmap_ms + s.scene.cpu_ms.select_ms + s.scene.cpu_ms.tiles_ms + s.scene.cpu_ms.draw_list_ms),
+            cpu_ms: mean(&|s| {
+                s.clipmap_ms
+                    + s.scene.cpu_ms.select_ms
+                    + s.scene.cpu_ms.tiles_ms
+                    + s.scene.cpu_ms.draw_list_ms
+            }),
             frame_ms: mean(&|s| s.frame_ms),
         }
     }
@@ -153,19 +172,30 @@ struct PointResult {
 fn main() {
     let args = BenchArgs::parse();
     let (view_count, flight_frames) = if args.quick { (4, 20) } else { (16, 60) };
-    let pyramid = Arc::new(dataset::open(None, Path::new("cache"), &Silent).expect("the built-in terrain"));
+    let pyramid =
+        Arc::new(dataset::open(None, Path::new("cache"), &Silent).expect("the built-in terrain"));
     let layout = *pyramid.layout();
-    let path = builtin_approach(layout.extent_m(), &|x, y| pyramid.exact_height(x, y).unwrap_or(0.0));
-    let views: Vec<(f64, Camera)> = path.frame_times(view_count).map(|t| (t, camera_at(&path, t))).collect();
+    let path =
+        builtin_approach(layout.extent_m(), &|x, y| pyramid.exact_height(x, y).unwrap_or(0.0));
+    let views: Vec<(f64, Camera)> =
+        path.frame_times(view_count).map(|t| (t, camera_at(&path, t))).collect();
     let source: Arc<dyn NodeSource> = pyramid.clone();
-    let mesh = TruthMesh::load(source.as_ref(), TruthRegion::covering_tiles(&layout, LodConfig::default().grid_size))
-        .expect("truth mesh");
+    let mesh = TruthMesh::load(
+        source.as_ref(),
+        TruthRegion::covering_tiles(&layout, LodConfig::default().grid_size),
+    )
+    .expect("truth mesh");
     let mut results = Vec::new();
     for point in points() {
         let result = measure_point(&point, &pyramid, &mesh, &path, &views, flight_frames);
         println!(
             "  {:<16} tau {:>3}: p99.9 {:.3} px, {:.0} triangles, {:.1} ms (truth {:.1} ms)",
-            point.name, point.lod.tau_px, result.p999_px, result.triangles_lod, result.lod_frame_ms, result.truth_frame_ms
+            point.name,
+            point.lod.tau_px,
+            result.p999_px,
+            result.triangles_lod,
+            result.lod_frame_ms,
+            result.truth_frame_ms
         );
         results.push(result);
     }
@@ -183,7 +213,8 @@ fn display_for(point: &Point, pyramid: &Arc<Pyramid>) -> Display {
     config.loader = LoaderMode::Inline;
     config.load_budget = 64;
     let source: Arc<dyn NodeSource> = pyramid.clone();
-    Display::new(&config, source, TerrainSummary::from_pyramid(pyramid.info())).expect("headless EGL display")
+    Display::new(&config, source, TerrainSummary::from_pyramid(pyramid.info()))
+        .expect("headless EGL display")
 }
 
 fn measure_point(
@@ -197,14 +228,16 @@ fn measure_point(
     let mut display = display_for(point, pyramid);
     let truth = TruthPass::new(display.context().gl(), mesh).expect("truth pass");
     let exact = |x: f64, y: f64| pyramid.exact_height(x, y);
-    let run = measure_flight(&mut display, &truth, &exact, pyramid.layout().spacing_m, views).expect("accuracy views");
+    let run = measure_flight(&mut display, &truth, &exact, pyramid.layout().spacing_m, views)
+        .expect("accuracy views");
     let (flight, _) = fly(&mut display, None, path, flight_frames);
     let sky_only_ms = sky_only(&mut display, &views[0].1);
     drop(truth);
     drop(display);
     let (chunked, chunked_uploads_per_frame) = if point.baseline {
         let mut display = display_for(point, pyramid);
-        let mut baseline = ChunkedBaseline::new(display.context().gl(), point.lod.grid_size).expect("baseline");
+        let mut baseline =
+            ChunkedBaseline::new(display.context().gl(), point.lod.grid_size).expect("baseline");
         let (frames, transfers) = fly(&mut display, Some(&mut baseline), path, flight_frames);
         let n = transfers.len().max(1) as f64;
         let uploads = transfers.iter().map(|t| t.uploads as f64).sum::<f64>() / n;
@@ -217,7 +250,8 @@ fn measure_point(
     } else {
         (None, None)
     };
-    let mut result = summarise(point, &run, FlightRow::of(&flight), chunked, chunked_uploads_per_frame);
+    let mut result =
+        summarise(point, &run, FlightRow::of(&flight), chunked, chunked_uploads_per_frame);
     result.sky_only_ms = sky_only_ms;
     result
 }
@@ -263,9 +297,16 @@ fn fly(
     (stats, transfers)
 }
 
-fn summarise(point: &Point, run: &AccuracyRun, flight: FlightRow, chunked: Option<FlightRow>, uploads: Option<f64>) -> PointResult {
+fn summarise(
+    point: &Point,
+    run: &AccuracyRun,
+    flight: FlightRow,
+    chunked: Option<FlightRow>,
+    uploads: Option<f64>,
+) -> PointResult {
     let n = run.views.len().max(1) as f64;
-    let mean = |f: &dyn Fn(&ridgeline::accuracy::ViewRow) -> f64| run.views.iter().map(f).sum::<f64>() / n;
+    let mean =
+        |f: &dyn Fn(&ridgeline::accuracy::ViewRow) -> f64| run.views.iter().map(f).sum::<f64>() / n;
     PointResult {
         point: *point,
         p99_px: run.summary.p99_px,
@@ -276,7 +317,9 @@ fn summarise(point: &Point, run: &AccuracyRun, flight: FlightRow, chunked: Optio
         triangles_truth: mean(&|v| v.triangles_truth as f64),
         lod_frame_ms: mean(&|v| v.lod_frame_ms),
         truth_frame_ms: mean(&|v| v.truth_frame_ms),
-        truth_over_lod_triangles: mean(&|v| v.triangles_truth as f64 / v.triangles_lod.max(1) as f64),
+        truth_over_lod_triangles: mean(&|v| {
+            v.triangles_truth as f64 / v.triangles_lod.max(1) as f64
+        }),
         truth_over_lod_frame: mean(&|v| v.truth_frame_ms / v.lod_frame_ms),
         flight,
         chunked,
@@ -287,8 +330,22 @@ fn summarise(point: &Point, run: &AccuracyRun, flight: FlightRow, chunked: Optio
 
 fn report(args: &BenchArgs, results: &[PointResult], views: u32) {
     let header = [
-        "point", "tau", "p99 px", "p99.9 px", "triangles", "truth/LOD tri", "truth/LOD ms", "LOD ms", "truth ms",
-        "draws", "KB up/frame", "xfers/frame", "CPU ms", "flight ms", "chunked ms", "chunked up/frame",
+        "point",
+        "tau",
+        "p99 px",
+        "p99.9 px",
+        "triangles",
+        "truth/LOD tri",
+        "truth/LOD ms",
+        "LOD ms",
+        "truth ms",
+        "draws",
+        "KB up/frame",
+        "xfers/frame",
+        "CPU ms",
+        "flight ms",
+        "chunked ms",
+        "chunked up/frame",
     ];
     let rows: Vec<Vec<String>> = results
         .iter()
@@ -314,24 +371,50 @@ fn report(args: &BenchArgs, results: &[PointResult], views: u32) {
             ]
         })
         .collect();
-    print_table(&format!("LOD against measured error: {views} views, 1280x720, built-in approach"), &header, &rows);
+    print_table(
+        &format!("LOD against measured error: {views} views, 1280x720, built-in approach"),
+        &header,
+        &rows,
+    );
     let brute = results.iter().map(|r| r.truth_frame_ms).sum::<f64>() / results.len().max(1) as f64;
-    println!("\n  brute force (every post, {} triangles): {brute:.1} ms per frame, 0 px by definition", results[0].triangles_truth);
+    println!(
+        "\n  brute force (every post, {} triangles): {brute:.1} ms per frame, 0 px by definition",
+        results[0].triangles_truth
+    );
     let floor = results.iter().map(|r| r.sky_only_ms).sum::<f64>() / results.len().max(1) as f64;
     println!("  clear and sky alone (the fill floor): {floor:.1} ms per frame");
-    let json_path = write_json("lod", &json!({ "quick": args.quick, "views": views, "size": [SIZE.x, SIZE.y], "brute_force_frame_ms": brute, "points": results }));
+    let json_path = write_json(
+        "lod",
+        &json!({ "quick": args.quick, "views": views, "size": [SIZE.x, SIZE.y], "brute_force_frame_ms": brute, "points": results }),
+    );
     let sweep: Vec<&PointResult> = results.iter().filter(|r| r.point.baseline).collect();
     let errors = results.iter().map(|r| r.p99_px.max(1e-4));
     let (x_min, x_max) = errors.fold((f64::MAX, 0.0f64), |(lo, hi), e| (lo.min(e), hi.max(e)));
     let series = vec![
-        Series { label: "UDLOD, tau 0.5..8 px".into(), points: sweep.iter().map(|r| (r.p99_px.max(1e-4), r.flight.frame_ms)).collect() },
+        Series {
+            label: "UDLOD, tau 0.5..8 px".into(),
+            points: sweep.iter().map(|r| (r.p99_px.max(1e-4), r.flight.frame_ms)).collect(),
+        },
         Series {
             label: "plain Chunked LOD (same tiles)".into(),
-            points: sweep.iter().filter_map(|r| r.chunked.map(|c| (r.p99_px.max(1e-4), c.frame_ms))).collect(),
+            points: sweep
+                .iter()
+                .filter_map(|r| r.chunked.map(|c| (r.p99_px.max(1e-4), c.frame_ms)))
+                .collect(),
         },
-        Series { label: "tile parameters".into(), points: results.iter().filter(|r| !r.point.baseline).map(|r| (r.p99_px.max(1e-4), r.flight.frame_ms)).collect() },
+        Series {
+            label: "tile parameters".into(),
+            points: results
+                .iter()
+                .filter(|r| !r.point.baseline)
+                .map(|r| (r.p99_px.max(1e-4), r.flight.frame_ms))
+                .collect(),
+        },
         // Its error is 0, off a log axis: drawn as a line across the plot.
-        Series { label: "brute force (0 px), every post".into(), points: vec![(x_min, brute), (x_max, brute)] },
+        Series {
+            label: "brute force (0 px), every post".into(),
+            points: vec![(x_min, brute), (x_max, brute)],
+        },
     ];
     let panel = Panel {
         title: "frame time against measured p99 error".into(),

@@ -73,7 +73,11 @@ impl Spread {
         let mut sorted: Vec<f64> = values.collect();
         sorted.sort_by(f64::total_cmp);
         let pick = |q: f64| sorted[((sorted.len() - 1) as f64 * q).round() as usize];
-        Spread { mean: sorted.iter().sum::<f64>() / sorted.len() as f64, p50: pick(0.5), p95: pick(0.95) }
+        Spread {
+            mean: sorted.iter().sum::<f64>() / sorted.len() as f64,
+            p50: pick(0.5),
+            p95: pick(0.95),
+        }
     }
 }
 
@@ -83,13 +87,15 @@ fn main() {
     let tau_px = tau_arg();
     let pyramid = dataset::open(None, Path::new("cache"), &Silent).expect("the built-in terrain");
     let layout = *pyramid.layout();
-    let path = builtin_approach(layout.extent_m(), &|x, y| pyramid.exact_height(x, y).unwrap_or(0.0));
+    let path =
+        builtin_approach(layout.extent_m(), &|x, y| pyramid.exact_height(x, y).unwrap_or(0.0));
     let summary = TerrainSummary::from_pyramid(pyramid.info());
     let source: Arc<dyn NodeSource> = Arc::new(pyramid);
     let mut config = DisplayConfig::new(GlBackend::Egl, SIZE);
     config.scene.lod.tau_px = tau_px;
     config.fov_x_deg = FOV_X_DEG;
-    let mut display = Display::new(&config, Arc::clone(&source), summary).expect("headless EGL display");
+    let mut display =
+        Display::new(&config, Arc::clone(&source), summary).expect("headless EGL display");
     let info = display.info().clone();
     let started = Instant::now();
     let mesh = TruthMesh::load(source.as_ref(), TruthRegion::whole(&layout)).expect("truth mesh");
@@ -101,7 +107,8 @@ fn main() {
         mesh.region.posts[0], mesh.region.posts[1], mesh.chunks.len()
     );
     let grid = config.scene.lod.grid_size as u64;
-    let views = draw_views(&mut display, &truth, &path, source.as_ref(), view_count, 2 * grid * grid);
+    let views =
+        draw_views(&mut display, &truth, &path, source.as_ref(), view_count, 2 * grid * grid);
     let live = fly_at_display_rate(&mut display, &path, live_frames);
     report(&args, tau_px, &info, &mesh, truth_build_ms, &views, &live);
 }
@@ -159,7 +166,8 @@ fn draw_views(
         for tile in &display.scene().draw_list().tiles {
             lod_tiles_per_level[tile.key.level as usize] += 1;
         }
-        let ground = source.exact_height(camera.position.x, camera.position.y).unwrap_or(0.0) as f64;
+        let ground =
+            source.exact_height(camera.position.x, camera.position.y).unwrap_or(0.0) as f64;
         rows.push(ViewRow {
             t,
             above_ground_m: camera.position.z - ground,
@@ -175,9 +183,11 @@ fn draw_views(
 }
 
 fn differing_share(a: &RgbaImage, b: &RgbaImage) -> f64 {
-    let differs =
-        |p: &image::Rgba<u8>, q: &image::Rgba<u8>| p.0.iter().zip(q.0).any(|(x, y)| x.abs_diff(y) > PIXEL_TOLERANCE);
-    a.pixels().zip(b.pixels()).filter(|(p, q)| differs(p, q)).count() as f64 / a.pixels().len() as f64
+    let differs = |p: &image::Rgba<u8>, q: &image::Rgba<u8>| {
+        p.0.iter().zip(q.0).any(|(x, y)| x.abs_diff(y) > PIXEL_TOLERANCE)
+    };
+    a.pixels().zip(b.pixels()).filter(|(p, q)| differs(p, q)).count() as f64
+        / a.pixels().len() as f64
 }
 
 /// Consecutive frames 1/60 s apart from the middle of the approach, LOD
@@ -222,13 +232,18 @@ impl Summary {
             lod_triangles: spread(&|v| v.lod.scene.triangles as f64),
             lod_surface_triangles: spread(&|v| v.lod_surface_triangles as f64),
             truth_triangles: spread(&|v| v.truth.triangles as f64),
-            truth_over_lod_triangles: spread(&|v| v.truth.triangles as f64 / v.lod.scene.triangles as f64),
+            truth_over_lod_triangles: spread(&|v| {
+                v.truth.triangles as f64 / v.lod.scene.triangles as f64
+            }),
             lod_draw_calls: spread(&|v| v.lod.draw_calls as f64),
             truth_draw_calls: spread(&|v| v.truth.draw_calls as f64),
             differing_pixels_percent: spread(&|v| v.differing_pixels * 100.0),
             settle_ms: spread(&|v| v.settle_ms),
             lod_tiles_per_level_mean: (0..levels)
-                .map(|l| views.iter().map(|v| v.lod_tiles_per_level[l] as f64).sum::<f64>() / views.len() as f64)
+                .map(|l| {
+                    views.iter().map(|v| v.lod_tiles_per_level[l] as f64).sum::<f64>()
+                        / views.len() as f64
+                })
                 .collect(),
         }
     }
@@ -251,15 +266,23 @@ impl Summary {
         let cells: Vec<Vec<String>> = rows
             .iter()
             .map(|(name, s, digits)| {
-                let values = [s.mean, s.p50, s.p95].map(|v| format!("{v:.digits$}", digits = *digits));
+                let values =
+                    [s.mean, s.p50, s.p95].map(|v| format!("{v:.digits$}", digits = *digits));
                 std::iter::once(name.to_string()).chain(values).collect()
             })
             .collect();
         print_table(title, &["", "mean", "p50", "p95"], &cells);
-        let levels: Vec<String> =
-            self.lod_tiles_per_level_mean.iter().enumerate().map(|(l, n)| format!("L{l} {n:.0}")).collect();
+        let levels: Vec<String> = self
+            .lod_tiles_per_level_mean
+            .iter()
+            .enumerate()
+            .map(|(l, n)| format!("L{l} {n:.0}"))
+            .collect();
         println!("\n  LOD tiles per level at the views (mean): {}", levels.join(", "));
-        println!("  paging before each view (settle, not in the frames): mean {:.1} ms", self.settle_ms.mean);
+        println!(
+            "  paging before each view (settle, not in the frames): mean {:.1} ms",
+            self.settle_ms.mean
+        );
     }
 }
 
@@ -277,7 +300,8 @@ fn print_cpu_table(views: &[ViewRow], live: &[FrameStats]) {
         .map(|(name, f)| {
             let at_views = Spread::of(views.iter().map(|v| f(&v.lod)));
             let at_rate = Spread::of(live.iter().map(f));
-            let cells = [at_views.mean, at_views.p95, at_rate.mean, at_rate.p95].map(|v| format!("{v:.2}"));
+            let cells =
+                [at_views.mean, at_views.p95, at_rate.mean, at_rate.p95].map(|v| format!("{v:.2}"));
             std::iter::once(name.to_string()).chain(cells).collect()
         })
         .collect();
@@ -309,24 +333,27 @@ fn report(
          triangles {:.2}",
         summary.truth_over_lod_frame.p50, summary.truth_over_lod_gl.p50, summary.truth_over_lod_triangles.p50
     );
-    let json_path = write_json("render", &json!({
-        "quick": args.quick,
-        "tau_px": tau_px,
-        "size": [SIZE.x, SIZE.y],
-        "fov_x_deg": FOV_X_DEG,
-        "gl_renderer": info.renderer,
-        "gl_version": info.version,
-        "backend": info.backend.name(),
-        "truth": {
-            "region_posts": mesh.region.posts,
-            "chunks": mesh.chunks.len(),
-            "triangles": mesh.triangles(),
-            "build_ms": truth_build_ms,
-        },
-        "summary": summary,
-        "views": views,
-        "display_rate": { "hz": DISPLAY_RATE_HZ, "frames": live },
-    }));
+    let json_path = write_json(
+        "render",
+        &json!({
+            "quick": args.quick,
+            "tau_px": tau_px,
+            "size": [SIZE.x, SIZE.y],
+            "fov_x_deg": FOV_X_DEG,
+            "gl_renderer": info.renderer,
+            "gl_version": info.version,
+            "backend": info.backend.name(),
+            "truth": {
+                "region_posts": mesh.region.posts,
+                "chunks": mesh.chunks.len(),
+                "triangles": mesh.triangles(),
+                "build_ms": truth_build_ms,
+            },
+            "summary": summary,
+            "views": views,
+            "display_rate": { "hz": DISPLAY_RATE_HZ, "frames": live },
+        }),
+    );
     let svg_path = plot(views, live);
     println!("\nwrote {} and {}", json_path.display(), svg_path.display());
 }
@@ -340,41 +367,44 @@ fn plot(views: &[ViewRow], live: &[FrameStats]) -> std::path::PathBuf {
         label: label.to_owned(),
         points: live.iter().enumerate().map(|(k, s)| (k as f64, f(s))).collect(),
     };
-    write_svg("render", &[
-        Panel {
-            title: "frame time along the approach".to_owned(),
-            x_label: "t (s)".to_owned(),
-            y_label: "ms to glFinish".to_owned(),
-            log_x: false,
-            log_y: false,
-            series: vec![
-                along("LOD frame", &|v| v.lod.frame_ms),
-                along("LOD GPU-side", &|v| v.lod.gl_ms),
-                along("truth frame", &|v| v.truth.frame_ms),
-            ],
-        },
-        Panel {
-            title: "triangles along the approach".to_owned(),
-            x_label: "t (s)".to_owned(),
-            y_label: "triangles".to_owned(),
-            log_x: false,
-            log_y: true,
-            series: vec![
-                along("LOD (with skirts)", &|v| v.lod.scene.triangles as f64),
-                along("truth", &|v| v.truth.triangles as f64),
-            ],
-        },
-        Panel {
-            title: format!("CPU per frame at {DISPLAY_RATE_HZ} Hz"),
-            x_label: "frame".to_owned(),
-            y_label: "ms".to_owned(),
-            log_x: false,
-            log_y: false,
-            series: vec![
-                live_series("clipmap update", |s| s.clipmap_ms),
-                live_series("tile selection", |s| s.scene.cpu_ms.select_ms),
-                live_series("tile generation", |s| s.scene.cpu_ms.tiles_ms),
-            ],
-        },
-    ])
+    write_svg(
+        "render",
+        &[
+            Panel {
+                title: "frame time along the approach".to_owned(),
+                x_label: "t (s)".to_owned(),
+                y_label: "ms to glFinish".to_owned(),
+                log_x: false,
+                log_y: false,
+                series: vec![
+                    along("LOD frame", &|v| v.lod.frame_ms),
+                    along("LOD GPU-side", &|v| v.lod.gl_ms),
+                    along("truth frame", &|v| v.truth.frame_ms),
+                ],
+            },
+            Panel {
+                title: "triangles along the approach".to_owned(),
+                x_label: "t (s)".to_owned(),
+                y_label: "triangles".to_owned(),
+                log_x: false,
+                log_y: true,
+                series: vec![
+                    along("LOD (with skirts)", &|v| v.lod.scene.triangles as f64),
+                    along("truth", &|v| v.truth.triangles as f64),
+                ],
+            },
+            Panel {
+                title: format!("CPU per frame at {DISPLAY_RATE_HZ} Hz"),
+                x_label: "frame".to_owned(),
+                y_label: "ms".to_owned(),
+                log_x: false,
+                log_y: false,
+                series: vec![
+                    live_series("clipmap update", |s| s.clipmap_ms),
+                    live_series("tile selection", |s| s.scene.cpu_ms.select_ms),
+                    live_series("tile generation", |s| s.scene.cpu_ms.tiles_ms),
+                ],
+            },
+        ],
+    )
 }

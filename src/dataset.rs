@@ -29,7 +29,11 @@ pub enum DatasetError {
 
 /// Opens the dataset `name` (a cache name under `cache_root`, or a path to a
 /// cache directory or pyramid file); `None` is the built-in default.
-pub fn open(name: Option<&str>, cache_root: &Path, progress: &dyn Progress) -> Result<Pyramid, DatasetError> {
+pub fn open(
+    name: Option<&str>,
+    cache_root: &Path,
+    progress: &dyn Progress,
+) -> Result<Pyramid, DatasetError> {
     let Some(name) = name else {
         return open_default(cache_root, progress);
     };

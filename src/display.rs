@@ -4,10 +4,12 @@
 
 use crate::accuracy::PositionImage;
 use crate::camera::Camera;
-use crate::clipmap::{Clipmap, ClipmapConfig, ClipmapError, LoaderMode, UpdateStats, ViewConfig, ViewId};
+use crate::clipmap::{
+    Clipmap, ClipmapConfig, ClipmapError, LoaderMode, UpdateStats, ViewConfig, ViewId,
+};
 use crate::gl::{
-    BaselineFrameStats, ChunkedBaseline, ContextRequest, GlBackend, GlContext, GlError, GlInfo, GlRenderer, GlesVersion, OffscreenTarget, TerrainOutput,
-    TruthFrameStats, TruthPass,
+    BaselineFrameStats, ChunkedBaseline, ContextRequest, GlBackend, GlContext, GlError, GlInfo,
+    GlRenderer, GlesVersion, OffscreenTarget, TerrainOutput, TruthFrameStats, TruthPass,
 };
 use crate::lod::ranges::RingInputs;
 use crate::lod::LevelRanges;
@@ -94,21 +96,36 @@ pub struct Display {
 impl Display {
     /// Opens the context and builds the clipmap over `source` (whose per-level
     /// error and height range `summary` gives).
-    pub fn new(config: &DisplayConfig, source: Arc<dyn NodeSource>, summary: TerrainSummary) -> Result<Display, DisplayError> {
+    pub fn new(
+        config: &DisplayConfig,
+        source: Arc<dyn NodeSource>,
+        summary: TerrainSummary,
+    ) -> Result<Display, DisplayError> {
         let mut request = ContextRequest::new(config.backend, config.version, config.size);
         request.title = "Ridgeline".to_owned();
         let context = GlContext::new(&request)?;
         let layout = *source.layout();
         let view_config = view_config(config, &summary, &layout);
         let slots = atlas_slots(&view_config, layout.levels);
-        let clipmap_config = ClipmapConfig { atlas_slots: slots, budget: config.load_budget, loader: config.loader };
+        let clipmap_config =
+            ClipmapConfig { atlas_slots: slots, budget: config.load_budget, loader: config.loader };
         let mut clipmap = Clipmap::new(source, clipmap_config)?;
         let view = clipmap.add_view(view_config, DVec3::ZERO)?;
         let terrain = ClipmapTerrain { clipmap: &clipmap, summary: &summary };
         let scene = Scene::new(config.scene, &terrain)?;
-        let mut renderer = GlRenderer::new(context.gl(), config.scene.lod.grid_size, config.scene.buffer_bytes)?;
+        let mut renderer =
+            GlRenderer::new(context.gl(), config.scene.lod.grid_size, config.scene.buffer_bytes)?;
         renderer.set_sentinel(config.sentinel);
-        Ok(Display { renderer, positions: None, context, scene, clipmap, view, summary, renderer_stale: false })
+        Ok(Display {
+            renderer,
+            positions: None,
+            context,
+            scene,
+            clipmap,
+            view,
+            summary,
+            renderer_stale: false,
+        })
     }
 
     pub fn info(&self) -> &GlInfo {
@@ -152,7 +169,8 @@ impl Display {
         camera: &Camera,
         baseline: &mut ChunkedBaseline,
     ) -> Result<(FrameStats, BaselineFrameStats), DisplayError> {
-        self.frame_through(camera, Some(baseline)).map(|(stats, base)| (stats, base.unwrap_or_default()))
+        self.frame_through(camera, Some(baseline))
+            .map(|(stats, base)| (stats, base.unwrap_or_default()))
     }
 
     fn frame_through(
@@ -214,7 +232,11 @@ impl Display {
     /// chunk of `truth` (built on [`Self::context`]), waiting for the GPU.
     /// Touches neither the clipmap nor the tile cache, so it may be
     /// interleaved with LOD frames; [`Self::read_pixels`] reads the result.
-    pub fn render_truth(&mut self, camera: &Camera, truth: &TruthPass) -> Result<TruthFrameStats, DisplayError> {
+    pub fn render_truth(
+        &mut self,
+        camera: &Camera,
+        truth: &TruthPass,
+    ) -> Result<TruthFrameStats, DisplayError> {
         camera.validate().map_err(SceneError::from)?;
         let start = Instant::now();
         self.context.make_current()?;
@@ -225,16 +247,25 @@ impl Display {
         truth.draw(&frame, TerrainOutput::Colour)?;
         self.renderer.finish();
         let frame_ms = start.elapsed().as_secs_f64() * 1e3;
-        Ok(TruthFrameStats { triangles: truth.triangles(), draw_calls: truth.draw_calls(), frame_ms })
+        Ok(TruthFrameStats {
+            triangles: truth.triangles(),
+            draw_calls: truth.draw_calls(),
+            frame_ms,
+        })
     }
 
     /// Redraws the last frame's tiles (drawn by [`Self::frame`] for this same
     /// `camera`) as camera-relative positions into `out`: what the display
     /// drew, per pixel, for the accuracy tool. Needs float colour buffers.
-    pub fn render_positions(&mut self, camera: &Camera, out: &mut PositionImage) -> Result<(), DisplayError> {
+    pub fn render_positions(
+        &mut self,
+        camera: &Camera,
+        out: &mut PositionImage,
+    ) -> Result<(), DisplayError> {
         let list = self.scene.draw_list();
         if list.frame != Some(self.frame_uniforms(camera)) {
-            let why = "render_positions needs the last frame to have been drawn for the same camera";
+            let why =
+                "render_positions needs the last frame to have been drawn for the same camera";
             return Err(GlError::InvalidRequest(why.to_owned()).into());
         }
         self.bind_positions()?;
@@ -245,7 +276,11 @@ impl Display {
 
     /// After baseline frames skipped the renderer's uploads, rewrites its
     /// whole height buffer from `staging` (once); tells whether it did.
-    fn catch_up(renderer: &mut GlRenderer, staging: &[u8], stale: &mut bool) -> Result<bool, GlError> {
+    fn catch_up(
+        renderer: &mut GlRenderer,
+        staging: &[u8],
+        stale: &mut bool,
+    ) -> Result<bool, GlError> {
         let stale = std::mem::take(stale);
         if stale {
             renderer.upload(staging, &[0..staging.len() as u32])?;
@@ -274,7 +309,8 @@ impl Display {
     fn bind_positions(&mut self) -> Result<(), DisplayError> {
         self.context.make_current()?;
         if self.positions.is_none() {
-            self.positions = Some(OffscreenTarget::positions(self.context.gl(), self.context.size())?);
+            self.positions =
+                Some(OffscreenTarget::positions(self.context.gl(), self.context.size())?);
         }
         if let Some(target) = &self.positions {
             target.bind();
@@ -321,7 +357,11 @@ impl Display {
 /// Sizes the clipmap's view so that every tile the rings can select finds
 /// its own level's node within the load radius: for each level, the far edge
 /// of its ring plus a tile diagonal, in node sizes.
-fn view_config(config: &DisplayConfig, summary: &TerrainSummary, layout: &crate::node::NodeLayout) -> ViewConfig {
+fn view_config(
+    config: &DisplayConfig,
+    summary: &TerrainSummary,
+    layout: &crate::node::NodeLayout,
+) -> ViewConfig {
     let camera = Camera {
         position: DVec3::ZERO,
         heading_deg: 0.0,

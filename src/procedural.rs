@@ -116,8 +116,13 @@ impl ProceduralEarth {
             return Err(ProceduralError::Spacing(spacing_m));
         }
         let samples = cells as u32 + 1;
-        let layout =
-            NodeLayout { levels, node_size, border, samples: [samples; 2], spacing_m: [spacing_m; 2] };
+        let layout = NodeLayout {
+            levels,
+            node_size,
+            border,
+            samples: [samples; 2],
+            spacing_m: [spacing_m; 2],
+        };
         let octaves = octaves_for(cells, seed);
         let delta_by_level = (0..levels).map(|lod| level_delta_bound(&octaves, lod)).collect();
         let base_m = (HEIGHT_RANGE_M[0] + HEIGHT_RANGE_M[1]) / 2.0;

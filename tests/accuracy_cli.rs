@@ -24,16 +24,44 @@ fn accuracy_json_reports_the_measured_error_and_writes_the_heat_map() {
     let cache = dir.join("terrain");
     import(&cache);
     let out_dir = dir.join("out");
-    let args = ["accuracy", "--dataset", cache.to_str().unwrap(), "--views", "2", "--size", "160x90", "--tau", "2", "--json", "--out"];
-    let run = Command::new(env!("CARGO_BIN_EXE_ridgeline")).args(args).arg(&out_dir).output().expect("run ridgeline");
+    let args = [
+        "accuracy",
+        "--dataset",
+        cache.to_str().unwrap(),
+        "--views",
+        "2",
+        "--size",
+        "160x90",
+        "--tau",
+        "2",
+        "--json",
+        "--out",
+    ];
+    let run = Command::new(env!("CARGO_BIN_EXE_ridgeline"))
+        .args(args)
+        .arg(&out_dir)
+        .output()
+        .expect("run ridgeline");
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
     let json: serde_json::Value = serde_json::from_slice(&run.stdout).expect("--json prints JSON");
-    for field in ["tau_px", "p50_px", "p99_px", "p999_px", "max_px", "coverage_mismatch", "triangles_lod", "triangles_truth", "views"] {
+    for field in [
+        "tau_px",
+        "p50_px",
+        "p99_px",
+        "p999_px",
+        "max_px",
+        "coverage_mismatch",
+        "triangles_lod",
+        "triangles_truth",
+        "views",
+    ] {
         assert!(json[field].is_number(), "{field} missing in {json}");
     }
     assert_eq!(json["views"], 2);
     assert!(json["p999_px"].as_f64().unwrap() <= 2.0, "the bound holds: {json}");
-    assert!(json["triangles_truth"].as_f64().unwrap() >= json["triangles_lod"].as_f64().unwrap() / 2.0);
+    assert!(
+        json["triangles_truth"].as_f64().unwrap() >= json["triangles_lod"].as_f64().unwrap() / 2.0
+    );
     let heat_map = image::open(out_dir.join("heat_map.png")).expect("heat map written");
     assert_eq!((heat_map.width(), heat_map.height()), (160, 90));
     assert!(out_dir.join("accuracy.json").is_file());

@@ -109,10 +109,7 @@ fn invalid_requests_are_refused_before_anything_changes() {
         (vec![request(1, 0, 8), request(1, 0, 8)], AllocError::DuplicateGenerator(1)),
         (vec![request(0, 0, 8), request(1, 0, 0)], AllocError::ZeroSize(1)),
         (vec![request(5, 0, 8)], AllocError::UnknownGenerator { generator: 5, max_generators: 2 }),
-        (
-            vec![request(0, 0, 65)],
-            AllocError::TooLarge { generator: 0, size: 65, capacity: 64 },
-        ),
+        (vec![request(0, 0, 65)], AllocError::TooLarge { generator: 0, size: 65, capacity: 64 }),
         (
             vec![request(0, 0, u32::MAX)],
             AllocError::TooLarge { generator: 0, size: u32::MAX, capacity: 64 },
@@ -128,8 +125,12 @@ fn invalid_requests_are_refused_before_anything_changes() {
         assert_eq!(alloc.block_range(GeneratorId(1)), None);
         alloc.check_invariants().unwrap();
     }
-    let message = AllocError::OutOfSpace { asked: 9, piece: 9, blocks: 1, largest_gap: 4, capacity: 64 };
-    assert!(message.to_string().contains("asked 9 bytes") && message.to_string().contains("largest free gap is 4"));
+    let message =
+        AllocError::OutOfSpace { asked: 9, piece: 9, blocks: 1, largest_gap: 4, capacity: 64 };
+    assert!(
+        message.to_string().contains("asked 9 bytes")
+            && message.to_string().contains("largest free gap is 4")
+    );
 }
 
 #[test]

@@ -158,7 +158,8 @@ impl Harness {
         self.requests.clear();
         for &(g, format, size) in list {
             if self.requests.iter().all(|r| r.generator.0 != g) {
-                let request = Request { generator: GeneratorId(g), format: VertexFormat(format), size };
+                let request =
+                    Request { generator: GeneratorId(g), format: VertexFormat(format), size };
                 self.requests.push(request);
             }
         }
@@ -188,7 +189,11 @@ impl Harness {
                 prop_assert_eq!(largest_gap, largest);
             }
             (real, model) => {
-                return Err(TestCaseError::fail(format!("real {:?} vs model {:?}", real.err(), model)));
+                return Err(TestCaseError::fail(format!(
+                    "real {:?} vs model {:?}",
+                    real.err(),
+                    model
+                )));
             }
         }
         Ok(())
@@ -242,10 +247,7 @@ fn config_strategy() -> impl Strategy<Value = AllocatorConfig> {
 /// A frame-shaped sequence: each frame begins, allocates once, and may release.
 fn ops_strategy(generators: u32) -> impl Strategy<Value = Vec<Op>> {
     let request = (0..generators, 0u16..3, 1u32..80);
-    let frame = (
-        prop::collection::vec(request, 0..8),
-        prop::option::of(0..generators),
-    );
+    let frame = (prop::collection::vec(request, 0..8), prop::option::of(0..generators));
     prop::collection::vec(frame, 1..200).prop_map(|frames| {
         let mut ops = Vec::new();
         for (requests, release) in frames {
@@ -295,7 +297,10 @@ fn shadow_model_runs_enough_calls() {
         calls += ops.len();
         failures += OUT_OF_SPACE.load(Relaxed) - before;
     }
-    println!("50 sequences: {calls} calls, {failures} out-of-space (total so far {})", CALLS.load(Relaxed));
+    println!(
+        "50 sequences: {calls} calls, {failures} out-of-space (total so far {})",
+        CALLS.load(Relaxed)
+    );
     assert!(calls > 50 * 100, "sequences are long enough");
     assert!(failures > 0, "some calls run out of space, so rollback is exercised");
 }

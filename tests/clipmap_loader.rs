@@ -46,7 +46,8 @@ fn a_still_camera_converges_like_inline_loading() {
     let position = over_ground(&earth, 2.2e7, 1.7e7, 80.0);
     let mut threaded = clipmap(&earth, 1500, 6, THREAD);
     let mut inline = clipmap(&earth, 1500, 6, LoaderMode::Inline);
-    let (a, b) = (threaded.add_view(VIEW, position).unwrap(), inline.add_view(VIEW, position).unwrap());
+    let (a, b) =
+        (threaded.add_view(VIEW, position).unwrap(), inline.add_view(VIEW, position).unwrap());
     let frames = settle(&mut threaded, Duration::from_secs(30));
     settle(&mut inline, Duration::from_secs(30));
     assert_eq!(resident(&threaded), resident(&inline));
@@ -63,7 +64,8 @@ fn a_moving_camera_with_the_thread_keeps_every_invariant() {
     let mut clipmap = clipmap(&earth, 300, 4, THREAD);
     let mut primary = over_ground(&earth, 9e6, 9e6, 300.0);
     let mut map = primary + DVec3::new(0.0, 0.0, 8000.0);
-    let (pfd, overview) = (clipmap.add_view(VIEW, primary).unwrap(), clipmap.add_view(VIEW, map).unwrap());
+    let (pfd, overview) =
+        (clipmap.add_view(VIEW, primary).unwrap(), clipmap.add_view(VIEW, map).unwrap());
     let mut loaded = 0;
     for frame in 0..120 {
         primary += DVec3::new(250.0 / 60.0 * 20.0, 30.0, -1.0);

@@ -71,7 +71,8 @@ fn heights_stay_in_range_and_look_like_terrain() {
     assert!(max - min > 3000.0, "mountains and lowlands");
     // Hills: a 1 km square of samples has relief, but not cliffs.
     let relief = |x: i64, y: i64| {
-        let hs: Vec<f64> = (0..400).map(|k| earth.sample(x + k % 20 * 21, y + k / 20 * 21) as f64).collect();
+        let hs: Vec<f64> =
+            (0..400).map(|k| earth.sample(x + k % 20 * 21, y + k / 20 * 21) as f64).collect();
         hs.iter().cloned().fold(f64::MIN, f64::max) - hs.iter().cloned().fold(f64::MAX, f64::min)
     };
     let local = relief(3_000_000, 7_000_000);
@@ -86,7 +87,8 @@ fn posts_are_level_zero_samples_at_the_level_stride() {
         let data = read(&earth, id);
         let (span, stride) = (layout.span(id.lod) as i64, 1i64 << id.lod);
         for (i, j) in [(0, 0), (16, 16), (3, 11), (16, 0)] {
-            let sample = earth.sample(id.x as i64 * span + i * stride, id.y as i64 * span + j * stride);
+            let sample =
+                earth.sample(id.x as i64 * span + i * stride, id.y as i64 * span + j * stride);
             assert_eq!(data.post(&layout, i as u32, j as u32), sample, "{id:?} post ({i}, {j})");
         }
         // The parent's posts are every second post of its children.
@@ -107,7 +109,11 @@ fn borders_repeat_the_neighbours_and_extend_at_the_edge() {
         assert_eq!(node.heights[row * side + side - 1], east.heights[row * side + 2]);
     }
     let corner = read(&earth, NodeId::new(0, 0, 0));
-    assert_eq!(corner.heights[0], corner.post(&layout, 0, 0), "south-west border clamps to the edge");
+    assert_eq!(
+        corner.heights[0],
+        corner.post(&layout, 0, 0),
+        "south-west border clamps to the edge"
+    );
 }
 
 #[test]
@@ -115,7 +121,10 @@ fn min_and_max_are_exact_over_the_centre_posts() {
     let earth = earth(8);
     let layout = *earth.layout();
     let data = read(&earth, NodeId::new(4, 77, 1234));
-    let posts: Vec<f32> = (0..=8).flat_map(|j| (0..=8).map(move |i| (i, j))).map(|(i, j)| data.post(&layout, i, j)).collect();
+    let posts: Vec<f32> = (0..=8)
+        .flat_map(|j| (0..=8).map(move |i| (i, j)))
+        .map(|(i, j)| data.post(&layout, i, j))
+        .collect();
     assert_eq!(data.min, posts.iter().cloned().fold(f32::MAX, f32::min));
     assert_eq!(data.max, posts.iter().cloned().fold(f32::MIN, f32::max));
 }
@@ -149,20 +158,30 @@ fn refuses_bad_ids_and_parameters() {
     let earth = earth(16);
     let levels = earth.layout().levels;
     let mut data = NodeData::default();
-    for id in [NodeId::new(levels, 0, 0), NodeId::new(0, 1 << 20, 0), NodeId::new(levels - 1, 0, 1)] {
-        assert!(matches!(earth.read_node(id, &mut data), Err(NodeError::OutOfRange { .. })), "{id:?}");
+    for id in [NodeId::new(levels, 0, 0), NodeId::new(0, 1 << 20, 0), NodeId::new(levels - 1, 0, 1)]
+    {
+        assert!(
+            matches!(earth.read_node(id, &mut data), Err(NodeError::OutOfRange { .. })),
+            "{id:?}"
+        );
     }
     let good = EarthParams::earth(16, 0);
     let bad = [
         (EarthParams { node_size: 1, ..good }, ProceduralError::NodeSize(1)),
-        (EarthParams { levels: 40, ..good }, ProceduralError::TooLarge { node_size: 16, levels: 40 }),
+        (
+            EarthParams { levels: 40, ..good },
+            ProceduralError::TooLarge { node_size: 16, levels: 40 },
+        ),
         (EarthParams { levels: 0, ..good }, ProceduralError::TooLarge { node_size: 16, levels: 0 }),
         (EarthParams { border: 17, ..good }, ProceduralError::Border { border: 17, node_size: 16 }),
     ];
     for (params, error) in bad {
         assert_eq!(ProceduralEarth::new(params).unwrap_err(), error);
     }
-    assert!(matches!(ProceduralEarth::new(EarthParams { spacing_m: f64::NAN, ..good }), Err(ProceduralError::Spacing(_))));
+    assert!(matches!(
+        ProceduralEarth::new(EarthParams { spacing_m: f64::NAN, ..good }),
+        Err(ProceduralError::Spacing(_))
+    ));
 }
 
 #[test]

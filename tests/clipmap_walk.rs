@@ -137,7 +137,8 @@ fn a_still_camera_converges_to_the_wanted_levels() {
     let before = snapshot(&clipmap);
     let again = clipmap.update().unwrap();
     assert_eq!((again.applied, again.missing), (0, 0));
-    let strip = |s: Snapshot| s.into_iter().map(|(node, state, _)| (node, state)).collect::<Vec<_>>();
+    let strip =
+        |s: Snapshot| s.into_iter().map(|(node, state, _)| (node, state)).collect::<Vec<_>>();
     assert_eq!(strip(before), strip(snapshot(&clipmap)));
 }
 
@@ -173,7 +174,8 @@ fn unused_nodes_stay_cached_and_are_reused_oldest_first() {
             break;
         }
     }
-    let home_nodes: Vec<_> = (0..1500).filter_map(|s| clipmap.atlas().node_in(s)).filter(|&id| id.lod < 3).collect();
+    let home_nodes: Vec<_> =
+        (0..1500).filter_map(|s| clipmap.atlas().node_in(s)).filter(|&id| id.lod < 3).collect();
     assert!(!home_nodes.is_empty());
     // A short hop: home's finest nodes become unused but stay resident.
     clipmap.set_view_position(view, home + DVec3::new(3000.0, 0.0, 0.0)).unwrap();
@@ -185,17 +187,24 @@ fn unused_nodes_stay_cached_and_are_reused_oldest_first() {
     let cached = home_nodes.iter().filter(|&&id| clipmap.atlas().slot_of(id).is_some()).count();
     assert!(cached > 0, "some of home's nodes are still cached");
     let lru: Vec<u32> = clipmap.atlas().lru().collect();
-    assert!(lru.windows(2).all(|w| clipmap.atlas().last_used(w[0]) <= clipmap.atlas().last_used(w[1])));
+    assert!(lru
+        .windows(2)
+        .all(|w| clipmap.atlas().last_used(w[0]) <= clipmap.atlas().last_used(w[1])));
     clipmap.set_view_position(view, home).unwrap();
     let stats = clipmap.update().unwrap();
-    assert!(stats.wanted - stats.missing >= cached as u32, "cached nodes count as resident at once: {stats:?}");
+    assert!(
+        stats.wanted - stats.missing >= cached as u32,
+        "cached nodes count as resident at once: {stats:?}"
+    );
 }
 
 #[test]
 fn refuses_bad_configurations_and_positions() {
     use ridgeline::clipmap::{ClipmapConfig, ClipmapError, LookupError, ViewConfig};
     let earth = earth(0);
-    let make = |slots, budget, loader| Clipmap::new(earth.clone(), ClipmapConfig { atlas_slots: slots, budget, loader });
+    let make = |slots, budget, loader| {
+        Clipmap::new(earth.clone(), ClipmapConfig { atlas_slots: slots, budget, loader })
+    };
     assert!(matches!(make(1, 1, LoaderMode::Inline), Err(ClipmapError::TooFewSlots { .. })));
     assert!(matches!(make(8, 0, LoaderMode::Inline), Err(ClipmapError::ZeroBudget)));
     assert!(matches!(make(8, 1, LoaderMode::Thread { queue: 0 }), Err(ClipmapError::ZeroQueue)));
@@ -209,11 +218,20 @@ fn refuses_bad_configurations_and_positions() {
     for config in bad_views {
         assert!(clipmap.add_view(config, DVec3::ZERO).is_err(), "{config:?}");
     }
-    assert!(matches!(clipmap.add_view(VIEW, DVec3::new(f64::NAN, 0.0, 0.0)), Err(ClipmapError::Position(_))));
+    assert!(matches!(
+        clipmap.add_view(VIEW, DVec3::new(f64::NAN, 0.0, 0.0)),
+        Err(ClipmapError::Position(_))
+    ));
     let view = clipmap.add_view(VIEW, DVec3::new(1e200, -1e200, 1e9)).unwrap();
     clipmap.update().unwrap();
-    assert_eq!(clipmap.height_at(view, DVec2::new(-1.0, 0.0)), Err(LookupError::OutsideData(-1.0, 0.0)));
-    assert!(matches!(clipmap.height_at(view, DVec2::new(10.0, 10.0)), Err(LookupError::OutsideView(..))));
+    assert_eq!(
+        clipmap.height_at(view, DVec2::new(-1.0, 0.0)),
+        Err(LookupError::OutsideData(-1.0, 0.0))
+    );
+    assert!(matches!(
+        clipmap.height_at(view, DVec2::new(10.0, 10.0)),
+        Err(LookupError::OutsideView(..))
+    ));
     assert!(clipmap.set_view_position(view, DVec3::new(0.0, f64::INFINITY, 0.0)).is_err());
     clipmap.set_view_position(view, DVec3::new(10.0, 10.0, 0.0)).unwrap();
     clipmap.update().unwrap();

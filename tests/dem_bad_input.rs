@@ -19,7 +19,8 @@ const SRTM3_BYTES: usize = 1201 * 1201 * 2;
 #[test]
 fn hgt_of_the_wrong_size_or_truncated() {
     let dir = TempDir::new("bad-hgt");
-    for (name, len) in [("N10E010.hgt", 1000), ("N11E010.hgt", SRTM3_BYTES - 2), ("N12E010.hgt", 0)] {
+    for (name, len) in [("N10E010.hgt", 1000), ("N11E010.hgt", SRTM3_BYTES - 2), ("N12E010.hgt", 0)]
+    {
         let path = dir.path(name);
         std::fs::write(&path, vec![0u8; len]).unwrap();
         assert!(matches!(import_error(&path), Problem::HgtSize { actual } if actual == len as u64));
@@ -46,7 +47,8 @@ fn hgt_of_nothing_but_voids() {
 
 // ------------------------------------------------------------------- DTED
 
-const SPEC: DtedSpec = DtedSpec { level: 0, origin: [40, 39], lon_tenths: 300, columns: 121, rows: 121 };
+const SPEC: DtedSpec =
+    DtedSpec { level: 0, origin: [40, 39], lon_tenths: 300, columns: 121, rows: 121 };
 
 fn dted_file(dir: &TempDir, name: &str, edit: impl FnOnce(&mut Vec<u8>)) -> PathBuf {
     let heights: Vec<i32> = (0..121 * 121).map(|k| 100 + k % 500).collect();
@@ -166,7 +168,10 @@ fn ascii_declaring_absurd_or_impossible_sizes_is_refused_before_allocating() {
     let dir = TempDir::new("bad-asc-huge");
     let text = "ncols 100000\nnrows 100000\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3\n";
     let path = ascii(&dir, "absurd.asc", text);
-    assert!(matches!(import_error(&path), Problem::AbsurdDimensions { width: 100000, height: 100000, .. }));
+    assert!(matches!(
+        import_error(&path),
+        Problem::AbsurdDimensions { width: 100000, height: 100000, .. }
+    ));
     let text = "ncols 1000\nnrows 1000\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3\n";
     let path = ascii(&dir, "short.asc", text);
     assert!(matches!(import_error(&path), Problem::Truncated { .. }));
@@ -179,12 +184,17 @@ fn ascii_with_wrong_magic_or_a_broken_header() {
     let dir = TempDir::new("bad-asc-header");
     let path = ascii(&dir, "magic.asc", "hello world\n1 2 3\n");
     assert!(matches!(import_error(&path), Problem::BadMagic { .. }));
-    let path = ascii(&dir, "nocell.asc", "ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\n1 2 3 4 5 6\n");
-    assert!(matches!(import_error(&path), Problem::Header(m) if m.contains("cellsize")));
     let path =
-        ascii(&dir, "both.asc", "ncols 1\nnrows 1\nxllcorner 0\nxllcenter 0\nyllcorner 0\ncellsize 1\n5\n");
+        ascii(&dir, "nocell.asc", "ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\n1 2 3 4 5 6\n");
+    assert!(matches!(import_error(&path), Problem::Header(m) if m.contains("cellsize")));
+    let path = ascii(
+        &dir,
+        "both.asc",
+        "ncols 1\nnrows 1\nxllcorner 0\nxllcenter 0\nyllcorner 0\ncellsize 1\n5\n",
+    );
     assert!(matches!(import_error(&path), Problem::Header(_)));
-    let path = ascii(&dir, "negative.asc", "ncols 1\nnrows 1\nxllcorner 0\nyllcorner 0\ncellsize -1\n5\n");
+    let path =
+        ascii(&dir, "negative.asc", "ncols 1\nnrows 1\nxllcorner 0\nyllcorner 0\ncellsize -1\n5\n");
     assert!(matches!(import_error(&path), Problem::Header(_)));
 }
 
@@ -195,7 +205,10 @@ fn ascii_nan_inf_and_junk_heights() {
         [("nan.asc", "NaN"), ("inf.asc", "inf"), ("ninf.asc", "-infinity"), ("big.asc", "1e999")]
     {
         let path = ascii(&dir, name, &format!("{HEADER}1 2 3\n4 {value} 6\n"));
-        assert!(matches!(import_error(&path), Problem::NonFinite { row: 1, column: 1, .. }), "{value}");
+        assert!(
+            matches!(import_error(&path), Problem::NonFinite { row: 1, column: 1, .. }),
+            "{value}"
+        );
     }
     let path = ascii(&dir, "word.asc", &format!("{HEADER}1 2 3\n4 5 6x\n"));
     assert!(matches!(import_error(&path), Problem::NotANumber { row: 1, column: 2, .. }));
@@ -252,7 +265,10 @@ fn tiff_declaring_100000_by_100000_in_200_bytes_is_refused_before_allocating() {
     let path = dir.path("huge.tif");
     write_tiff_raw(&path, &[0u8; 16], |d, offset| strip_tags(d, [100_000, 100_000], offset, 16));
     assert!(std::fs::metadata(&path).unwrap().len() < 400);
-    assert!(matches!(import_error(&path), Problem::AbsurdDimensions { width: 100_000, height: 100_000, .. }));
+    assert!(matches!(
+        import_error(&path),
+        Problem::AbsurdDimensions { width: 100_000, height: 100_000, .. }
+    ));
 }
 
 #[test]
@@ -338,7 +354,8 @@ fn tiff_without_usable_georeference_or_with_colour() {
     let path = dir.path("rotated.tif");
     let mut matrix = [0.0; 16];
     (matrix[0], matrix[1], matrix[4], matrix[5], matrix[15]) = (1.0, 0.5, 0.5, -1.0, 1.0);
-    let rotated = GeoTags { transformation: Some(matrix), keys: projected_keys(32633), ..GeoTags::default() };
+    let rotated =
+        GeoTags { transformation: Some(matrix), keys: projected_keys(32633), ..GeoTags::default() };
     write_tiff_strips::<colortype::GrayI16>(
         &path,
         [4, 4],
@@ -409,7 +426,10 @@ fn valid_files(dir: &TempDir) -> Vec<(&'static str, Vec<u8>)> {
     let heights: Vec<i32> = (0..121 * 121).map(|k| k % 700 - 50).collect();
     let dted = dted_bytes(SPEC, &heights);
     let ascii = format!("{HEADER}1 2 3\n4 -9999 6.5\n").into_bytes();
-    let geo = GeoTags { nodata: Some("-32768".into()), ..GeoTags::geographic([40.0, 40.0], 0.001, false) };
+    let geo = GeoTags {
+        nodata: Some("-32768".into()),
+        ..GeoTags::geographic([40.0, 40.0], 0.001, false)
+    };
     let samples = Samples::I16((0..20 * 19).map(|k| (k % 97) as i16).collect());
     let tiled = dir.path("tiled.tif");
     write_tiff_tiles(&tiled, [20, 19], 16, &samples, TileCompression::Deflate, 2, &geo);

@@ -28,7 +28,8 @@ fn hgt_srtm3_round_trip_with_voids() {
     let dir = TempDir::new("hgt3");
     let side = 1201u32;
     let plane = |i: u32, j: u32| 500.0 + 2.0 * f64::from(i) + 3.0 * f64::from(j);
-    let mut heights: Vec<i16> = (0..side * side).map(|k| plane(k % side, k / side) as i16).collect();
+    let mut heights: Vec<i16> =
+        (0..side * side).map(|k| plane(k % side, k / side) as i16).collect();
     for (i, j) in void_pattern(side, side) {
         heights[(j * side + i) as usize] = HGT_VOID;
     }
@@ -62,8 +63,9 @@ fn hgt_srtm1_southern_western_tile() {
 /// and checks the import.
 fn dted_round_trip(spec: DtedSpec, name: &str, plane: &dyn Fn(u32, u32) -> f64) {
     let dir = TempDir::new("dted");
-    let mut heights: Vec<i32> =
-        (0..spec.columns * spec.rows).map(|k| plane(k % spec.columns, k / spec.columns) as i32).collect();
+    let mut heights: Vec<i32> = (0..spec.columns * spec.rows)
+        .map(|k| plane(k % spec.columns, k / spec.columns) as i32)
+        .collect();
     for (i, j) in void_pattern(spec.columns, spec.rows) {
         heights[(j * spec.columns + i) as usize] = DTED_VOID;
     }
@@ -130,10 +132,12 @@ fn dted_with_tape_labels_and_detected_by_magic() {
 fn ascii_grid_corner_header_with_nodata() {
     let dir = TempDir::new("asc");
     let path = dir.path("dem.asc");
-    let header = "ncols 4\nNROWS 3\nxllcorner 1000\nyllcorner 2000\ncellsize 30\nNODATA_value -9999\n";
+    let header =
+        "ncols 4\nNROWS 3\nxllcorner 1000\nyllcorner 2000\ncellsize 30\nNODATA_value -9999\n";
     // North row first.
     let rows = ["1.5 2 3 4", "5 -9999 7 8", "9 10 11 12.25"];
-    let rows: Vec<Vec<String>> = rows.iter().map(|r| r.split(' ').map(String::from).collect()).collect();
+    let rows: Vec<Vec<String>> =
+        rows.iter().map(|r| r.split(' ').map(String::from).collect()).collect();
     write_ascii(&path, header, &rows);
     let grid = import_file(&path).unwrap();
     assert_eq!((grid.width, grid.height), (4, 3));
@@ -152,7 +156,8 @@ fn ascii_grid_center_header_dx_dy_and_prj_sidecar() {
     let dir = TempDir::new("asc-prj");
     let path = dir.path("geo.txt");
     let header = "NCOLS 3\nNROWS 2\nXLLCENTER -71.5\nYLLCENTER -5.25\nDX 0.5\nDY 0.25\n";
-    let rows = vec![vec!["1".into(), "2".into(), "3".into()], vec!["4".into(), "5".into(), "6".into()]];
+    let rows =
+        vec![vec!["1".into(), "2".into(), "3".into()], vec!["4".into(), "5".into(), "6".into()]];
     write_ascii(&path, header, &rows);
     std::fs::write(dir.path("geo.prj"), "GEOGCS[\"WGS 84\",DATUM[\"WGS_1984\"]]").unwrap();
     assert_eq!(ridgeline::dem::format::detect(&path).unwrap(), Format::AsciiGrid);

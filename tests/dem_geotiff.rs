@@ -51,7 +51,12 @@ fn check_area_georef(grid: &ElevationGrid) {
     assert_eq!(grid.georef.crs, Crs::Geographic);
     assert_eq!(grid.georef.spacing, [SPACING; 2]);
     assert_close(grid.georef.origin[0], CORNER[0] + 0.5 * SPACING, 1e-12, "west post");
-    assert_close(grid.georef.origin[1], CORNER[1] - (f64::from(H) - 0.5) * SPACING, 1e-12, "south post");
+    assert_close(
+        grid.georef.origin[1],
+        CORNER[1] - (f64::from(H) - 0.5) * SPACING,
+        1e-12,
+        "south post",
+    );
 }
 
 /// Heights before filling in grid order from file-order values.
@@ -85,9 +90,10 @@ fn int16_strips_deflate_and_lzw_with_horizontal_predictor() {
     let dir = TempDir::new("tif-i16-z");
     let geo = GeoTags::geographic(CORNER, SPACING, false);
     let data = file_order(int_sample);
-    for (name, compression) in
-        [("deflate.tif", Compression::Deflate(DeflateLevel::Balanced)), ("lzw.tif", Compression::Lzw)]
-    {
+    for (name, compression) in [
+        ("deflate.tif", Compression::Deflate(DeflateLevel::Balanced)),
+        ("lzw.tif", Compression::Lzw),
+    ] {
         let path = dir.path(name);
         write_tiff_strips::<colortype::GrayI16>(
             &path,
@@ -110,7 +116,8 @@ fn float32_strips_compressed_with_nan_nodata_pixel_is_point() {
     let voids = [(3, 4), (20, 20), (21, 20), (0, 36)];
     let is_void = |c: u32, r: u32| voids.contains(&(c, r));
     let data = file_order(|c, r| if is_void(c, r) { f32::NAN } else { float_sample(c, r) });
-    let before = grid_order(&file_order(|c, r| (!is_void(c, r)).then(|| f64::from(float_sample(c, r)))));
+    let before =
+        grid_order(&file_order(|c, r| (!is_void(c, r)).then(|| f64::from(float_sample(c, r)))));
     let mut geo = GeoTags::geographic(CORNER, SPACING, true);
     geo.nodata = Some("nan".into());
     // The encoder refuses the horizontal predictor for floats.
@@ -152,7 +159,8 @@ fn int16_gdal_nodata_marks_voids() {
         &geo,
     );
     let grid = import_file(&path).unwrap();
-    let before = grid_order(&file_order(|c, r| (!is_void(c, r)).then(|| f64::from(int_sample(c, r)))));
+    let before =
+        grid_order(&file_order(|c, r| (!is_void(c, r)).then(|| f64::from(int_sample(c, r)))));
     check_filled(&grid, &before, None);
     assert_eq!(grid.voids_filled, 12);
 }
@@ -180,11 +188,14 @@ fn int16_tiles_every_compression_with_horizontal_predictor() {
 fn float32_tiles_floating_point_predictor_with_nodata() {
     let dir = TempDir::new("tif-tiles-f32");
     let is_void = |c: u32, r: u32| c == 30 && r < 3;
-    let samples = Samples::F32(file_order(|c, r| if is_void(c, r) { -9999.0 } else { float_sample(c, r) }));
-    let before = grid_order(&file_order(|c, r| (!is_void(c, r)).then(|| f64::from(float_sample(c, r)))));
+    let samples =
+        Samples::F32(file_order(|c, r| if is_void(c, r) { -9999.0 } else { float_sample(c, r) }));
+    let before =
+        grid_order(&file_order(|c, r| (!is_void(c, r)).then(|| f64::from(float_sample(c, r)))));
     let mut geo = GeoTags::geographic(CORNER, SPACING, false);
     geo.nodata = Some(" -9999.0 ".into());
-    for (name, compression) in [("lzw.tif", TileCompression::Lzw), ("deflate.tif", TileCompression::Deflate)]
+    for (name, compression) in
+        [("lzw.tif", TileCompression::Lzw), ("deflate.tif", TileCompression::Deflate)]
     {
         let path = dir.path(name);
         write_tiff_tiles(&path, [W, H], 16, &samples, compression, 3, &geo);
@@ -243,7 +254,8 @@ fn south_up_raster_keeps_its_row_order() {
     let path = dir.path("south_up.tif");
     let mut matrix = [0.0; 16];
     (matrix[0], matrix[3], matrix[5], matrix[7], matrix[15]) = (2.0, 100.0, 2.0, 200.0, 1.0);
-    let geo = GeoTags { transformation: Some(matrix), keys: projected_keys(32767), ..GeoTags::default() };
+    let geo =
+        GeoTags { transformation: Some(matrix), keys: projected_keys(32767), ..GeoTags::default() };
     let data = file_order(int_sample);
     write_tiff_strips::<colortype::GrayI16>(
         &path,

@@ -13,7 +13,8 @@ use ridgeline::dem::{voids, Problem, RawGrid};
 use ridgeline::geo::GeoRef;
 
 fn raw(width: u32, height: u32, heights: &[Option<f64>]) -> RawGrid {
-    let mut grid = RawGrid::voids(Path::new("random.asc"), width, height, GeoRef::local([1.0, 1.0]));
+    let mut grid =
+        RawGrid::voids(Path::new("random.asc"), width, height, GeoRef::local([1.0, 1.0]));
     for (h, v) in grid.heights.iter_mut().zip(heights) {
         *h = v.map_or(f32::NAN, |v| v as f32);
     }
@@ -27,7 +28,8 @@ fn grid_with_voids() -> impl Strategy<Value = (u32, u32, Vec<f64>, Vec<bool>)> {
         (
             Just(w),
             Just(h),
-            prop::collection::vec(-500i32..5000, n).prop_map(|v| v.into_iter().map(f64::from).collect()),
+            prop::collection::vec(-500i32..5000, n)
+                .prop_map(|v| v.into_iter().map(f64::from).collect()),
             prop::collection::vec(prop::bool::weighted(void_share), n),
         )
     })

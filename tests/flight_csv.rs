@@ -6,10 +6,10 @@ use std::path::Path;
 
 use glam::{DVec2, DVec3};
 use proptest::prelude::*;
-use ridgeline::geo::metres_per_degree;
 use ridgeline::flight::{
     geographic_to_local, local_to_geographic, FlightPath, PathProblem, Pose, Waypoint,
 };
+use ridgeline::geo::metres_per_degree;
 use ridgeline::geo::{Crs, GeoRef};
 
 const FILE: &str = "approach.csv";
@@ -33,29 +33,46 @@ fn pose(x: f64, y: f64, alt: f64, heading: f64, pitch: f64, roll: f64) -> Pose {
 
 #[test]
 fn xy_header_gives_the_rows_in_order() {
-    let path = parse("t,x,y,alt,heading,pitch,roll\n0,100,200,1500,45,-3,0\n10,1100,1200,1400,50,-2.5,10\n", &local())
-        .unwrap();
+    let path = parse(
+        "t,x,y,alt,heading,pitch,roll\n0,100,200,1500,45,-3,0\n10,1100,1200,1400,50,-2.5,10\n",
+        &local(),
+    )
+    .unwrap();
     let waypoints = path.waypoints();
     assert_eq!(waypoints.len(), 2);
-    assert_eq!(waypoints[0], Waypoint { t: 0.0, pose: pose(100.0, 200.0, 1500.0, 45.0, -3.0, 0.0) });
-    assert_eq!(waypoints[1], Waypoint { t: 10.0, pose: pose(1100.0, 1200.0, 1400.0, 50.0, -2.5, 10.0) });
+    assert_eq!(
+        waypoints[0],
+        Waypoint { t: 0.0, pose: pose(100.0, 200.0, 1500.0, 45.0, -3.0, 0.0) }
+    );
+    assert_eq!(
+        waypoints[1],
+        Waypoint { t: 10.0, pose: pose(1100.0, 1200.0, 1400.0, 50.0, -2.5, 10.0) }
+    );
 }
 
 #[test]
 fn columns_may_come_in_any_order_case_and_spacing_with_comments_bom_and_crlf() {
     let text = "\u{feff}# my path\r\n\r\n  Roll , PITCH,heading , alt,y, x ,t\r\n# a comment row\r\n 0 , -3 ,45, 1500 ,200,100, 0\r\n";
     let path = parse(text, &local()).unwrap();
-    assert_eq!(path.waypoints(), &[Waypoint { t: 0.0, pose: pose(100.0, 200.0, 1500.0, 45.0, -3.0, 0.0) }]);
+    assert_eq!(
+        path.waypoints(),
+        &[Waypoint { t: 0.0, pose: pose(100.0, 200.0, 1500.0, 45.0, -3.0, 0.0) }]
+    );
 }
 
 #[test]
 fn lat_lon_header_maps_through_the_equirectangular_frame() {
     let georef = geographic();
-    let text = "lon,lat,t,alt,heading,pitch,roll\n40.25,39.5,0,2000,90,0,0\n40.0,39.0,1,2000,90,0,0\n";
+    let text =
+        "lon,lat,t,alt,heading,pitch,roll\n40.25,39.5,0,2000,90,0,0\n40.0,39.0,1,2000,90,0,0\n";
     let path = parse(text, &georef).unwrap();
     let expected = geographic_to_local(&georef, EXTENT, 39.5, 40.25);
     assert_eq!(path.waypoints()[0].pose.position, expected.extend(2000.0));
-    assert_eq!(path.waypoints()[1].pose.position, DVec3::new(0.0, 0.0, 2000.0), "the SW sample is the origin");
+    assert_eq!(
+        path.waypoints()[1].pose.position,
+        DVec3::new(0.0, 0.0, 2000.0),
+        "the SW sample is the origin"
+    );
     // Centre latitude of this grid is 39.5: half a degree north, a quarter degree east.
     let [east, north] = metres_per_degree(39.5);
     assert!((expected.y - north / 2.0).abs() < 1e-6);
@@ -68,7 +85,11 @@ fn bad_inputs() -> Vec<(&'static str, String, GeoRef, Vec<&'static str>)> {
     let good = "0,100,200,1500,45,-3,0";
     let row = |cells: &str| format!("{xy}\n{good}\n{cells}\n");
     let geo = geographic();
-    let projected = GeoRef { crs: Crs::Projected { epsg: Some(32637) }, origin: [0.0, 0.0], spacing: [30.0, 30.0] };
+    let projected = GeoRef {
+        crs: Crs::Projected { epsg: Some(32637) },
+        origin: [0.0, 0.0],
+        spacing: [30.0, 30.0],
+    };
     vec![
         ("empty file", String::new(), local(), vec!["no header"]),
         ("only comments", "# nothing\n\n".into(), local(), vec!["no header"]),
@@ -79,14 +100,24 @@ fn bad_inputs() -> Vec<(&'static str, String, GeoRef, Vec<&'static str>)> {
             local(),
             vec!["header", "column 8", "`speed`"],
         ),
-        ("missing column", "t,x,y,alt,heading,pitch\n".into(), local(), vec!["header", "`roll`", "missing"]),
+        (
+            "missing column",
+            "t,x,y,alt,heading,pitch\n".into(),
+            local(),
+            vec!["header", "`roll`", "missing"],
+        ),
         (
             "duplicate column",
             "t,x,y,alt,heading,pitch,pitch,roll\n".into(),
             local(),
             vec!["header", "`pitch`", "twice"],
         ),
-        ("x with lat", "t,x,lat,alt,heading,pitch,roll\n".into(), geo, vec!["header", "`x,y`", "`lat,lon`"]),
+        (
+            "x with lat",
+            "t,x,lat,alt,heading,pitch,roll\n".into(),
+            geo,
+            vec!["header", "`x,y`", "`lat,lon`"],
+        ),
         (
             "lat/lon on local data",
             "t,lat,lon,alt,heading,pitch,roll\n1,2,3,4,5,6,7\n".into(),
@@ -105,9 +136,24 @@ fn bad_inputs() -> Vec<(&'static str, String, GeoRef, Vec<&'static str>)> {
             local(),
             vec!["row 2", "line 3", "`pitch`", "`abc` is not a number"],
         ),
-        ("NaN", row("1,NaN,200,1500,45,-3,0"), local(), vec!["row 2", "`x`", "`NaN` is not a finite"]),
-        ("infinity", row("1,100,200,inf,45,-3,0"), local(), vec!["row 2", "`alt`", "`inf` is not a finite"]),
-        ("minus infinity", row("1,100,-infinity,1500,45,-3,0"), local(), vec!["row 2", "`y`", "not a finite"]),
+        (
+            "NaN",
+            row("1,NaN,200,1500,45,-3,0"),
+            local(),
+            vec!["row 2", "`x`", "`NaN` is not a finite"],
+        ),
+        (
+            "infinity",
+            row("1,100,200,inf,45,-3,0"),
+            local(),
+            vec!["row 2", "`alt`", "`inf` is not a finite"],
+        ),
+        (
+            "minus infinity",
+            row("1,100,-infinity,1500,45,-3,0"),
+            local(),
+            vec!["row 2", "`y`", "not a finite"],
+        ),
         (
             "overflow to infinity",
             row("1e400,100,200,1500,45,-3,0"),
@@ -116,9 +162,24 @@ fn bad_inputs() -> Vec<(&'static str, String, GeoRef, Vec<&'static str>)> {
         ),
         ("empty cell", row("1,100,,1500,45,-3,0"), local(), vec!["row 2", "`y`", "empty"]),
         ("too few cells", row("1,100,200,1500,45"), local(), vec!["row 2", "`pitch`", "5 cells"]),
-        ("too many cells", row("1,100,200,1500,45,-3,0,9"), local(), vec!["row 2", "column 8", "8 cells"]),
-        ("same time", row("0,100,200,1500,45,-3,0"), local(), vec!["row 2", "`t`", "strictly increase"]),
-        ("time going back", row("-1,100,200,1500,45,-3,0"), local(), vec!["row 2", "`t`", "strictly increase"]),
+        (
+            "too many cells",
+            row("1,100,200,1500,45,-3,0,9"),
+            local(),
+            vec!["row 2", "column 8", "8 cells"],
+        ),
+        (
+            "same time",
+            row("0,100,200,1500,45,-3,0"),
+            local(),
+            vec!["row 2", "`t`", "strictly increase"],
+        ),
+        (
+            "time going back",
+            row("-1,100,200,1500,45,-3,0"),
+            local(),
+            vec!["row 2", "`t`", "strictly increase"],
+        ),
         ("absurd time", row("1e8,100,200,1500,45,-3,0"), local(), vec!["row 2", "`t`", "outside"]),
         (
             "pitch beyond vertical",
@@ -126,14 +187,25 @@ fn bad_inputs() -> Vec<(&'static str, String, GeoRef, Vec<&'static str>)> {
             local(),
             vec!["row 2", "`pitch`", "outside [-90, 90]"],
         ),
-        ("pitch below vertical", row("1,100,200,1500,45,-90.5,0"), local(), vec!["row 2", "`pitch`", "outside"]),
-        ("roll", row("1,100,200,1500,45,-3,181"), local(), vec!["row 2", "`roll`", "outside [-180, 180]"]),
+        (
+            "pitch below vertical",
+            row("1,100,200,1500,45,-90.5,0"),
+            local(),
+            vec!["row 2", "`pitch`", "outside"],
+        ),
+        (
+            "roll",
+            row("1,100,200,1500,45,-3,181"),
+            local(),
+            vec!["row 2", "`roll`", "outside [-180, 180]"],
+        ),
         ("heading", row("1,100,200,1500,400,-3,0"), local(), vec!["row 2", "`heading`", "outside"]),
         ("altitude", row("1,100,200,200000,45,-3,0"), local(), vec!["row 2", "`alt`", "outside"]),
         ("position", row("1,3e7,200,1500,45,-3,0"), local(), vec!["row 2", "`x`", "outside"]),
         (
             "latitude",
-            "t,lat,lon,alt,heading,pitch,roll\n0,39.5,40.5,1500,0,0,0\n1,91,40.5,1500,0,0,0\n".into(),
+            "t,lat,lon,alt,heading,pitch,roll\n0,39.5,40.5,1500,0,0,0\n1,91,40.5,1500,0,0,0\n"
+                .into(),
             geographic(),
             vec!["row 2", "`lat`", "outside [-90, 90]"],
         ),
@@ -220,12 +292,19 @@ fn samples_land_on_the_spacing_the_pyramid_uses() {
         assert!((local - expected).length() < 1e-6, "sample ({i}, {j}): {local} vs {expected}");
     }
     // Three arc-seconds at 39.5 N on WGS 84: 92.52 m north, 71.68 m east.
-    assert!((spacing_m[1] - 92.52).abs() < 0.01 && (spacing_m[0] - 71.68).abs() < 0.01, "{spacing_m:?}");
+    assert!(
+        (spacing_m[1] - 92.52).abs() < 0.01 && (spacing_m[0] - 71.68).abs() < 0.01,
+        "{spacing_m:?}"
+    );
 }
 
 #[test]
 fn longitudes_across_the_antimeridian_stay_neighbours() {
-    let georef = GeoRef { crs: Crs::Geographic, origin: [179.5, 0.0], spacing: [1.0 / 1200.0, 1.0 / 1200.0] };
+    let georef = GeoRef {
+        crs: Crs::Geographic,
+        origin: [179.5, 0.0],
+        spacing: [1.0 / 1200.0, 1.0 / 1200.0],
+    };
     let local = geographic_to_local(&georef, [1201, 1], 0.0, -179.75);
     assert!((local.x - 0.75 * metres_per_degree(0.0)[0]).abs() < 1e-6, "{local}");
     let back = local_to_geographic(&georef, [1201, 1], local);
@@ -241,13 +320,19 @@ fn read_names_the_file_and_refuses_oversized_ones_before_reading() {
     assert_eq!(FlightPath::read(&good, &local(), EXTENT).unwrap().waypoints().len(), 1);
 
     let huge = dir.join("huge.csv");
-    std::fs::File::create(&huge).unwrap().set_len(ridgeline::flight::csv::MAX_FILE_BYTES + 1).unwrap();
+    std::fs::File::create(&huge)
+        .unwrap()
+        .set_len(ridgeline::flight::csv::MAX_FILE_BYTES + 1)
+        .unwrap();
     let error = FlightPath::read(&huge, &local(), EXTENT).unwrap_err();
     assert!(matches!(error.problem, PathProblem::TooLarge { .. }), "{error}");
     assert!(error.to_string().contains("huge.csv"));
 
     let missing = dir.join("missing.csv");
     let error = FlightPath::read(&missing, &local(), EXTENT).unwrap_err();
-    assert!(matches!(error.problem, PathProblem::Io(_)) && error.to_string().contains("missing.csv"), "{error}");
+    assert!(
+        matches!(error.problem, PathProblem::Io(_)) && error.to_string().contains("missing.csv"),
+        "{error}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }

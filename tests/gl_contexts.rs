@@ -12,9 +12,9 @@ mod gl_common;
 use std::time::Instant;
 
 use clap::ValueEnum;
+use gl_common::{child_test, run_child, skip_for_missing_osmesa, take_turn, window_display};
 use glam::{UVec2, Vec4};
 use image::{Rgba, RgbaImage};
-use gl_common::{child_test, run_child, skip_for_missing_osmesa, take_turn, window_display};
 use ridgeline::gl::{ContextRequest, GlBackend, GlContext, GlesVersion, OpenedBackend, SmokePass};
 
 const SIZE: UVec2 = UVec2::new(96, 64);
@@ -47,7 +47,8 @@ fn draw_check_and_report(context: &GlContext, started: Instant) {
             info.backend.name(),
             info.requested
         ));
-        let saved = image.save(&path).map_or_else(|e| format!("not saved: {e}"), |()| "saved".to_owned());
+        let saved =
+            image.save(&path).map_or_else(|e| format!("not saved: {e}"), |()| "saved".to_owned());
         panic!("{problem}; read-back at {} ({saved})", path.display());
     }
     report(context, started);
@@ -118,7 +119,9 @@ fn egl_es3_draws_and_reads_back() {
     assert!(info.is_es() && info.version.starts_with("OpenGL ES 3"), "{}", info.version);
     let caps = context.caps();
     assert_eq!(caps.level, GlesVersion::Es3);
-    assert!(caps.glsl_es_300 && caps.vertex_array_objects && caps.instancing && caps.uint32_indices);
+    assert!(
+        caps.glsl_es_300 && caps.vertex_array_objects && caps.instancing && caps.uint32_indices
+    );
     assert_eq!(context.size(), SIZE);
     draw_check_and_report(&context, started);
 }
@@ -143,7 +146,11 @@ fn osmesa_runs_the_es_shaders_on_desktop_gl() {
     let started = Instant::now();
     let request = ContextRequest::new(GlBackend::OsMesa, GlesVersion::Es2, SIZE);
     let context = match GlContext::new(&request) {
-        Err(error) if skip_for_missing_osmesa("osmesa_runs_the_es_shaders_on_desktop_gl", &error) => return,
+        Err(error)
+            if skip_for_missing_osmesa("osmesa_runs_the_es_shaders_on_desktop_gl", &error) =>
+        {
+            return
+        }
         other => other.expect("OSMesa context"),
     };
     let info = context.info();
@@ -189,7 +196,9 @@ fn window_under_xvfb_draws_and_reads_back() {
     let _turn = take_turn();
     let started = Instant::now();
     // A display of our own (a developer's) is used only when it answers.
-    let Some(window_display) = window_display("window_under_xvfb_draws_and_reads_back") else { return };
+    let Some(window_display) = window_display("window_under_xvfb_draws_and_reads_back") else {
+        return;
+    };
     let display = Some(window_display.display.as_str());
     let window = ChildRun {
         backend: "window",

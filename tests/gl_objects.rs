@@ -8,8 +8,8 @@ use std::sync::Mutex;
 
 use glam::UVec2;
 use ridgeline::gl::{
-    Buffer, BufferTarget, BufferUsage, ContextRequest, GlBackend, GlContext, GlError, GlesVersion, Program,
-    Renderbuffer, ShaderStage, VertexArray,
+    Buffer, BufferTarget, BufferUsage, ContextRequest, GlBackend, GlContext, GlError, GlesVersion,
+    Program, Renderbuffer, ShaderStage, VertexArray,
 };
 
 /// llvmpipe already uses every core; contexts take turns.
@@ -35,7 +35,9 @@ fn buffer_writes_ranges_inside_and_refuses_past_the_end() {
         buffer.upload_range(64, &[]).expect("empty write at the end");
         for (offset, len) in [(61, 4), (65, 0), (0, 65), (usize::MAX, 1)] {
             match buffer.upload_range(offset, &vec![0; len]) {
-                Err(GlError::InvalidRequest(message)) => assert!(message.contains("overruns"), "{message}"),
+                Err(GlError::InvalidRequest(message)) => {
+                    assert!(message.contains("overruns"), "{message}")
+                }
                 other => panic!("offset {offset} len {len}: expected a refusal, got {other:?}"),
             }
         }
@@ -48,7 +50,8 @@ fn buffer_writes_ranges_inside_and_refuses_past_the_end() {
 fn compile_and_link_errors_carry_the_driver_log() {
     let _turn = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let context = egl(GlesVersion::Es2);
-    let broken = "#version 100\nprecision mediump float;\nvoid main() { gl_FragColor = undeclared; }\n";
+    let broken =
+        "#version 100\nprecision mediump float;\nvoid main() { gl_FragColor = undeclared; }\n";
     match Program::build(context.gl(), "broken", VERTEX, broken, &[(0, "a_position")]) {
         Err(GlError::ShaderCompile { name, stage, log }) => {
             assert_eq!((name.as_str(), stage), ("broken.frag", ShaderStage::Fragment));
@@ -65,8 +68,11 @@ fn compile_and_link_errors_carry_the_driver_log() {
         }
         other => panic!("expected a link error, got {other:?}"),
     }
-    let error =
-        GlError::ShaderCompile { name: "x.frag".into(), stage: ShaderStage::Fragment, log: "L".into() };
+    let error = GlError::ShaderCompile {
+        name: "x.frag".into(),
+        stage: ShaderStage::Fragment,
+        log: "L".into(),
+    };
     assert_eq!(error.to_string(), "fragment shader `x.frag` failed to compile:\nL");
 }
 
@@ -78,7 +84,8 @@ fn es3_shaders_compile_where_the_level_allows() {
     let vertex = "#version 300 es\nlayout(location = 0) in vec2 a_position;\nvoid main() { gl_Position = vec4(a_position, 0.0, 1.0); }\n";
     let fragment =
         "#version 300 es\nprecision mediump float;\nout vec4 colour;\nvoid main() { colour = vec4(1.0); }\n";
-    let program = Program::build(context.gl(), "es3", vertex, fragment, &[]).expect("GLSL ES 3.00 program");
+    let program =
+        Program::build(context.gl(), "es3", vertex, fragment, &[]).expect("GLSL ES 3.00 program");
     assert!(program.uniform_location("absent").is_none());
     VertexArray::new(context.gl()).expect("ES 3 has vertex arrays").bind();
 }
@@ -109,7 +116,8 @@ fn render_targets_refuse_sizes_before_the_gl() {
         let refused = Renderbuffer::new(context.gl(), glow::RGBA8, size);
         assert!(matches!(refused, Err(GlError::InvalidRequest(_))), "{size}: {refused:?}");
     }
-    let zero = GlContext::new(&ContextRequest::new(GlBackend::Egl, GlesVersion::Es3, UVec2::new(0, 8)));
+    let zero =
+        GlContext::new(&ContextRequest::new(GlBackend::Egl, GlesVersion::Es3, UVec2::new(0, 8)));
     assert!(matches!(zero, Err(GlError::InvalidRequest(_))), "zero-sized headless target accepted");
 }
 
@@ -119,9 +127,14 @@ fn objects_outliving_their_context_are_not_freed_twice() {
     let context = egl(GlesVersion::Es3);
     let gl = Rc::clone(context.gl());
     let buffer = Buffer::new(&gl, BufferTarget::Vertices, 16, BufferUsage::Static).expect("buffer");
-    let program =
-        Program::build(&gl, "kept", VERTEX, "#version 100\nvoid main() { gl_FragColor = vec4(1.0); }\n", &[])
-            .expect("program");
+    let program = Program::build(
+        &gl,
+        "kept",
+        VERTEX,
+        "#version 100\nvoid main() { gl_FragColor = vec4(1.0); }\n",
+        &[],
+    )
+    .expect("program");
     assert!(gl.is_alive());
     drop(context);
     assert!(!gl.is_alive(), "the handle must know its context is gone");

@@ -22,7 +22,10 @@ fn bad_grids_and_options_are_refused_with_a_reason() {
     assert!(refuse(&short, BuildOptions::default()).contains("199 heights"));
     let mut empty = grid.clone();
     (empty.width, empty.heights) = (0, Vec::new());
-    assert!(matches!(build(&empty, &BuildOptions::default(), &Silent), Err(BuildError::InvalidGrid(_))));
+    assert!(matches!(
+        build(&empty, &BuildOptions::default(), &Silent),
+        Err(BuildError::InvalidGrid(_))
+    ));
     let mut no_spacing = grid.clone();
     no_spacing.georef.spacing[1] = 0.0;
     assert!(refuse(&no_spacing, BuildOptions::default()).contains("spacing"));

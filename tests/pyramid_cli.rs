@@ -9,17 +9,25 @@ use pyramid_common::scratch_dir;
 use ridgeline::pyramid::FILE_NAME;
 
 fn ridgeline(args: &[&str], cache: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_ridgeline")).args(args).arg(cache).output().expect("run ridgeline")
+    Command::new(env!("CARGO_BIN_EXE_ridgeline"))
+        .args(args)
+        .arg(cache)
+        .output()
+        .expect("run ridgeline")
 }
 
 #[test]
 fn info_json_describes_an_imported_cache() {
     let cache = scratch_dir("cli-info");
-    let imported = ridgeline(&["import", "--synthetic", "257", "--node-size", "32", "--border", "1", "--out"], &cache);
+    let imported = ridgeline(
+        &["import", "--synthetic", "257", "--node-size", "32", "--border", "1", "--out"],
+        &cache,
+    );
     assert!(imported.status.success(), "{}", String::from_utf8_lossy(&imported.stderr));
     let info = ridgeline(&["info", "--json"], &cache);
     assert!(info.status.success(), "{}", String::from_utf8_lossy(&info.stderr));
-    let json: serde_json::Value = serde_json::from_slice(&info.stdout).expect("info --json prints JSON");
+    let json: serde_json::Value =
+        serde_json::from_slice(&info.stdout).expect("info --json prints JSON");
     assert_eq!(json["levels"], 4, "256 cells need 32 << 3");
     assert_eq!(json["node_size"], 32);
     assert_eq!(json["samples"], serde_json::json!([257, 257]));
@@ -29,13 +37,17 @@ fn info_json_describes_an_imported_cache() {
     assert_eq!(deltas.len(), 4);
     assert_eq!(deltas[0], 0.0);
     assert!(deltas[1..].iter().all(|d| d.as_f64().expect("number") > 0.0));
-    let (lo, hi) = (json["height_min"].as_f64().expect("min"), json["height_max"].as_f64().expect("max"));
+    let (lo, hi) =
+        (json["height_min"].as_f64().expect("min"), json["height_max"].as_f64().expect("max"));
     assert!(lo < hi);
     assert_eq!(json["voids_filled"], 0);
 
     let table = ridgeline(&["info"], &cache);
     let text = String::from_utf8_lossy(&table.stdout);
-    assert!(table.status.success() && text.contains("257 x 257") && text.contains("4 levels"), "{text}");
+    assert!(
+        table.status.success() && text.contains("257 x 257") && text.contains("4 levels"),
+        "{text}"
+    );
 }
 
 #[test]
@@ -69,7 +81,8 @@ fn importing_the_shipped_srtm_tile_records_where_it_is() {
     let imported = ridgeline(&["import", tile, "--out"], &cache);
     assert!(imported.status.success(), "{}", String::from_utf8_lossy(&imported.stderr));
     let info = ridgeline(&["info", "--json"], &cache);
-    let json: serde_json::Value = serde_json::from_slice(&info.stdout).expect("info --json prints JSON");
+    let json: serde_json::Value =
+        serde_json::from_slice(&info.stdout).expect("info --json prints JSON");
     assert_eq!(json["samples"], serde_json::json!([1000, 1000]));
     assert_eq!(json["levels"], 5, "999 cells need 64 << 4");
     let degrees = |key: &str| json["georef"][key].as_f64().expect("geographic bounds");
@@ -83,7 +96,10 @@ fn importing_the_shipped_srtm_tile_records_where_it_is() {
     let spacing = json["spacing_m"].as_array().expect("spacing");
     assert!((spacing[0].as_f64().expect("east") - 71.6).abs() < 0.1);
     assert!((spacing[1].as_f64().expect("north") - 92.5).abs() < 0.1);
-    assert_eq!((json["height_min"].as_f64(), json["height_max"].as_f64()), (Some(1111.0), Some(3270.0)));
+    assert_eq!(
+        (json["height_min"].as_f64(), json["height_max"].as_f64()),
+        (Some(1111.0), Some(3270.0))
+    );
 }
 
 #[test]

@@ -24,7 +24,13 @@ fn height_in_triangle(a: DVec3, b: DVec3, c: DVec3, x: f64, y: f64) -> Option<f6
 
 /// The largest vertical distance between the grid samples under node `id`
 /// and the triangles of its posts, recomputed point by point.
-fn brute_force_delta(grid: &ElevationGrid, node: &NodeData, id: NodeId, node_size: u32, border: u32) -> f64 {
+fn brute_force_delta(
+    grid: &ElevationGrid,
+    node: &NodeData,
+    id: NodeId,
+    node_size: u32,
+    border: u32,
+) -> f64 {
     let step = 1u64 << id.lod;
     let span = node_size as u64 * step;
     let side = (node_size + 1 + 2 * border) as usize;
@@ -56,7 +62,13 @@ fn ulp(value: f32) -> f64 {
 }
 
 /// Checks `samples` random nodes of the pyramid built from `grid`.
-fn check_random_nodes(grid: &ElevationGrid, options: BuildOptions, samples: usize, seed: u64, case: &str) {
+fn check_random_nodes(
+    grid: &ElevationGrid,
+    options: BuildOptions,
+    samples: usize,
+    seed: u64,
+    case: &str,
+) {
     let dir = scratch_dir(&format!("delta-{case}"));
     let (_, path) = build_and_write(grid, options, &dir);
     let pyramid = Pyramid::open(&path).expect("open");
@@ -72,31 +84,48 @@ fn check_random_nodes(grid: &ElevationGrid, options: BuildOptions, samples: usiz
         let brute = brute_force_delta(grid, &node, id, options.node_size, options.border);
         let stored = node.delta;
         // Two f64 formulations of one surface differ by ~1e-12 m at most.
-        assert!(stored as f64 >= brute - 1e-9, "{case} {id:?}: stored {stored} below brute force {brute}");
-        assert!(stored as f64 - brute <= ulp(stored), "{case} {id:?}: stored {stored}, brute force {brute}");
+        assert!(
+            stored as f64 >= brute - 1e-9,
+            "{case} {id:?}: stored {stored} below brute force {brute}"
+        );
+        assert!(
+            stored as f64 - brute <= ulp(stored),
+            "{case} {id:?}: stored {stored}, brute force {brute}"
+        );
         if lod == 0 {
             assert_eq!(stored, 0.0, "level 0 passes through every sample");
         } else {
             coarse_with_error += (stored > 0.0) as u32;
         }
     }
-    assert!(coarse_with_error > 0 || layout.levels == 1, "{case}: no coarse node with an error was checked");
+    assert!(
+        coarse_with_error > 0 || layout.levels == 1,
+        "{case}: no coarse node with an error was checked"
+    );
 }
 
 #[test]
 fn stored_delta_equals_brute_force_on_the_shipped_srtm_tile() {
     let tile = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/dem/srtm3_n39e040_1000.tif");
-    let grid = ridgeline::dem::import_file(std::path::Path::new(tile)).expect("import the shipped tile");
+    let grid =
+        ridgeline::dem::import_file(std::path::Path::new(tile)).expect("import the shipped tile");
     check_random_nodes(&grid, BuildOptions::default(), 30, 0x5127, "srtm");
 }
 
 #[test]
 fn stored_delta_equals_brute_force_on_random_nodes() {
     // Sizes that do and do not fill the last node, odd and even node sizes.
-    let cases = [(203, 157, 16, 2), (129, 129, 32, 1), (300, 61, 20, 3), (65, 400, 8, 2), (2, 2, 4, 1)];
+    let cases =
+        [(203, 157, 16, 2), (129, 129, 32, 1), (300, 61, 20, 3), (65, 400, 8, 2), (2, 2, 4, 1)];
     for (case, &(width, height, node_size, border)) in cases.iter().enumerate() {
         let grid = random_grid(width, height, case as u64);
-        check_random_nodes(&grid, BuildOptions { node_size, border }, 40, case as u64, &format!("random-{case}"));
+        check_random_nodes(
+            &grid,
+            BuildOptions { node_size, border },
+            40,
+            case as u64,
+            &format!("random-{case}"),
+        );
     }
 }
 

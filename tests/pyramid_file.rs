@@ -52,7 +52,10 @@ fn every_node_reads_back_as_built_and_is_the_clamped_grid() {
     }
     let outside = NodeId::new(0, layout.nodes_at(0)[0], 0);
     assert!(matches!(pyramid.read_node(outside, &mut node), Err(NodeError::OutOfRange { .. })));
-    assert!(matches!(pyramid.read_node(NodeId::new(200, 0, 0), &mut node), Err(NodeError::OutOfRange { .. })));
+    assert!(matches!(
+        pyramid.read_node(NodeId::new(200, 0, 0), &mut node),
+        Err(NodeError::OutOfRange { .. })
+    ));
 }
 
 #[test]
@@ -95,26 +98,43 @@ fn exact_height_interpolates_level0_on_its_triangles() {
 fn assert_refused(dir: &std::path::Path, bytes: &[u8], what: &str) -> PyramidError {
     let path = dir.join("damaged.rlp");
     std::fs::write(&path, bytes).expect("write damaged copy");
-    let error = Pyramid::open(&path).err().unwrap_or_else(|| panic!("{what}: a damaged file opened"));
-    assert!(error.to_string().contains(&path.display().to_string()), "{what}: {error} does not name the file");
+    let error =
+        Pyramid::open(&path).err().unwrap_or_else(|| panic!("{what}: a damaged file opened"));
+    assert!(
+        error.to_string().contains(&path.display().to_string()),
+        "{what}: {error} does not name the file"
+    );
     error
 }
 
 #[test]
 fn truncated_empty_foreign_and_newer_files_are_refused() {
     let dir = scratch_dir("file-refused");
-    let (_, path) = build_and_write(&random_grid(40, 40, 4), BuildOptions { node_size: 8, border: 1 }, &dir);
+    let (_, path) =
+        build_and_write(&random_grid(40, 40, 4), BuildOptions { node_size: 8, border: 1 }, &dir);
     let good = std::fs::read(&path).expect("read");
     assert!(matches!(assert_refused(&dir, &[], "empty"), PyramidError::Truncated { .. }));
-    assert!(matches!(assert_refused(&dir, &good[..good.len() - 1], "short"), PyramidError::Truncated { .. }));
-    assert!(matches!(assert_refused(&dir, &good[..100], "header only"), PyramidError::Truncated { .. }));
+    assert!(matches!(
+        assert_refused(&dir, &good[..good.len() - 1], "short"),
+        PyramidError::Truncated { .. }
+    ));
+    assert!(matches!(
+        assert_refused(&dir, &good[..100], "header only"),
+        PyramidError::Truncated { .. }
+    ));
     let mut longer = good.clone();
     longer.push(0);
     assert!(matches!(assert_refused(&dir, &longer, "longer"), PyramidError::Corrupt { .. }));
-    assert!(matches!(assert_refused(&dir, b"GIF89a and more bytes", "foreign"), PyramidError::NotAPyramid { .. }));
+    assert!(matches!(
+        assert_refused(&dir, b"GIF89a and more bytes", "foreign"),
+        PyramidError::NotAPyramid { .. }
+    ));
     let mut newer = good.clone();
     newer[8] = 2;
-    assert!(matches!(assert_refused(&dir, &newer, "newer"), PyramidError::Version { found: 2, .. }));
+    assert!(matches!(
+        assert_refused(&dir, &newer, "newer"),
+        PyramidError::Version { found: 2, .. }
+    ));
     let missing = Pyramid::open(dir.join("missing")).err().expect("missing file");
     assert!(matches!(missing, PyramidError::Io { .. }) && missing.to_string().contains("missing"));
 }
@@ -122,7 +142,8 @@ fn truncated_empty_foreign_and_newer_files_are_refused() {
 #[test]
 fn a_node_damaged_after_opening_is_refused_when_read() {
     let dir = scratch_dir("file-damaged-later");
-    let (_, path) = build_and_write(&random_grid(40, 40, 5), BuildOptions { node_size: 8, border: 1 }, &dir);
+    let (_, path) =
+        build_and_write(&random_grid(40, 40, 5), BuildOptions { node_size: 8, border: 1 }, &dir);
     let pyramid = Pyramid::open(&path).expect("open");
     let mut node = NodeData::default();
     pyramid.read_node(NodeId::new(0, 0, 0), &mut node).expect("intact");
@@ -157,7 +178,8 @@ proptest! {
 #[test]
 fn every_header_byte_is_covered() {
     let dir = scratch_dir("file-header-bytes");
-    let (_, path) = build_and_write(&random_grid(30, 20, 7), BuildOptions { node_size: 8, border: 2 }, &dir);
+    let (_, path) =
+        build_and_write(&random_grid(30, 20, 7), BuildOptions { node_size: 8, border: 2 }, &dir);
     let good = std::fs::read(&path).expect("read");
     let header_len = u64::from_le_bytes(good[12..20].try_into().expect("8 bytes")) as usize;
     assert_eq!(header_len % 16, 0);

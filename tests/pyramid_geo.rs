@@ -11,7 +11,11 @@ fn geographic(origin: [f64; 2], spacing: [f64; 2]) -> GeoRef {
 fn a_degree_has_its_wgs84_length_at_the_centre_latitude() {
     // Lengths of one degree (m): equator 111 319.49 east, 110 574.27 north;
     // 45° 78 846.84 east, 111 131.75 north; 60° 55 799.98 east, 111 412.24 north.
-    let cases = [(0.0, 111_319.49, 110_574.27), (45.0, 78_846.84, 111_131.75), (60.0, 55_799.98, 111_412.24)];
+    let cases = [
+        (0.0, 111_319.49, 110_574.27),
+        (45.0, 78_846.84, 111_131.75),
+        (60.0, 55_799.98, 111_412.24),
+    ];
     for (lat, east, north) in cases {
         // Three samples one degree apart centred on `lat`.
         let spacing = geographic([10.0, lat - 1.0], [1.0, 1.0]).spacing_m([3, 3]);
@@ -22,7 +26,11 @@ fn a_degree_has_its_wgs84_length_at_the_centre_latitude() {
 
 #[test]
 fn planar_spacing_is_already_metres_and_has_no_degrees() {
-    let utm = GeoRef { crs: Crs::Projected { epsg: Some(32632) }, origin: [5e5, 5e6], spacing: [25.0, 30.0] };
+    let utm = GeoRef {
+        crs: Crs::Projected { epsg: Some(32632) },
+        origin: [5e5, 5e6],
+        spacing: [25.0, 30.0],
+    };
     assert_eq!(utm.spacing_m([10, 10]), [25.0, 30.0]);
     assert_eq!(utm.bounds_deg([10, 10]), None);
     assert_eq!(GeoRef::local([2.0, 3.0]).spacing_m([5, 5]), [2.0, 3.0]);
@@ -30,7 +38,8 @@ fn planar_spacing_is_already_metres_and_has_no_degrees() {
 
 #[test]
 fn bounds_span_the_outermost_posts() {
-    let srtm = geographic([40.0, 39.0], [1.0 / 1200.0; 2]).bounds_deg([1201, 1201]).expect("geographic");
+    let srtm =
+        geographic([40.0, 39.0], [1.0 / 1200.0; 2]).bounds_deg([1201, 1201]).expect("geographic");
     assert_eq!((srtm.west, srtm.south), (40.0, 39.0));
     assert!((srtm.east - 41.0).abs() < 1e-12 && (srtm.north - 40.0).abs() < 1e-12);
 }

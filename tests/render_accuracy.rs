@@ -9,11 +9,11 @@ mod render_common;
 
 use std::sync::Arc;
 
+use render_common::{config, open, pyramid, VIEWS};
 use ridgeline::accuracy::{measure_flight, AccuracyRun};
 use ridgeline::camera::Camera;
 use ridgeline::gl::{GlBackend, GlesVersion, TruthMesh, TruthPass, TruthRegion};
 use ridgeline::node::NodeSource;
-use render_common::{config, open, pyramid, VIEWS};
 
 fn measure(tau_px: f64) -> AccuracyRun {
     let mut config = config(GlBackend::Egl, GlesVersion::Es3);
@@ -27,7 +27,8 @@ fn measure(tau_px: f64) -> AccuracyRun {
     let region = TruthRegion::covering_tiles(&layout, config.scene.lod.grid_size);
     let mesh = TruthMesh::load(pyramid.as_ref(), region).expect("truth mesh");
     let truth = TruthPass::new(display.context().gl(), &mesh).expect("truth pass");
-    let views: Vec<(f64, Camera)> = VIEWS.iter().enumerate().map(|(k, v)| (k as f64, v.camera())).collect();
+    let views: Vec<(f64, Camera)> =
+        VIEWS.iter().enumerate().map(|(k, v)| (k as f64, v.camera())).collect();
     let source = Arc::clone(&pyramid);
     let exact = move |x: f64, y: f64| source.exact_height(x, y);
     measure_flight(&mut display, &truth, &exact, layout.spacing_m, &views).expect("measured")
@@ -58,16 +59,34 @@ fn measured_error_confirms_tau_and_grows_with_it() {
         assert!(run.skirt_pixels * 5000 < run.summary.pixels, "{} skirt pixels", run.skirt_pixels);
         for view in &run.views {
             // The CPU mirror reads the surface the GPU drew (skirts aside).
-            assert!(view.mirror_p99_m < 0.05, "mirror p99 {} m at tau {}", view.mirror_p99_m, run.tau_px);
+            assert!(
+                view.mirror_p99_m < 0.05,
+                "mirror p99 {} m at tau {}",
+                view.mirror_p99_m,
+                run.tau_px
+            );
         }
-        assert!(run.worst.as_ref().is_some_and(|w| w.heat_map.dimensions() == (render_common::SIZE.x, render_common::SIZE.y)));
+        assert!(run.worst.as_ref().is_some_and(
+            |w| w.heat_map.dimensions() == (render_common::SIZE.x, render_common::SIZE.y)
+        ));
     }
     let [fine, medium, coarse] = [&runs[0], &runs[1], &runs[2]];
-    assert!(fine.summary.p999_px <= 1.0 && medium.summary.p999_px <= 4.0, "the bound holds where it is promised");
+    assert!(
+        fine.summary.p999_px <= 1.0 && medium.summary.p999_px <= 4.0,
+        "the bound holds where it is promised"
+    );
     // And at every pixel: the bound is a guarantee, not a percentile.
-    assert!(fine.summary.max_px <= 1.0 && medium.summary.max_px <= 4.0, "max {} and {} px", fine.summary.max_px, medium.summary.max_px);
+    assert!(
+        fine.summary.max_px <= 1.0 && medium.summary.max_px <= 4.0,
+        "max {} and {} px",
+        fine.summary.max_px,
+        medium.summary.max_px
+    );
     // Coarse tiles are seen as error: the measurement is not blind.
-    assert!(coarse.summary.p99_px > 4.0 * fine.summary.p99_px, "tau 16 draws measurably coarser terrain");
+    assert!(
+        coarse.summary.p99_px > 4.0 * fine.summary.p99_px,
+        "tau 16 draws measurably coarser terrain"
+    );
     assert!(coarse.summary.max_px > fine.summary.max_px);
     let triangles = |run: &AccuracyRun| run.views.iter().map(|v| v.triangles_lod).sum::<u64>();
     assert!(triangles(coarse) * 2 < triangles(fine));

@@ -5,8 +5,8 @@
 
 mod render_common;
 
-use ridgeline::gl::{ChunkedBaseline, GlBackend, GlesVersion};
 use render_common::{config, open, render, VIEWS};
+use ridgeline::gl::{ChunkedBaseline, GlBackend, GlesVersion};
 
 #[test]
 fn baseline_draws_the_display_picture_and_uploads_each_tile_once() {
@@ -14,7 +14,8 @@ fn baseline_draws_the_display_picture_and_uploads_each_tile_once() {
     let mut display = open(&config).expect("headless EGL display");
     let [first, second, _] = VIEWS.map(|v| v.camera());
     let (batched, _) = render(&mut display, &first);
-    let mut baseline = ChunkedBaseline::new(display.context().gl(), config.scene.lod.grid_size).expect("baseline");
+    let mut baseline =
+        ChunkedBaseline::new(display.context().gl(), config.scene.lod.grid_size).expect("baseline");
     let (stats, base) = display.frame_baseline(&first, &mut baseline).expect("baseline frame");
     assert_eq!(base.uploads, stats.draw_calls, "every tile is uploaded by itself on first sight");
     assert_eq!(base.buffers, stats.draw_calls);
@@ -27,7 +28,10 @@ fn baseline_draws_the_display_picture_and_uploads_each_tile_once() {
     assert!(moved.uploads > 0 && moved.buffers <= moved.uploads + again.buffers);
     let baseline_second = display.read_pixels().expect("read");
     let (batched_second, _) = render(&mut display, &second);
-    assert!(batched_second == baseline_second, "the batched renderer catches up on the skipped uploads");
+    assert!(
+        batched_second == baseline_second,
+        "the batched renderer catches up on the skipped uploads"
+    );
 }
 
 /// While nodes page in a few per frame, tiles are regenerated from better
@@ -39,7 +43,8 @@ fn baseline_rewrites_tiles_regenerated_in_place() {
     config.load_budget = 2;
     let mut batched = open(&config).expect("headless EGL display");
     let mut chunked = open(&config).expect("second headless EGL display");
-    let mut baseline = ChunkedBaseline::new(chunked.context().gl(), config.scene.lod.grid_size).expect("baseline");
+    let mut baseline =
+        ChunkedBaseline::new(chunked.context().gl(), config.scene.lod.grid_size).expect("baseline");
     let start = VIEWS[0].camera();
     let mut paging_frames = 0;
     for k in 0..16 {
@@ -51,7 +56,13 @@ fn baseline_rewrites_tiles_regenerated_in_place() {
         chunked.context_mut().make_current().expect("current");
         let (_, base) = chunked.frame_baseline(&camera, &mut baseline).expect("baseline frame");
         paging_frames += usize::from(stats.nodes_loaded > 0 && base.uploads > 0);
-        assert!(chunked.read_pixels().expect("read") == expected, "frame {k}: the baseline draws stale heights");
+        assert!(
+            chunked.read_pixels().expect("read") == expected,
+            "frame {k}: the baseline draws stale heights"
+        );
     }
-    assert!(paging_frames >= 8, "nodes paged in and tiles were rewritten in {paging_frames} of 16 frames");
+    assert!(
+        paging_frames >= 8,
+        "nodes paged in and tiles were rewritten in {paging_frames} of 16 frames"
+    );
 }

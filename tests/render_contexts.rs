@@ -112,13 +112,20 @@ fn child_env(var: &str) -> String {
 #[ignore = "run in a child process by the ES 2.0 and window tests"]
 fn child_render() {
     let tag = child_env("RIDGELINE_RENDER_TAG");
-    let backend = GlBackend::from_str(&child_env("RIDGELINE_RENDER_BACKEND"), true).expect("a --backend value");
-    let version = GlesVersion::from_str(&child_env("RIDGELINE_RENDER_VERSION"), true).expect("a GLES version");
-    let mut display = open(&config(backend, version)).unwrap_or_else(|e| panic!("{backend:?} {version:?} display: {e}"));
+    let backend = GlBackend::from_str(&child_env("RIDGELINE_RENDER_BACKEND"), true)
+        .expect("a --backend value");
+    let version = GlesVersion::from_str(&child_env("RIDGELINE_RENDER_VERSION"), true)
+        .expect("a GLES version");
+    let mut display = open(&config(backend, version))
+        .unwrap_or_else(|e| panic!("{backend:?} {version:?} display: {e}"));
     let info = display.info().clone();
     println!("{tag}: {} on {} ({})", info.version, info.renderer, info.platform);
     assert_eq!(info.backend.name(), child_env("RIDGELINE_RENDER_EXPECT_BACKEND"));
-    assert!(info.version.starts_with(&child_env("RIDGELINE_RENDER_EXPECT_VERSION")), "GL_VERSION {}", info.version);
+    assert!(
+        info.version.starts_with(&child_env("RIDGELINE_RENDER_EXPECT_VERSION")),
+        "GL_VERSION {}",
+        info.version
+    );
     assert_eq!(info.caps.level, version);
     assert_eq!(display.context_mut().size(), SIZE, "Xvfb has no window manager to change the size");
     for view in &VIEWS {

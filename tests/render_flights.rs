@@ -27,7 +27,8 @@ use image::{Rgba, RgbaImage};
 use render_common::compare::{difference_image, save_evidence, Difference};
 use render_common::coverage::terrain_guaranteed;
 use render_common::{
-    camera, config, drawn_tiles, ground, lod_changed, open, redraw, render, terrain_bounds, SENTINEL, SENTINEL_RGBA, TOLERANCE,
+    camera, config, drawn_tiles, ground, lod_changed, open, redraw, render, terrain_bounds,
+    SENTINEL, SENTINEL_RGBA, TOLERANCE,
 };
 use ridgeline::camera::Camera;
 use ridgeline::display::{Display, DisplayConfig};
@@ -96,7 +97,11 @@ struct Holes {
 /// Flies [`low_flight`] with the sentinel clear colour; per frame, redraws
 /// with `alter` when given, and counts holes. Saves a frame with holes,
 /// marked in green, and returns its path with the counts.
-fn fly_counting_holes(display: &mut Display, name: &str, alter: Option<fn(&mut DrawList)>) -> (Vec<Holes>, BTreeSet<u8>, Option<String>) {
+fn fly_counting_holes(
+    display: &mut Display,
+    name: &str,
+    alter: Option<fn(&mut DrawList)>,
+) -> (Vec<Holes>, BTreeSet<u8>, Option<String>) {
     let bounds = terrain_bounds(1000.0);
     let mut frames = Vec::new();
     let mut levels = BTreeSet::new();
@@ -110,7 +115,9 @@ fn fly_counting_holes(display: &mut Display, name: &str, alter: Option<fn(&mut D
         let must_be_terrain = terrain_guaranteed(camera, &bounds);
         let mut marked = image.clone();
         let mut holes = 0;
-        for ((pixel, marked), &terrain) in image.pixels().zip(marked.pixels_mut()).zip(&must_be_terrain) {
+        for ((pixel, marked), &terrain) in
+            image.pixels().zip(marked.pixels_mut()).zip(&must_be_terrain)
+        {
             if terrain && pixel.0 == SENTINEL_RGBA {
                 holes += 1;
                 *marked = Rgba([0, 255, 0, 255]);
@@ -119,7 +126,8 @@ fn fly_counting_holes(display: &mut Display, name: &str, alter: Option<fn(&mut D
         if holes > 0 && evidence.is_none() {
             evidence = Some(save_evidence(&marked, &format!("{name}-frame-{k}-holes-green")));
         }
-        let covered = must_be_terrain.iter().filter(|&&t| t).count() as f64 / must_be_terrain.len() as f64;
+        let covered =
+            must_be_terrain.iter().filter(|&&t| t).count() as f64 / must_be_terrain.len() as f64;
         frames.push(Holes { holes, covered, generated: stats.scene.generated });
     }
     (frames, levels, evidence)
@@ -130,7 +138,8 @@ fn no_holes_along_a_low_flight() {
     let _turn = take_turn();
     for (name, config) in [("flying", flying()), ("coarse", coarse())] {
         let mut display = open(&with_sentinel(config)).expect("EGL display");
-        let (frames, levels, evidence) = fly_counting_holes(&mut display, &format!("cracks-{name}"), None);
+        let (frames, levels, evidence) =
+            fly_counting_holes(&mut display, &format!("cracks-{name}"), None);
         let holes: usize = frames.iter().map(|f| f.holes).sum();
         let least_covered = frames.iter().map(|f| f.covered).fold(1.0, f64::min);
         let changing = frames.iter().filter(|f| f.generated > 0).count();
@@ -140,8 +149,15 @@ fn no_holes_along_a_low_flight() {
             frames.len(),
             least_covered * 100.0
         );
-        assert_eq!(holes, 0, "{name}: holes in the terrain, first frame with holes marked at {evidence:?}");
-        assert!(least_covered > 0.5, "{name}: the check covered only {:.0}% of a frame", least_covered * 100.0);
+        assert_eq!(
+            holes, 0,
+            "{name}: holes in the terrain, first frame with holes marked at {evidence:?}"
+        );
+        assert!(
+            least_covered > 0.5,
+            "{name}: the check covered only {:.0}% of a frame",
+            least_covered * 100.0
+        );
         assert!(changing >= 10, "{name}: tiles changed on only {changing} frames");
         assert!(levels.len() >= 3, "{name}: the flight saw only levels {levels:?}");
     }
@@ -154,10 +170,16 @@ fn no_holes_along_a_low_flight() {
 fn the_hole_check_finds_cracks_without_skirts_and_morph() {
     let _turn = take_turn();
     let mut display = open(&with_sentinel(coarse())).expect("EGL display");
-    let (frames, _, evidence) = fly_counting_holes(&mut display, "cracks-coarse-no-skirts-no-morph", Some(without_skirts_and_morph));
+    let (frames, _, evidence) = fly_counting_holes(
+        &mut display,
+        "cracks-coarse-no-skirts-no-morph",
+        Some(without_skirts_and_morph),
+    );
     let holes: usize = frames.iter().map(|f| f.holes).sum();
     let with_holes = frames.iter().filter(|f| f.holes > 0).count();
-    println!("coarse, skirts and morph off: {holes} holes on {with_holes} frames; first at {evidence:?}");
+    println!(
+        "coarse, skirts and morph off: {holes} holes on {with_holes} frames; first at {evidence:?}"
+    );
     assert!(holes > 0, "removing skirts and morphing left no hole to find");
 }
 
@@ -199,7 +221,12 @@ const PIN_M: f64 = 0.01;
 /// Positions along [`slow_flight`] (every `step` metres up to `length`)
 /// where a tile splits or merges, each as two positions `PIN_M` apart with
 /// the switch between them.
-fn switches(display: &mut Display, selection: &mut Selection, length: f64, step: f64) -> Vec<(f64, f64)> {
+fn switches(
+    display: &mut Display,
+    selection: &mut Selection,
+    length: f64,
+    step: f64,
+) -> Vec<(f64, f64)> {
     let mut found = Vec::new();
     let mut before = selection.tiles(display, &slow_flight(0.0));
     let mut s = 0.0;
@@ -259,7 +286,10 @@ fn pops(config: &DisplayConfig, alter: Option<fn(&mut DrawList)>) -> Vec<Pop> {
         .map(|(a, b)| {
             let (before, tiles_before) = picture(&mut display, a);
             let (after, tiles_after) = picture(&mut display, b);
-            assert!(lod_changed(&tiles_before, &tiles_after), "the drawn tiles do not switch between {a} and {b} m");
+            assert!(
+                lod_changed(&tiles_before, &tiles_after),
+                "the drawn tiles do not switch between {a} and {b} m"
+            );
             let (earlier, _) = picture(&mut display, a - 5.0);
             Pop {
                 at_m: a,
@@ -280,7 +310,10 @@ fn no_pops_where_tiles_switch_level_along_a_slow_flight() {
     for (name, config, least) in [("flying", flying(), 5), ("coarse", coarse(), 3)] {
         let pops = pops(&config, None);
         for pop in &pops {
-            println!("{name} at {:7.2} m: switch {} | 5 m of flight {}", pop.at_m, pop.pop, pop.flight);
+            println!(
+                "{name} at {:7.2} m: switch {} | 5 m of flight {}",
+                pop.at_m, pop.pop, pop.flight
+            );
         }
         assert!(pops.len() >= least, "{name}: only {} switches along the flight", pops.len());
         if let Some(pop) = pops.iter().find(|pop| !pop.is_small()) {
@@ -289,7 +322,10 @@ fn no_pops_where_tiles_switch_level_along_a_slow_flight() {
             let saved = [
                 save_evidence(before, &format!("{name}-before")),
                 save_evidence(after, &format!("{name}-after")),
-                save_evidence(&difference_image(before, after, TOLERANCE.channel_threshold), &format!("{name}-diff")),
+                save_evidence(
+                    &difference_image(before, after, TOLERANCE.channel_threshold),
+                    &format!("{name}-diff"),
+                ),
             ];
             panic!("{name}: the switch changes the picture by {} against {} for 5 m of flight\n  {saved:#?}", pop.pop, pop.flight);
         }
@@ -304,7 +340,10 @@ fn the_pop_check_finds_switches_without_morph() {
     let _turn = take_turn();
     let pops = pops(&coarse(), Some(without_morph));
     for pop in &pops {
-        println!("coarse unmorphed at {:7.2} m: switch {} | 5 m of flight {}", pop.at_m, pop.pop, pop.flight);
+        println!(
+            "coarse unmorphed at {:7.2} m: switch {} | 5 m of flight {}",
+            pop.at_m, pop.pop, pop.flight
+        );
     }
     let caught = pops.iter().filter(|pop| !pop.is_small()).count();
     assert!(caught > 0, "none of {} unmorphed switches was caught", pops.len());

@@ -17,14 +17,16 @@ mod render_common;
 use gl_common::{skip_for_missing_osmesa, take_turn};
 use image::RgbaImage;
 use render_common::compare::{assert_similar, check_similar, Difference};
-use render_common::{config, open, render, redraw, View, TOLERANCE, VIEWS};
+use render_common::{config, open, redraw, render, View, TOLERANCE, VIEWS};
 use ridgeline::display::DisplayError;
 use ridgeline::gl::{GlBackend, GlesVersion, OpenedBackend};
 use std::path::PathBuf;
 use std::sync::OnceLock;
 
 fn golden_path(view: &View) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/golden").join(format!("{}.png", view.name))
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/golden")
+        .join(format!("{}.png", view.name))
 }
 
 fn updating() -> bool {
@@ -39,7 +41,10 @@ fn goldens() -> &'static [RgbaImage] {
     GOLDENS.get_or_init(|| {
         if updating() {
             let mut display = open(&config(GlBackend::Egl, GlesVersion::Es3)).expect("EGL display");
-            VIEWS.iter().map(|view| write_golden(view, render(&mut display, &view.camera()).0)).collect()
+            VIEWS
+                .iter()
+                .map(|view| write_golden(view, render(&mut display, &view.camera()).0))
+                .collect()
         } else {
             VIEWS.iter().map(read_golden).collect()
         }
@@ -78,7 +83,8 @@ fn egl_renders_the_golden_views() {
     for (view, golden) in VIEWS.iter().zip(goldens) {
         let (image, stats) = render(&mut display, &view.camera());
         assert!(stats.scene.tiles > 50, "{}: only {} tiles drawn", view.name, stats.scene.tiles);
-        let difference = assert_similar(&format!("golden-egl-{}", view.name), golden, &image, &TOLERANCE);
+        let difference =
+            assert_similar(&format!("golden-egl-{}", view.name), golden, &image, &TOLERANCE);
         println!("EGL {} vs golden: {difference} ({} tiles)", view.name, stats.scene.tiles);
     }
 }
@@ -88,19 +94,38 @@ fn osmesa_renders_the_golden_views_and_matches_egl() {
     let _turn = take_turn();
     let goldens = goldens();
     let mut osmesa = match open(&config(GlBackend::OsMesa, GlesVersion::Es2)) {
-        Err(DisplayError::Gl(error)) if skip_for_missing_osmesa("osmesa_renders_the_golden_views_and_matches_egl", &error) => {
+        Err(DisplayError::Gl(error))
+            if skip_for_missing_osmesa(
+                "osmesa_renders_the_golden_views_and_matches_egl",
+                &error,
+            ) =>
+        {
             return;
         }
         other => other.expect("OSMesa display"),
     };
     assert_eq!(osmesa.info().backend, OpenedBackend::OsMesa);
-    assert!(!osmesa.info().is_es(), "OSMesa runs the ES shaders on desktop GL: {}", osmesa.info().version);
+    assert!(
+        !osmesa.info().is_es(),
+        "OSMesa runs the ES shaders on desktop GL: {}",
+        osmesa.info().version
+    );
     let mut egl = open(&config(GlBackend::Egl, GlesVersion::Es3)).expect("EGL display");
     for (view, golden) in VIEWS.iter().zip(goldens) {
         let (from_osmesa, _) = render(&mut osmesa, &view.camera());
         let (from_egl, _) = render(&mut egl, &view.camera());
-        let to_golden = assert_similar(&format!("golden-osmesa-{}", view.name), golden, &from_osmesa, &TOLERANCE);
-        let to_egl = assert_similar(&format!("osmesa-vs-egl-{}", view.name), &from_egl, &from_osmesa, &TOLERANCE);
+        let to_golden = assert_similar(
+            &format!("golden-osmesa-{}", view.name),
+            golden,
+            &from_osmesa,
+            &TOLERANCE,
+        );
+        let to_egl = assert_similar(
+            &format!("osmesa-vs-egl-{}", view.name),
+            &from_egl,
+            &from_osmesa,
+            &TOLERANCE,
+        );
         println!("OSMesa {}: vs golden {to_golden}; vs EGL {to_egl}", view.name);
     }
 }
@@ -128,10 +153,18 @@ fn the_tolerance_rejects_a_moved_camera_a_coarser_tau_a_missing_tile_and_wrong_c
         moved.position.x += 5.0;
         let (image, _) = render(&mut display, &moved);
         must_differ(&format!("{}-moved-5m", view.name), golden, &image);
-        must_differ(&format!("{}-tau-2px", view.name), golden, &render(&mut coarser, &view.camera()).0);
+        must_differ(
+            &format!("{}-tau-2px", view.name),
+            golden,
+            &render(&mut coarser, &view.camera()).0,
+        );
         // The band can only colour terrain within 1000 m below the aircraft.
         if view.altitude - banded_caution_m < highest_m {
-            must_differ(&format!("{}-caution-1000m", view.name), golden, &render(&mut banded, &view.camera()).0);
+            must_differ(
+                &format!("{}-caution-1000m", view.name),
+                golden,
+                &render(&mut banded, &view.camera()).0,
+            );
         }
         let (mut swapped, _) = render(&mut display, &view.camera());
         for pixel in swapped.pixels_mut() {
@@ -158,13 +191,18 @@ fn a_mismatch_names_and_keeps_the_images() {
     let grey = RgbaImage::from_pixel(8, 4, image::Rgba([100, 100, 100, 255]));
     let mut spotted = grey.clone();
     spotted.put_pixel(3, 2, image::Rgba([100, 180, 100, 255]));
-    let problem = check_similar("self-test-spot", &grey, &spotted, &TOLERANCE).expect_err("a spot on 1 of 32 pixels passed");
+    let problem = check_similar("self-test-spot", &grey, &spotted, &TOLERANCE)
+        .expect_err("a spot on 1 of 32 pixels passed");
     for kind in ["expected", "actual", "diff"] {
-        let path = render_common::scratch_dir().join(format!("render-failures/self-test-spot-{kind}.png"));
+        let path =
+            render_common::scratch_dir().join(format!("render-failures/self-test-spot-{kind}.png"));
         assert!(problem.contains(&path.display().to_string()), "{problem}");
         assert_eq!(image::open(&path).expect("evidence saved").to_rgba8().dimensions(), (8, 4));
     }
-    let diff = image::open(render_common::scratch_dir().join("render-failures/self-test-spot-diff.png")).unwrap().to_rgba8();
+    let diff =
+        image::open(render_common::scratch_dir().join("render-failures/self-test-spot-diff.png"))
+            .unwrap()
+            .to_rgba8();
     assert_eq!(diff.get_pixel(3, 2).0, [255, 0, 0, 255], "the differing pixel is marked red");
     assert_eq!(check_similar("self-test-same", &grey, &grey, &TOLERANCE).map(|d| d.largest), Ok(0));
 }

@@ -49,14 +49,22 @@ use std::time::Instant;
 /// border posts. At 2.4 m one settled view of the earth-scale test pages
 /// 65 000 nodes (a minute): the 9.2 km height range widens every ring.
 fn earth_params(thin: u32) -> EarthParams {
-    EarthParams { node_size: 64, levels: 19 - thin as u8, border: 2, spacing_m: 2.4 * (1u32 << thin) as f64, seed: 11 }
+    EarthParams {
+        node_size: 64,
+        levels: 19 - thin as u8,
+        border: 2,
+        spacing_m: 2.4 * (1u32 << thin) as f64,
+        seed: 11,
+    }
 }
 
 /// Per-level error and height range, from the earth's own bounds.
 fn summary(earth: &ProceduralEarth) -> TerrainSummary {
     let [low, high] = earth.height_bounds();
     TerrainSummary {
-        delta_per_level: (0..earth.layout().levels).map(|lod| earth.delta_bound(lod) as f64).collect(),
+        delta_per_level: (0..earth.layout().levels)
+            .map(|lod| earth.delta_bound(lod) as f64)
+            .collect(),
         height_range: (low as f32, high as f32),
     }
 }
@@ -83,7 +91,11 @@ const CENTIMETRE: f64 = 0.01;
 const EXACT_RADIUS_M: f64 = 65_000.0;
 
 fn earth_config() -> DisplayConfig {
-    DisplayConfig { loader: LoaderMode::Inline, load_budget: 1000, ..DisplayConfig::new(GlBackend::Egl, EARTH_SIZE) }
+    DisplayConfig {
+        loader: LoaderMode::Inline,
+        load_budget: 1000,
+        ..DisplayConfig::new(GlBackend::Egl, EARTH_SIZE)
+    }
 }
 
 /// A view near the origin; the far one is the same view moved by the shift.
@@ -117,7 +129,11 @@ fn near_views(earth: &ProceduralEarth) -> [EarthView; 2] {
     let ahead = 250.0 * std::f64::consts::FRAC_1_SQRT_2;
     let band_edge = ground(x + ahead, y + ahead) + palette::DEFAULT_CAUTION_BELOW_M as f64;
     [
-        EarthView { name: "horizon", camera: camera(x, y, ground(x, y) + 900.0, -8.0), sharp: false },
+        EarthView {
+            name: "horizon",
+            camera: camera(x, y, ground(x, y) + 900.0, -8.0),
+            sharp: false,
+        },
         EarthView { name: "band", camera: camera(x, y, band_edge, -20.0), sharp: true },
     ]
 }
@@ -142,7 +158,14 @@ fn drawn(display: &Display, list: &DrawList) -> BTreeMap<TileKey, Drawn> {
             let start = tile.byte_offset as usize;
             let bytes = &staging[start..start + count * size];
             let vertices = bytes.chunks_exact(size).map(bytemuck::pod_read_unaligned).collect();
-            (tile.key, Drawn { uniforms: *tile, posts: list.frame.expect("a drawn frame").posts, vertices })
+            (
+                tile.key,
+                Drawn {
+                    uniforms: *tile,
+                    posts: list.frame.expect("a drawn frame").posts,
+                    vertices,
+                },
+            )
         })
         .collect()
 }
@@ -159,7 +182,8 @@ fn shader_position(tile: &Drawn, grid: u32, i: u32, j: u32, altitude: f64) -> [f
 /// The same post computed exactly in f64 from the tile key and the camera.
 fn exact_position(tile: &Drawn, grid: u32, i: u32, j: u32, eye: DVec3, spacing_m: f64) -> DVec3 {
     let key = tile.uniforms.key;
-    let post = |k: u32, n: u32| ((k as u64 * grid as u64 + n as u64) << key.level) as f64 * spacing_m;
+    let post =
+        |k: u32, n: u32| ((k as u64 * grid as u64 + n as u64) << key.level) as f64 * spacing_m;
     let height = tile.vertices[(i + j * (grid + 1)) as usize].height as f64;
     DVec3::new(post(key.x, i), post(key.y, j), height) - eye
 }
@@ -179,18 +203,34 @@ struct Agreement {
 
 /// Compares the far view's draws, moved back by [`SHIFT_POSTS`], with the
 /// near view's. Panics if they are not the same tiles.
-fn agreement(far: &BTreeMap<TileKey, Drawn>, far_eye: DVec3, near: &BTreeMap<TileKey, Drawn>, near_eye: DVec3, grid: u32) -> Agreement {
-    let moved: BTreeMap<TileKey, &Drawn> = far.iter().map(|(&key, tile)| (moved_back(key, grid), tile)).collect();
-    let (far_keys, near_keys): (BTreeSet<TileKey>, BTreeSet<TileKey>) = (moved.keys().copied().collect(), near.keys().copied().collect());
+fn agreement(
+    far: &BTreeMap<TileKey, Drawn>,
+    far_eye: DVec3,
+    near: &BTreeMap<TileKey, Drawn>,
+    near_eye: DVec3,
+    grid: u32,
+) -> Agreement {
+    let moved: BTreeMap<TileKey, &Drawn> =
+        far.iter().map(|(&key, tile)| (moved_back(key, grid), tile)).collect();
+    let (far_keys, near_keys): (BTreeSet<TileKey>, BTreeSet<TileKey>) =
+        (moved.keys().copied().collect(), near.keys().copied().collect());
     let only_far: Vec<_> = far_keys.difference(&near_keys).collect();
     let only_near: Vec<_> = near_keys.difference(&far_keys).collect();
-    assert!(only_far.is_empty() && only_near.is_empty(), "different tiles: only far {only_far:?}, only near {only_near:?}");
+    assert!(
+        only_far.is_empty() && only_near.is_empty(),
+        "different tiles: only far {only_far:?}, only near {only_near:?}"
+    );
     let spacing_m = earth_params(EARTH_THIN).spacing_m;
     let mut result = Agreement::default();
     for (key, near_tile) in near {
         let far_tile = moved[key];
         let (a, b) = (far_tile.uniforms, near_tile.uniforms);
-        if a.first_post != b.first_post || a.post_step != b.post_step || a.morph != b.morph || a.skirt_depth != b.skirt_depth || far_tile.vertices != near_tile.vertices {
+        if a.first_post != b.first_post
+            || a.post_step != b.post_step
+            || a.morph != b.morph
+            || a.skirt_depth != b.skirt_depth
+            || far_tile.vertices != near_tile.vertices
+        {
             result.other_differences.push(*key);
         }
         for j in 0..=grid {
@@ -203,7 +243,9 @@ fn agreement(far: &BTreeMap<TileKey, Drawn>, far_eye: DVec3, near: &BTreeMap<Til
                 for (tile, position, eye) in [(far_tile, p, far_eye), (near_tile, q, near_eye)] {
                     let exact = exact_position(tile, grid, i, j, eye, spacing_m);
                     if exact.truncate().length() <= EXACT_RADIUS_M {
-                        let error = (0..3).map(|c| (position[c] as f64 - exact[c]).abs()).fold(0.0, f64::max);
+                        let error = (0..3)
+                            .map(|c| (position[c] as f64 - exact[c]).abs())
+                            .fold(0.0, f64::max);
                         result.against_exact_m = result.against_exact_m.max(error);
                         result.near_vertices += 1;
                     }
@@ -217,7 +259,12 @@ fn agreement(far: &BTreeMap<TileKey, Drawn>, far_eye: DVec3, near: &BTreeMap<Til
 /// The tile of the shifted earth that shows what `key` shows here.
 fn moved_back(key: TileKey, grid: u32) -> TileKey {
     let span = (grid as u64) << key.level;
-    assert_eq!(SHIFT_POSTS as u64 % span, 0, "tile {key:?}: the shift is not a whole tile of level {}", key.level);
+    assert_eq!(
+        SHIFT_POSTS as u64 % span,
+        0,
+        "tile {key:?}: the shift is not a whole tile of level {}",
+        key.level
+    );
     let shift = (SHIFT_POSTS as u64 / span) as u32;
     TileKey::new(key.level, key.x - shift, key.y - shift)
 }
@@ -272,17 +319,36 @@ struct BothPlaces {
 fn draw_at_both_places(far: &mut Display, near: &mut Display, near_camera: &Camera) -> BothPlaces {
     let grid = earth_config().scene.lod.grid_size;
     let shift_m = SHIFT_POSTS as f64 * earth_params(EARTH_THIN).spacing_m;
-    let far_camera = Camera { position: near_camera.position + DVec3::new(shift_m, shift_m, 0.0), ..*near_camera };
+    let far_camera = Camera {
+        position: near_camera.position + DVec3::new(shift_m, shift_m, 0.0),
+        ..*near_camera
+    };
     let (far_image, far_stats) = render(far, &far_camera);
     let (near_image, near_stats) = render(near, near_camera);
-    assert_eq!(far_stats.scene.coarsened + near_stats.scene.coarsened, 0, "the GPU buffer was full");
+    assert_eq!(
+        far_stats.scene.coarsened + near_stats.scene.coarsened,
+        0,
+        "the GPU buffer was full"
+    );
     let far_list = far.scene().draw_list().clone();
     let near_tiles = drawn(near, near.scene().draw_list());
-    let positions = agreement(&drawn(far, &far_list), far_camera.position, &near_tiles, near_camera.position, grid);
+    let positions = agreement(
+        &drawn(far, &far_list),
+        far_camera.position,
+        &near_tiles,
+        near_camera.position,
+        grid,
+    );
     let fault_image = redraw(far, |list| origins_in_f32_absolute(list, far_camera.position, grid));
     let mut fault_list = far_list;
     origins_in_f32_absolute(&mut fault_list, far_camera.position, grid);
-    let fault_positions = agreement(&drawn(far, &fault_list), far_camera.position, &near_tiles, near_camera.position, grid);
+    let fault_positions = agreement(
+        &drawn(far, &fault_list),
+        far_camera.position,
+        &near_tiles,
+        near_camera.position,
+        grid,
+    );
     BothPlaces {
         tiles: near_stats.scene.tiles,
         levels: near_tiles.keys().map(|key| key.level).collect(),
@@ -320,17 +386,35 @@ fn a_view_ten_thousand_km_out_draws_the_same_picture_as_at_the_origin() {
             fault.between_views_m, fault.against_exact_m, both.fault_pixels.0, both.fault_pixels.1
         );
         assert!(both.tiles > 30, "{name}: only {} tiles drawn", both.tiles);
-        assert!(positions.other_differences.is_empty(), "{name}: other uniforms or data in {:?}", positions.other_differences);
-        assert!(positions.between_views_m < CENTIMETRE, "{name}: vertices apart by {} m", positions.between_views_m);
-        assert!(positions.against_exact_m < CENTIMETRE, "{name}: vertices off by {} m", positions.against_exact_m);
+        assert!(
+            positions.other_differences.is_empty(),
+            "{name}: other uniforms or data in {:?}",
+            positions.other_differences
+        );
+        assert!(
+            positions.between_views_m < CENTIMETRE,
+            "{name}: vertices apart by {} m",
+            positions.between_views_m
+        );
+        assert!(
+            positions.against_exact_m < CENTIMETRE,
+            "{name}: vertices off by {} m",
+            positions.against_exact_m
+        );
         if both.pixels.1 > 0 {
             let saved = evidence(name, [("far", far_image), ("near", near_image)]);
             panic!("{name}: {} pixels differ by more than one step: {saved:#?}", both.pixels.1);
         }
         // The checks catch the fault they exist for.
-        assert!(fault.between_views_m > CENTIMETRE && fault.against_exact_m > CENTIMETRE, "{name}: the f32 fault moves no vertex");
+        assert!(
+            fault.between_views_m > CENTIMETRE && fault.against_exact_m > CENTIMETRE,
+            "{name}: the f32 fault moves no vertex"
+        );
         if sharp && both.fault_pixels.1 == 0 {
-            let saved = evidence(&format!("{name}-f32-fault"), [("far", &both.fault_image), ("near", near_image)]);
+            let saved = evidence(
+                &format!("{name}-f32-fault"),
+                [("far", &both.fault_image), ("near", near_image)],
+            );
             panic!("{name}: the f32 fault leaves the picture within one step: {saved:#?}");
         }
     }
@@ -357,8 +441,10 @@ const RSS_NOISE: u64 = 4 << 20;
 /// The process's resident set, bytes (Linux).
 fn resident_bytes() -> u64 {
     let status = std::fs::read_to_string("/proc/self/status").expect("/proc/self/status");
-    let line = status.lines().find(|line| line.starts_with("VmRSS:")).expect("VmRSS in /proc/self/status");
-    let kib: u64 = line.split_whitespace().nth(1).and_then(|n| n.parse().ok()).expect("VmRSS in kB");
+    let line =
+        status.lines().find(|line| line.starts_with("VmRSS:")).expect("VmRSS in /proc/self/status");
+    let kib: u64 =
+        line.split_whitespace().nth(1).and_then(|n| n.parse().ok()).expect("VmRSS in kB");
     kib * 1024
 }
 
@@ -472,7 +558,10 @@ fn soak_in_a_process_of_its_own() {
             lap.tiles.len(), lap.used_bytes, first.tiles.len(), first.used_bytes, lap.tiles == first.tiles
         );
         if count_differing(&lap.image, &first.image).0 > 0 {
-            let saved = evidence(&format!("soak-lap-{k}"), [("end", &lap.image), ("first-end", &first.image)]);
+            let saved = evidence(
+                &format!("soak-lap-{k}"),
+                [("end", &lap.image), ("first-end", &first.image)],
+            );
             panic!("lap {k} ends with another picture: {saved:#?}");
         }
     }
@@ -482,18 +571,30 @@ fn soak_in_a_process_of_its_own() {
     let warm = laps.iter().position(|lap| lap.atlas_full).expect("the atlas fills");
     assert!(warm < LAPS / 2, "the atlas filled only after lap {warm}");
     let after = &laps[warm + 1..];
-    assert!(after.iter().map(|lap| lap.nodes_loaded).sum::<u64>() > 0, "the loader stopped paging once the atlas was full");
+    assert!(
+        after.iter().map(|lap| lap.nodes_loaded).sum::<u64>() > 0,
+        "the loader stopped paging once the atlas was full"
+    );
     let (at_warm, last) = (laps[warm].resident_bytes, laps[LAPS - 1].resident_bytes);
     let highest = after.iter().map(|lap| lap.resident_bytes).max().unwrap_or(at_warm);
     println!(
         "resident: {:.2} MiB when the atlas filled (lap {warm}), {:.2} MiB at the end, at most {:.2} MiB between",
         at_warm as f64 / 1048576.0, last as f64 / 1048576.0, highest as f64 / 1048576.0
     );
-    assert!(highest <= at_warm + RSS_NOISE, "resident memory grows after warm-up: {at_warm} then up to {highest} bytes");
+    assert!(
+        highest <= at_warm + RSS_NOISE,
+        "resident memory grows after warm-up: {at_warm} then up to {highest} bytes"
+    );
     // Free space: no trend in the workspace (where fragmentation shows),
     // averaged over each lap's frames, from the first third of the laps to the last.
     let third = LAPS / 3;
-    let (early, late) = (mean(&laps[1..=third], Lap::mean_workspace), mean(&laps[LAPS - third..], Lap::mean_workspace));
+    let (early, late) = (
+        mean(&laps[1..=third], Lap::mean_workspace),
+        mean(&laps[LAPS - third..], Lap::mean_workspace),
+    );
     println!("workspace: {early:.0} bytes in laps 1 to {third}, {late:.0} in the last {third}");
-    assert!(late <= early * 1.1, "the allocator's workspace grows: {early:.0} then {late:.0} bytes");
+    assert!(
+        late <= early * 1.1,
+        "the allocator's workspace grows: {early:.0} then {late:.0} bytes"
+    );
 }

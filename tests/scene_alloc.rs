@@ -13,7 +13,9 @@ use scene_common::{camera, terrain};
 fn steady_state_frames_allocate_nothing() {
     let terrain = terrain();
     let mut scene = Scene::new(SceneConfig::default(), terrain).unwrap();
-    let path = |k: u32| camera(20_000.0 + 40.0 * k as f64, 30_000.0 + 25.0 * k as f64, 3_000.0, 55.0, -7.0);
+    let path = |k: u32| {
+        camera(20_000.0 + 40.0 * k as f64, 30_000.0 + 25.0 * k as f64, 3_000.0, 55.0, -7.0)
+    };
     // Warm-up: the hash map and tables reach their working size.
     for k in 0..40 {
         scene.frame(&path(k), terrain).unwrap();

@@ -17,7 +17,13 @@ fn shared_edges_agree_along_a_low_flight() {
     let mut shared_points = 0;
     for k in 0..30 {
         let t = k as f64 / 29.0;
-        let cam = camera(8_000.0 + 50_000.0 * t, 10_000.0 + 60_000.0 * t, 3_600.0 - 1_000.0 * t, 40.0, -8.0);
+        let cam = camera(
+            8_000.0 + 50_000.0 * t,
+            10_000.0 + 60_000.0 * t,
+            3_600.0 - 1_000.0 * t,
+            40.0,
+            -8.0,
+        );
         scene.frame(&cam, terrain).unwrap();
         let list = scene.draw_list();
         levels_seen.extend(list.tiles.iter().map(|t| t.key.level));
@@ -27,8 +33,15 @@ fn shared_edges_agree_along_a_low_flight() {
                 continue;
             }
             shared_points += 1;
-            let (lo, hi) = values.iter().fold((f64::MAX, f64::MIN), |(lo, hi), &v| (lo.min(v), hi.max(v)));
-            assert!(hi - lo < 0.01, "frame {k}: tiles disagree by {} m at post ({}, {})", hi - lo, x as f64 / 2.0, y as f64 / 2.0);
+            let (lo, hi) =
+                values.iter().fold((f64::MAX, f64::MIN), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+            assert!(
+                hi - lo < 0.01,
+                "frame {k}: tiles disagree by {} m at post ({}, {})",
+                hi - lo,
+                x as f64 / 2.0,
+                y as f64 / 2.0
+            );
         }
     }
     assert!(levels_seen.len() >= 3, "the flight crosses several levels: {levels_seen:?}");

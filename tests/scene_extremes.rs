@@ -19,13 +19,21 @@ const SIDE: u32 = 513;
 const SPACING: f64 = 30.0;
 
 fn grid(name: &str, height: impl Fn(u32, u32) -> f32) -> (String, ElevationGrid) {
-    let heights = (0..SIDE).flat_map(|j| (0..SIDE).map(move |i| (i, j))).map(|(i, j)| height(i, j)).collect();
-    let grid = ElevationGrid { width: SIDE, height: SIDE, heights, georef: GeoRef::local([SPACING, SPACING]), voids_filled: 0 };
+    let heights =
+        (0..SIDE).flat_map(|j| (0..SIDE).map(move |i| (i, j))).map(|(i, j)| height(i, j)).collect();
+    let grid = ElevationGrid {
+        width: SIDE,
+        height: SIDE,
+        heights,
+        georef: GeoRef::local([SPACING, SPACING]),
+        voids_filled: 0,
+    };
     (name.to_string(), grid)
 }
 
 fn terrain_of(name: &str, grid: &ElevationGrid) -> PreloadedTerrain {
-    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("extreme-{name}-{}", std::process::id()));
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("extreme-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let built = pyramid::build(grid, &BuildOptions::default(), &Silent).unwrap();
     pyramid::write_atomic(&built, &dir.join(pyramid::FILE_NAME), &Silent).unwrap();
@@ -40,7 +48,9 @@ fn extreme_terrain_draws_without_cracks() {
     let cases = [
         grid("flat-sea", |_, _| 0.0),
         grid("cliffs", |i, _| if (i / 16) % 2 == 0 { 0.0 } else { 2000.0 }),
-        grid("dead-sea-to-everest", |i, j| -430.0 + (8848.0 + 430.0) * (i + j) as f32 / (2 * (SIDE - 1)) as f32),
+        grid("dead-sea-to-everest", |i, j| {
+            -430.0 + (8848.0 + 430.0) * (i + j) as f32 / (2 * (SIDE - 1)) as f32
+        }),
         grid("spike", |i, j| if (i, j) == (300, 300) { 8848.0 } else { 100.0 }),
     ];
     let extent = (SIDE - 1) as f64 * SPACING;
@@ -54,7 +64,13 @@ fn extreme_terrain_draws_without_cracks() {
         let mut worst: f64 = 0.0;
         for k in 0..12 {
             let t = k as f64 / 11.0;
-            let cam = camera(0.1 * extent + 0.7 * extent * t, 0.2 * extent + 0.5 * extent * t, top as f64 + 300.0, 45.0, -12.0);
+            let cam = camera(
+                0.1 * extent + 0.7 * extent * t,
+                0.2 * extent + 0.5 * extent * t,
+                top as f64 + 300.0,
+                45.0,
+                -12.0,
+            );
             scene.frame(&cam, &terrain).unwrap_or_else(|e| panic!("{name}, frame {k}: {e}"));
             let (staging, ranges) = scene.uploads();
             backend.upload(staging, ranges).unwrap();
@@ -62,12 +78,29 @@ fn extreme_terrain_draws_without_cracks() {
             let list = scene.draw_list();
             for tile in &list.tiles {
                 let level_delta = deltas.get(tile.key.level as usize + 1).copied().unwrap_or(0.0);
-                assert!(tile.skirt_depth as f64 >= 2.0 * level_delta, "{name}: skirt {} under delta {level_delta}", tile.skirt_depth);
-                assert!(tile.first_post.iter().chain([&tile.post_step]).chain(&tile.morph).all(|v| v.is_finite()));
+                assert!(
+                    tile.skirt_depth as f64 >= 2.0 * level_delta,
+                    "{name}: skirt {} under delta {level_delta}",
+                    tile.skirt_depth
+                );
+                assert!(tile
+                    .first_post
+                    .iter()
+                    .chain([&tile.post_step])
+                    .chain(&tile.morph)
+                    .all(|v| v.is_finite()));
             }
-            worst = worst.max(worst_edge_disagreement(list, staging, cam.position.z, config.lod.grid_size));
+            worst = worst.max(worst_edge_disagreement(
+                list,
+                staging,
+                cam.position.z,
+                config.lod.grid_size,
+            ));
         }
-        println!("{name}: deltas {deltas:?}, worst shared-edge disagreement {worst:.4} m, {} draw calls", backend.counts().draw_calls);
+        println!(
+            "{name}: deltas {deltas:?}, worst shared-edge disagreement {worst:.4} m, {} draw calls",
+            backend.counts().draw_calls
+        );
         assert!(backend.counts().draw_calls > 0, "{name}: something was drawn");
         assert!(worst < 0.01, "{name}: tiles disagree by {worst} m along a shared edge");
     }

@@ -9,7 +9,11 @@ use ridgeline::render::{NullBackend, RenderBackend};
 use ridgeline::scene::{Scene, SceneConfig};
 use scene_common::{camera, terrain};
 
-fn run_frame(scene: &mut Scene, backend: &mut NullBackend, cam: &ridgeline::camera::Camera) -> ridgeline::scene::FrameReport {
+fn run_frame(
+    scene: &mut Scene,
+    backend: &mut NullBackend,
+    cam: &ridgeline::camera::Camera,
+) -> ridgeline::scene::FrameReport {
     let report = scene.frame(cam, terrain()).unwrap();
     let (staging, ranges) = scene.uploads();
     backend.upload(staging, ranges).unwrap();
@@ -40,7 +44,11 @@ fn scripted_flight_counts_and_a_still_camera_uploads_nothing() {
     for _ in 0..5 {
         let report = run_frame(&mut scene, &mut backend, &still);
         let counts = backend.take();
-        assert_eq!((counts.bytes_uploaded, counts.upload_calls, report.generated), (0, 0, 0), "a still camera uploads nothing");
+        assert_eq!(
+            (counts.bytes_uploaded, counts.upload_calls, report.generated),
+            (0, 0, 0),
+            "a still camera uploads nothing"
+        );
         assert!(counts.draw_calls > 0);
     }
 }
@@ -57,7 +65,10 @@ fn the_default_transfer_cap_bounds_every_upload() {
         let (_, ranges) = scene.uploads();
         pieces += ranges.len();
         let tile = ridgeline::tiles::vertex::tile_bytes(config.lod.grid_size);
-        assert!(ranges.iter().all(|r| r.end - r.start <= cap.max(tile)), "a transfer exceeds the cap: {ranges:?}");
+        assert!(
+            ranges.iter().all(|r| r.end - r.start <= cap.max(tile)),
+            "a transfer exceeds the cap: {ranges:?}"
+        );
     }
     assert!(pieces > 10, "a moving camera's uploads are cut into several transfers");
 }
@@ -92,7 +103,8 @@ fn the_near_plane_follows_the_nearest_tile() {
     };
     // The lowest ground on a 5 km lattice, away from the data's edges.
     let pyramid = scene_common::pyramid();
-    let lattice = (2..14).flat_map(|i| (2..18).map(move |j| (i as f64 * 5000.0, j as f64 * 5000.0)));
+    let lattice =
+        (2..14).flat_map(|i| (2..18).map(move |j| (i as f64 * 5000.0, j as f64 * 5000.0)));
     let height = |&(x, y): &(f64, f64)| pyramid.exact_height(x, y).expect("inside the data") as f64;
     let (x, y) = lattice.min_by(|a, b| height(a).total_cmp(&height(b))).expect("points");
     let ground = height(&(x, y));
@@ -104,7 +116,13 @@ fn the_near_plane_follows_the_nearest_tile() {
     let low = camera(x, y, ground + 20.0, 0.0, -5.0);
     scene.frame(&low, terrain).expect("frame");
     let low_near = near(&scene, &low);
-    println!("near plane {high_near:.1} m at {:.0} m above the ground, {low_near:.2} m at 20 m", high.position.z - ground);
+    println!(
+        "near plane {high_near:.1} m at {:.0} m above the ground, {low_near:.2} m at 20 m",
+        high.position.z - ground
+    );
     assert!(high_near > 100.0, "near plane {high_near} m");
-    assert!((0.5..16.0).contains(&low_near), "near plane {low_near} m must stay in front of the ground 20 m below");
+    assert!(
+        (0.5..16.0).contains(&low_near),
+        "near plane {low_near} m must stay in front of the ground 20 m below"
+    );
 }

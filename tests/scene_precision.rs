@@ -33,7 +33,14 @@ fn corner_error(earth: &Arc<ProceduralEarth>, at: (f64, f64), radius: f64) -> (f
     let terrain = ClipmapTerrain { clipmap: &clipmap, summary: &summary };
     let lod = LodConfig { tau_px: 4.0, ..LodConfig::default() };
     let mut scene = Scene::new(SceneConfig { lod, ..SceneConfig::default() }, &terrain).unwrap();
-    let camera = Camera { position: eye, heading_deg: 30.0, pitch_deg: -10.0, roll_deg: 0.0, fov_x_deg: 60.0, viewport: [640, 360] };
+    let camera = Camera {
+        position: eye,
+        heading_deg: 30.0,
+        pitch_deg: -10.0,
+        roll_deg: 0.0,
+        fov_x_deg: 60.0,
+        viewport: [640, 360],
+    };
     scene.frame(&camera, &terrain).unwrap();
     let grid = lod.grid_size as f64;
     let (mut worst, mut tiles) = (0.0f64, 0);
@@ -57,11 +64,16 @@ fn corner_error(earth: &Arc<ProceduralEarth>, at: (f64, f64), radius: f64) -> (f
 
 #[test]
 fn a_view_ten_thousand_km_out_is_as_precise_as_one_at_the_origin() {
-    let earth = Arc::new(ProceduralEarth::new(EarthParams { border: 2, ..EarthParams::earth(64, 11) }).unwrap());
+    let earth = Arc::new(
+        ProceduralEarth::new(EarthParams { border: 2, ..EarthParams::earth(64, 11) }).unwrap(),
+    );
     let (near, near_corners) = corner_error(&earth, (20_000.0, 20_000.0), 20_000.0);
     let (far, far_corners) = corner_error(&earth, (1e7 + 20_000.0, 1e7 + 20_000.0), 20_000.0);
     println!("corner error within 20 km: {near:.2e} m at the origin ({near_corners} corners), {far:.2e} m at 10^7 m ({far_corners})");
     assert!(near_corners > 20 && far_corners > 20, "both views see tiles");
     assert!(near < 0.01 && far < 0.01, "vertex positions within a centimetre: {near} and {far} m");
-    assert!(far <= 2.0 * near + 1e-3, "10^7 m out is no worse than at the origin: {far} vs {near} m");
+    assert!(
+        far <= 2.0 * near + 1e-3,
+        "10^7 m out is no worse than at the origin: {far} vs {near} m"
+    );
 }

@@ -39,7 +39,11 @@ fn ten_thousand_frames_keep_memory_and_free_space_flat() {
             allocations_after_first_lap += alloc_counter::allocations() - before;
         }
         if frame % LAP == LAP - 1 {
-            lap_ends.push((report.allocator_used_bytes, report.allocator_workspace_bytes, report.tiles));
+            lap_ends.push((
+                report.allocator_used_bytes,
+                report.allocator_workspace_bytes,
+                report.tiles,
+            ));
         }
     }
     let counts = backend.counts();
@@ -48,12 +52,20 @@ fn ten_thousand_frames_keep_memory_and_free_space_flat() {
     assert_eq!(allocations_after_first_lap, 0, "allocations after the first lap");
     // The tile cache keeps only what the view uses: every lap ends with the
     // same tiles in the same number of bytes.
-    assert!(lap_ends.windows(2).all(|w| (w[0].0, w[0].2) == (w[1].0, w[1].2)), "lap ends differ: {lap_ends:?}");
+    assert!(
+        lap_ends.windows(2).all(|w| (w[0].0, w[0].2) == (w[1].0, w[1].2)),
+        "lap ends differ: {lap_ends:?}"
+    );
     // Fragmentation: no trend from the first third of the laps to the last.
     let third = lap_ends.len() / 3;
-    let mean = |laps: &[(u64, u32, usize)]| laps.iter().map(|l| l.1 as f64).sum::<f64>() / laps.len() as f64;
+    let mean = |laps: &[(u64, u32, usize)]| {
+        laps.iter().map(|l| l.1 as f64).sum::<f64>() / laps.len() as f64
+    };
     let (early, late) = (mean(&lap_ends[..third]), mean(&lap_ends[lap_ends.len() - third..]));
-    assert!(late <= early * 1.05, "workspace grows: {early:.0} then {late:.0} bytes ({lap_ends:?})");
+    assert!(
+        late <= early * 1.05,
+        "workspace grows: {early:.0} then {late:.0} bytes ({lap_ends:?})"
+    );
     let peak = lap_ends.iter().map(|l| l.1).max().unwrap() as f64;
     assert!(peak <= 2.0 * lap_ends[0].0 as f64, "workspace {peak} exceeds twice the bytes in use");
 }

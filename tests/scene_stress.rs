@@ -16,8 +16,19 @@ fn check_frame(scene: &mut Scene, cam: &ridgeline::camera::Camera) -> usize {
     let frame = list.frame.expect("frame uniforms");
     assert!(frame.view_projection.is_finite(), "{cam:?}: projection not finite");
     for tile in &list.tiles {
-        let values = [tile.first_post[0], tile.first_post[1], tile.post_step, tile.morph[0], tile.morph[1], tile.skirt_depth];
-        assert!(values.iter().all(|v| v.is_finite()), "{cam:?}: tile {:?} has {values:?}", tile.key);
+        let values = [
+            tile.first_post[0],
+            tile.first_post[1],
+            tile.post_step,
+            tile.morph[0],
+            tile.morph[1],
+            tile.skirt_depth,
+        ];
+        assert!(
+            values.iter().all(|v| v.is_finite()),
+            "{cam:?}: tile {:?} has {values:?}",
+            tile.key
+        );
     }
     assert!(report.allocator_used_bytes <= scene.config().buffer_bytes as u64);
     report.tiles
@@ -30,10 +41,18 @@ fn extreme_attitudes_and_positions_draw_or_refuse_cleanly() {
     let cases = [
         ("looking straight down", camera(centre.0, centre.1, 5_000.0, 0.0, -90.0)),
         ("looking straight up", camera(centre.0, centre.1, 5_000.0, 0.0, 90.0)),
-        ("inverted", { let mut c = camera(centre.0, centre.1, 4_000.0, 30.0, -5.0); c.roll_deg = 180.0; c }),
+        ("inverted", {
+            let mut c = camera(centre.0, centre.1, 4_000.0, 30.0, -5.0);
+            c.roll_deg = 180.0;
+            c
+        }),
         ("below the terrain", camera(centre.0, centre.1, 500.0, 10.0, 5.0)),
         ("at 100 km", camera(centre.0, centre.1, 100_000.0, 0.0, -60.0)),
-        ("near-zero field of view", { let mut c = camera(centre.0, centre.1, 3_500.0, 0.0, -5.0); c.fov_x_deg = 1e-3; c }),
+        ("near-zero field of view", {
+            let mut c = camera(centre.0, centre.1, 3_500.0, 0.0, -5.0);
+            c.fov_x_deg = 1e-3;
+            c
+        }),
         ("far outside the data", camera(-500_000.0, 2_000_000.0, 3_000.0, 135.0, -3.0)),
     ];
     for (name, cam) in cases {
@@ -49,7 +68,12 @@ fn extreme_attitudes_and_positions_draw_or_refuse_cleanly() {
 #[test]
 fn numbers_that_are_not_numbers_are_refused() {
     let mut scene = Scene::new(SceneConfig::default(), terrain()).unwrap();
-    for (field, value) in [("x", f64::NAN), ("altitude", f64::INFINITY), ("heading", f64::NEG_INFINITY), ("pitch", f64::NAN)] {
+    for (field, value) in [
+        ("x", f64::NAN),
+        ("altitude", f64::INFINITY),
+        ("heading", f64::NEG_INFINITY),
+        ("pitch", f64::NAN),
+    ] {
         let mut cam = camera(30_000.0, 30_000.0, 3_000.0, 0.0, 0.0);
         match field {
             "x" => cam.position.x = value,
@@ -58,14 +82,22 @@ fn numbers_that_are_not_numbers_are_refused() {
             _ => cam.pitch_deg = value,
         }
         match scene.frame(&cam, terrain()) {
-            Err(SceneError::Camera(CameraError::NotFinite { field: named, .. })) => assert_eq!(named, field),
+            Err(SceneError::Camera(CameraError::NotFinite { field: named, .. })) => {
+                assert_eq!(named, field)
+            }
             other => panic!("{field} = {value}: expected a refusal, got {other:?}"),
         }
     }
     let mut cam = camera(30_000.0, 30_000.0, 3_000.0, 0.0, 0.0);
     cam.fov_x_deg = 0.0;
-    assert!(matches!(scene.frame(&cam, terrain()), Err(SceneError::Camera(CameraError::FieldOfView(_)))));
+    assert!(matches!(
+        scene.frame(&cam, terrain()),
+        Err(SceneError::Camera(CameraError::FieldOfView(_)))
+    ));
     cam.fov_x_deg = 60.0;
     cam.viewport = [0, 100];
-    assert!(matches!(scene.frame(&cam, terrain()), Err(SceneError::Camera(CameraError::EmptyViewport(0, 100)))));
+    assert!(matches!(
+        scene.frame(&cam, terrain()),
+        Err(SceneError::Camera(CameraError::EmptyViewport(0, 100)))
+    ));
 }

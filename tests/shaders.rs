@@ -10,7 +10,12 @@ fn shaders() -> Vec<(String, String)> {
         .expect("shaders/gles exists")
         .map(|entry| entry.expect("readable entry").path())
         .filter(|path| matches!(path.extension().and_then(|e| e.to_str()), Some("vert" | "frag")))
-        .map(|path| (path.file_name().unwrap().to_string_lossy().into_owned(), std::fs::read_to_string(&path).unwrap()))
+        .map(|path| {
+            (
+                path.file_name().unwrap().to_string_lossy().into_owned(),
+                std::fs::read_to_string(&path).unwrap(),
+            )
+        })
         .collect();
     out.sort();
     out
@@ -26,7 +31,11 @@ fn every_shader_is_glsl_es_100() {
     let all = shaders();
     assert!(all.len() >= 6, "found {} shaders", all.len());
     for (name, source) in &all {
-        assert_eq!(source.lines().next(), Some("#version 100"), "{name} must start with #version 100");
+        assert_eq!(
+            source.lines().next(),
+            Some("#version 100"),
+            "{name} must start with #version 100"
+        );
     }
 }
 
@@ -35,16 +44,29 @@ fn no_vertex_shader_reads_a_texture() {
     for (name, source) in shaders().iter().filter(|(name, _)| name.ends_with(".vert")) {
         let code = code(source);
         for word in ["sampler", "texture", "texelFetch"] {
-            assert!(!code.contains(word), "{name} uses `{word}`: the target GPUs cannot read textures in vertex shaders");
+            assert!(
+                !code.contains(word),
+                "{name} uses `{word}`: the target GPUs cannot read textures in vertex shaders"
+            );
         }
     }
 }
 
 #[test]
 fn terrain_morph_matches_its_rust_mirror() {
-    let vert = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders/gles/terrain.vert")).unwrap();
-    let rust = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("src/lod/morph.rs")).unwrap();
-    assert!(code(&vert).contains("clamp((distance - u_morph.x) / (u_morph.y - u_morph.x), 0.0, 1.0)"));
-    assert!(code(&vert).contains("length(vec3(position, a_height.x - altitude))"), "distance uses the unmorphed height");
+    let vert = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders/gles/terrain.vert"),
+    )
+    .unwrap();
+    let rust =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("src/lod/morph.rs"))
+            .unwrap();
+    assert!(
+        code(&vert).contains("clamp((distance - u_morph.x) / (u_morph.y - u_morph.x), 0.0, 1.0)")
+    );
+    assert!(
+        code(&vert).contains("length(vec3(position, a_height.x - altitude))"),
+        "distance uses the unmorphed height"
+    );
     assert!(code(&rust).contains("((distance - start) / (end - start)).clamp(0.0, 1.0)"));
 }

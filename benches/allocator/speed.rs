@@ -12,7 +12,9 @@
 
 use super::support::{print_table, Panel, Series};
 use rand::prelude::*;
-use ridgeline::allocator::{AllocatorConfig, ContiguousAllocator, GeneratorId, Request, VertexFormat};
+use ridgeline::allocator::{
+    AllocatorConfig, ContiguousAllocator, GeneratorId, Request, VertexFormat,
+};
 use serde_json::{json, Value};
 use std::time::Instant;
 
@@ -56,10 +58,16 @@ impl Workload {
 fn ridgeline(w: &Workload) -> (f64, f64) {
     let config = AllocatorConfig { alignment: UNIT, ..AllocatorConfig::new(w.capacity(), w.n) };
     let mut alloc = ContiguousAllocator::new(config).expect("bench configuration");
-    let request = |(g, size): (u32, u32)| Request { generator: GeneratorId(g), format: VertexFormat(0), size };
-    let initial: Vec<Request> = w.initial.iter().enumerate().map(|(g, &s)| request((g as u32, s))).collect();
+    let request = |(g, size): (u32, u32)| Request {
+        generator: GeneratorId(g),
+        format: VertexFormat(0),
+        size,
+    };
+    let initial: Vec<Request> =
+        w.initial.iter().enumerate().map(|(g, &s)| request((g as u32, s))).collect();
     alloc.allocate(&initial).expect("initial fill fits");
-    let steps: Vec<Vec<Request>> = w.steps.iter().map(|s| s.iter().copied().map(request).collect()).collect();
+    let steps: Vec<Vec<Request>> =
+        w.steps.iter().map(|s| s.iter().copied().map(request).collect()).collect();
     let mut transfers = 0;
     let start = Instant::now();
     for step in &steps {
@@ -83,7 +91,8 @@ fn offset_allocator(w: &Workload) -> f64 {
 
 fn range_alloc(w: &Workload) -> f64 {
     let mut alloc = range_alloc::RangeAllocator::new(0..w.capacity());
-    let mut live: Vec<_> = w.initial.iter().map(|&s| alloc.allocate_range(s).expect("fits")).collect();
+    let mut live: Vec<_> =
+        w.initial.iter().map(|&s| alloc.allocate_range(s).expect("fits")).collect();
     let start = Instant::now();
     for step in &w.steps {
         for &(g, size) in step {
@@ -147,7 +156,16 @@ pub fn compare(quick: bool) -> (Vec<Value>, Panel) {
     }
     print_table(
         "Speed: ns per placed block (a quarter of N replaced per step; best of several runs)",
-        &["N", "ridgeline", "offset-alloc", "range-alloc", "vs offset", "vs range", "vs offset / log2 N", "transfers/step"],
+        &[
+            "N",
+            "ridgeline",
+            "offset-alloc",
+            "range-alloc",
+            "vs offset",
+            "vs range",
+            "vs offset / log2 N",
+            "transfers/step",
+        ],
         &table,
     );
     let panel = Panel {

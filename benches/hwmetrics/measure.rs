@@ -34,7 +34,8 @@ impl Pairs {
     /// Mean frame time added by the operation (operation minus its
     /// baselines), in seconds.
     pub fn cost_secs(&self) -> f64 {
-        mean(self.measured.iter().map(|b| b.frame_secs)) - mean(self.baseline.iter().map(|b| b.frame_secs))
+        mean(self.measured.iter().map(|b| b.frame_secs))
+            - mean(self.baseline.iter().map(|b| b.frame_secs))
     }
 
     /// Mean seconds per frame inside glBufferSubData.
@@ -46,7 +47,8 @@ impl Pairs {
     pub fn upload_variance(&self) -> f64 {
         let m = self.upload_secs();
         let n = self.measured.len();
-        self.measured.iter().map(|b| (b.upload_secs - m).powi(2)).sum::<f64>() / n.saturating_sub(1).max(1) as f64
+        self.measured.iter().map(|b| (b.upload_secs - m).powi(2)).sum::<f64>()
+            / n.saturating_sub(1).max(1) as f64
     }
 }
 

@@ -105,20 +105,33 @@ impl Scene {
         let gl = Rc::clone(context.gl());
         let tiles = side * side;
         let attributes = [(A_GRID, "a_grid"), (A_HEIGHT, "a_height"), (A_OFFSET, "a_offset")];
-        let program = Program::build(&gl, "hwmetrics", VERTEX_SOURCE, FRAGMENT_SOURCE, &attributes)?;
-        let missing = |name: &str| GlError::InvalidRequest(format!("hwmetrics shader lost uniform {name}"));
+        let program =
+            Program::build(&gl, "hwmetrics", VERTEX_SOURCE, FRAGMENT_SOURCE, &attributes)?;
+        let missing =
+            |name: &str| GlError::InvalidRequest(format!("hwmetrics shader lost uniform {name}"));
         let at = Uniforms {
             offset: program.uniform_location("u_offset").ok_or_else(|| missing("u_offset"))?,
             scale: program.uniform_location("u_scale").ok_or_else(|| missing("u_scale"))?,
         };
-        let vertex_array = if gl.caps().vertex_array_objects { Some(VertexArray::new(&gl)?) } else { None };
+        let vertex_array =
+            if gl.caps().vertex_array_objects { Some(VertexArray::new(&gl)?) } else { None };
         if let Some(vao) = &vertex_array {
             vao.bind();
         }
-        let grid = static_buffer(&gl, BufferTarget::Vertices, bytemuck::cast_slice(&grid_positions(side)))?;
-        let spare_vertices = static_buffer(&gl, BufferTarget::Vertices, bytemuck::cast_slice(&grid_positions(1)))?;
+        let grid = static_buffer(
+            &gl,
+            BufferTarget::Vertices,
+            bytemuck::cast_slice(&grid_positions(side)),
+        )?;
+        let spare_vertices =
+            static_buffer(&gl, BufferTarget::Vertices, bytemuck::cast_slice(&grid_positions(1)))?;
         let staging = tile_vertices(tiles);
-        let heights = Buffer::new(&gl, BufferTarget::Vertices, staging.len() * HEIGHT_STRIDE, BufferUsage::Dynamic)?;
+        let heights = Buffer::new(
+            &gl,
+            BufferTarget::Vertices,
+            staging.len() * HEIGHT_STRIDE,
+            BufferUsage::Dynamic,
+        )?;
         heights.upload_range(0, bytemuck::cast_slice(&staging))?;
         let index_data = strip_indices(tiles);
         let indices = [
@@ -202,7 +215,16 @@ impl Scene {
         self.grid.bind();
         // SAFETY: the grid buffer is bound and holds every tile's positions;
         // the offset is inside it (tile < tiles).
-        unsafe { self.gl.vertex_attrib_pointer_f32(A_GRID, 2, glow::FLOAT, false, 8, (first * GRID_STRIDE) as i32) };
+        unsafe {
+            self.gl.vertex_attrib_pointer_f32(
+                A_GRID,
+                2,
+                glow::FLOAT,
+                false,
+                8,
+                (first * GRID_STRIDE) as i32,
+            )
+        };
         self.heights.bind();
         // SAFETY: as above for the height buffer; height is the first field
         // of `TileVertex`.
@@ -224,7 +246,14 @@ impl Scene {
         let offset = (first * TILE_INDICES * 4) as i32;
         // SAFETY: an index buffer of every tile's u32 indices is bound (to
         // the VAO or the context) and [first, first + count) are tiles.
-        unsafe { self.gl.draw_elements(glow::TRIANGLE_STRIP, (count * TILE_INDICES) as i32, glow::UNSIGNED_INT, offset) };
+        unsafe {
+            self.gl.draw_elements(
+                glow::TRIANGLE_STRIP,
+                (count * TILE_INDICES) as i32,
+                glow::UNSIGNED_INT,
+                offset,
+            )
+        };
     }
 
     fn tile_origin(&self, tile: u32) -> (f32, f32) {
@@ -253,7 +282,11 @@ impl Scene {
             Operation::SplitDraws => (0..tiles).for_each(|t| self.draw(t, 1)),
             Operation::VertexBufferSwap => {
                 for t in 0..tiles {
-                    if t % 2 == 0 { self.grid.bind() } else { self.spare_vertices.bind() }
+                    if t % 2 == 0 {
+                        self.grid.bind()
+                    } else {
+                        self.spare_vertices.bind()
+                    }
                     self.draw(t, 1);
                 }
             }
@@ -321,14 +354,19 @@ impl Scene {
             let first = if self.upload_cursor + batch > tiles { 0 } else { self.upload_cursor };
             let begin = first as usize * TILE_VERTICES as usize;
             let vertices = &self.staging[begin..begin + (batch * TILE_VERTICES) as usize];
-            self.heights.upload_range(first as usize * tile_size, bytemuck::cast_slice(vertices))?;
+            self.heights
+                .upload_range(first as usize * tile_size, bytemuck::cast_slice(vertices))?;
             self.upload_cursor = (first + batch) % tiles;
         }
         Ok(start.elapsed().as_secs_f64())
     }
 }
 
-fn static_buffer(gl: &Rc<ridgeline::gl::Gl>, target: BufferTarget, bytes: &[u8]) -> Result<Buffer, GlError> {
+fn static_buffer(
+    gl: &Rc<ridgeline::gl::Gl>,
+    target: BufferTarget,
+    bytes: &[u8],
+) -> Result<Buffer, GlError> {
     let buffer = Buffer::new(gl, target, bytes.len(), BufferUsage::Static)?;
     buffer.upload_range(0, bytes)?;
     Ok(buffer)

@@ -107,7 +107,11 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, plotters::coord::Shift>
     let (x0, x1) = bounds(panel, |p| p.0, panel.log_x);
     let (y0, y1) = bounds(panel, |p| p.1, panel.log_y);
     let mut builder = ChartBuilder::on(area);
-    builder.caption(&panel.title, ("sans-serif", 16)).margin(12).x_label_area_size(36).y_label_area_size(56);
+    builder
+        .caption(&panel.title, ("sans-serif", 16))
+        .margin(12)
+        .x_label_area_size(36)
+        .y_label_area_size(56);
     macro_rules! finish {
         ($chart:expr) => {{
             let mut chart = $chart;
@@ -120,7 +124,10 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, plotters::coord::Shift>
             for (i, series) in panel.series.iter().enumerate() {
                 let color = Palette99::pick(i).to_rgba();
                 chart
-                    .draw_series(LineSeries::new(series.points.iter().copied(), color.stroke_width(2)))
+                    .draw_series(LineSeries::new(
+                        series.points.iter().copied(),
+                        color.stroke_width(2),
+                    ))
                     .expect("series")
                     .label(&series.label)
                     .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], color));
@@ -128,14 +135,25 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, plotters::coord::Shift>
                     .draw_series(series.points.iter().map(|&p| Circle::new(p, 3, color.filled())))
                     .expect("points");
             }
-            chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw().expect("legend");
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .draw()
+                .expect("legend");
         }};
     }
     match (panel.log_x, panel.log_y) {
         (false, false) => finish!(builder.build_cartesian_2d(x0..x1, y0..y1).expect("axes")),
-        (true, false) => finish!(builder.build_cartesian_2d((x0..x1).log_scale(), y0..y1).expect("axes")),
-        (false, true) => finish!(builder.build_cartesian_2d(x0..x1, (y0..y1).log_scale()).expect("axes")),
-        (true, true) => finish!(builder.build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale()).expect("axes")),
+        (true, false) => {
+            finish!(builder.build_cartesian_2d((x0..x1).log_scale(), y0..y1).expect("axes"))
+        }
+        (false, true) => {
+            finish!(builder.build_cartesian_2d(x0..x1, (y0..y1).log_scale()).expect("axes"))
+        }
+        (true, true) => finish!(builder
+            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
+            .expect("axes")),
     }
 }
 

@@ -13,11 +13,17 @@ pub const HEAT_SKY: [u8; 4] = [32, 32, 32, 255];
 pub const HEAT_MISMATCH: [u8; 4] = [255, 0, 255, 255];
 
 /// Ramp stops from 0 to tau: dark blue, teal, green, yellow.
-const RAMP: [[f64; 3]; 4] = [[20.0, 30.0, 110.0], [20.0, 140.0, 150.0], [60.0, 190.0, 60.0], [250.0, 230.0, 40.0]];
+const RAMP: [[f64; 3]; 4] =
+    [[20.0, 30.0, 110.0], [20.0, 140.0, 150.0], [60.0, 190.0, 60.0], [250.0, 230.0, 40.0]];
 
 /// Colours one view's per-pixel `errors_px` (NaN where not measured)
 /// against `tau_px`; `lod` and `truth` are the view's position images.
-pub fn heat_map(errors_px: &[f32], lod: &PositionImage, truth: &PositionImage, tau_px: f64) -> RgbaImage {
+pub fn heat_map(
+    errors_px: &[f32],
+    lod: &PositionImage,
+    truth: &PositionImage,
+    tau_px: f64,
+) -> RgbaImage {
     debug_assert_eq!(errors_px.len(), lod.pixel_count());
     RgbaImage::from_fn(lod.size.x, lod.size.y, |x, y| {
         let k = y as usize * lod.size.x as usize + x as usize;

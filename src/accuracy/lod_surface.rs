@@ -43,10 +43,17 @@ impl LodSurface {
     /// Indexes `list`'s tiles (drawn from `eye` with tiles of `grid_size`
     /// cells over level-0 posts `spacing_m` apart).
     pub fn new(list: &DrawList, grid_size: u32, spacing_m: [f64; 2], eye: DVec2) -> LodSurface {
-        let tiles: HashMap<TileKey, TileUniforms> = list.tiles.iter().map(|t| (t.key, *t)).collect();
+        let tiles: HashMap<TileKey, TileUniforms> =
+            list.tiles.iter().map(|t| (t.key, *t)).collect();
         let levels = list.tiles.iter().map(|t| t.key.level + 1).max().unwrap_or(0);
         let altitude = list.frame.map_or(0.0, |f| f.camera_altitude as f32 as f64);
-        let curvature = list.frame.map_or(0.0, |f| if f.curvature { (1.0 / (2.0 * EARTH_RADIUS_M)) as f32 as f64 } else { 0.0 });
+        let curvature = list.frame.map_or(0.0, |f| {
+            if f.curvature {
+                (1.0 / (2.0 * EARTH_RADIUS_M)) as f32 as f64
+            } else {
+                0.0
+            }
+        });
         let posts = list.frame.map_or(PostFrame::default(), |f| f.posts);
         LodSurface { tiles, levels, grid_size, spacing_m, eye, posts, altitude, curvature }
     }
@@ -63,7 +70,8 @@ impl LodSurface {
     /// [`EDGE_TOLERANCE_POSTS`]), where skirts hang.
     pub fn on_tile_edge(&self, x_m: f64, y_m: f64) -> bool {
         let g = self.grid_size as f64;
-        self.locate(x_m, y_m).is_some_and(|(_, [u, v])| u.min(g - u).min(v).min(g - v) < EDGE_TOLERANCE_POSTS)
+        self.locate(x_m, y_m)
+            .is_some_and(|(_, [u, v])| u.min(g - u).min(v).min(g - v) < EDGE_TOLERANCE_POSTS)
     }
 
     /// The drawn tile over `(x_m, y_m)` and the point's position in it, in
@@ -71,7 +79,10 @@ impl LodSurface {
     fn locate(&self, x_m: f64, y_m: f64) -> Option<(&TileUniforms, [f64; 2])> {
         let g = self.grid_size as f64;
         (0..self.levels).find_map(|level| {
-            let post = [self.spacing_m[0] * (1u64 << level) as f64, self.spacing_m[1] * (1u64 << level) as f64];
+            let post = [
+                self.spacing_m[0] * (1u64 << level) as f64,
+                self.spacing_m[1] * (1u64 << level) as f64,
+            ];
             let (u, v) = (x_m / post[0], y_m / post[1]);
             if u < 0.0 || v < 0.0 {
                 return None;
@@ -79,7 +90,8 @@ impl LodSurface {
             let (tx, ty) = ((u / g).floor() as u32, (v / g).floor() as u32);
             // A point exactly on a tile's east or north edge belongs to the
             // tile beyond, or, at the edge of the tiled area, to this one.
-            let beside = |t: u32, w: f64| if t > 0 && w == t as f64 * g { [t, t - 1] } else { [t, t] };
+            let beside =
+                |t: u32, w: f64| if t > 0 && w == t as f64 * g { [t, t - 1] } else { [t, t] };
             let (xs, ys) = (beside(tx, u), beside(ty, v));
             let keys = [(xs[0], ys[0]), (xs[1], ys[0]), (xs[0], ys[1]), (xs[1], ys[1])];
             keys.iter().find_map(|&(x, y)| {
@@ -103,7 +115,8 @@ impl LodSurface {
     fn vertex_height(&self, staging: &[u8], tile: &TileUniforms, i: u32, j: u32) -> f64 {
         let index = (i + j * (self.grid_size + 1)) as usize;
         let at = tile.byte_offset as usize + index * std::mem::size_of::<TileVertex>();
-        let vertex: TileVertex = bytemuck::pod_read_unaligned(&staging[at..at + std::mem::size_of::<TileVertex>()]);
+        let vertex: TileVertex =
+            bytemuck::pod_read_unaligned(&staging[at..at + std::mem::size_of::<TileVertex>()]);
         let [x, y] = tile.post_position(&self.posts, i as f32, j as f32).map(f64::from);
         let distance = (x * x + y * y + (vertex.height as f64 - self.altitude).powi(2)).sqrt();
         let factor = morph_factor(distance, tile.morph[0] as f64, tile.morph[1] as f64);

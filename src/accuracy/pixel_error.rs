@@ -39,7 +39,11 @@ impl ViewGeometry {
             altitude: frame.camera_altitude as f32 as f64,
             view_projection: DMat4::from_cols_array(&m),
             viewport: frame.viewport,
-            curvature: if frame.curvature { (1.0 / (2.0 * EARTH_RADIUS_M)) as f32 as f64 } else { 0.0 },
+            curvature: if frame.curvature {
+                (1.0 / (2.0 * EARTH_RADIUS_M)) as f32 as f64
+            } else {
+                0.0
+            },
             perspective_scale: camera.perspective_scale(),
         }
     }
@@ -144,7 +148,8 @@ pub fn measure_view(
     out.mirror_m.clear();
     out.mirror_m.resize(pixels, f32::NAN);
     let width = (lod.size.x as usize).max(1);
-    let rows = out.errors_px.par_chunks_mut(width).zip(out.mirror_m.par_chunks_mut(width)).enumerate();
+    let rows =
+        out.errors_px.par_chunks_mut(width).zip(out.mirror_m.par_chunks_mut(width)).enumerate();
     let pixel = Pixel { geometry, surface, staging, exact };
     let counts = rows
         .map(|(row, (errors, mirror))| {
@@ -214,7 +219,9 @@ impl Pixel<'_> {
         let p = p.as_dvec3();
         let (ground, drawn) = self.geometry.ground(p);
         let mirror = self.surface.height_at(self.staging, ground.x, ground.y);
-        let skirt = mirror.is_some_and(|m| drawn < m - SKIRT_TOLERANCE_M && self.surface.on_tile_edge(ground.x, ground.y));
+        let skirt = mirror.is_some_and(|m| {
+            drawn < m - SKIRT_TOLERANCE_M && self.surface.on_tile_edge(ground.x, ground.y)
+        });
         let shown = match mirror {
             Some(m) if !skirt => m,
             _ => drawn,
@@ -297,7 +304,11 @@ mod tests {
         let mut out = ViewErrors::default();
         measure_view(&geometry, &lod, &truth, &surface, &[], &sea, &mut out);
         let expected = 10.0 * camera.perspective_scale() / 2000.0;
-        assert!((out.errors_px[0] as f64 - expected).abs() < 1e-3, "{} vs {expected}", out.errors_px[0]);
+        assert!(
+            (out.errors_px[0] as f64 - expected).abs() < 1e-3,
+            "{} vs {expected}",
+            out.errors_px[0]
+        );
         assert!(out.errors_px[1].is_nan());
         assert_eq!((out.terrain_pixels, out.lod_only, out.truth_only, out.holes), (1, 1, 0, 1));
     }

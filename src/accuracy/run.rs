@@ -8,7 +8,9 @@ use glam::DVec2;
 use image::RgbaImage;
 
 use super::pixel_error::ExactHeight;
-use super::{heat_map, measure_view, ErrorSummary, LodSurface, PositionImage, ViewErrors, ViewGeometry};
+use super::{
+    heat_map, measure_view, ErrorSummary, LodSurface, PositionImage, ViewErrors, ViewGeometry,
+};
 use crate::camera::Camera;
 use crate::display::{Display, DisplayError};
 use crate::gl::TruthPass;
@@ -94,7 +96,8 @@ pub fn measure_flight(
         display.render_truth(first, truth)?;
     }
     for (t, camera) in views {
-        let row = measure_one(display, truth, exact, spacing_m, *t, camera, &mut images, &mut errors)?;
+        let row =
+            measure_one(display, truth, exact, spacing_m, *t, camera, &mut images, &mut errors)?;
         all_errors.extend(errors.errors_px.iter().copied().filter(|e| !e.is_nan()));
         mismatched += errors.lod_only + errors.truth_only;
         pixels += errors.errors_px.len();
@@ -107,7 +110,8 @@ pub fn measure_flight(
             let [lod, truth_positions] = &images;
             let heat_map = heat_map(&errors.errors_px, lod, truth_positions, tau_px);
             display.frame(camera)?;
-            worst = Some(WorstView { index: rows.len(), heat_map, picture: display.read_pixels()? });
+            worst =
+                Some(WorstView { index: rows.len(), heat_map, picture: display.read_pixels()? });
         }
         rows.push(row);
     }
@@ -115,7 +119,16 @@ pub fn measure_flight(
     let coverage_mismatch = if pixels == 0 { 0.0 } else { mismatched as f64 / pixels as f64 };
     let skirt_pixels = rows.iter().map(|r| r.skirt_pixels).sum();
     let max_surface_px = rows.iter().map(|r| r.max_surface_px).fold(0.0, f64::max);
-    Ok(AccuracyRun { tau_px, summary, coverage_mismatch, holes, skirt_pixels, max_surface_px, views: rows, worst })
+    Ok(AccuracyRun {
+        tau_px,
+        summary,
+        coverage_mismatch,
+        holes,
+        skirt_pixels,
+        max_surface_px,
+        views: rows,
+        worst,
+    })
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -142,20 +155,28 @@ fn measure_one(
     let scene = display.scene();
     let list = scene.draw_list();
     let grid_size = scene.config().lod.grid_size;
-    let surface = LodSurface::new(list, grid_size, spacing_m, DVec2::new(camera.position.x, camera.position.y));
+    let surface = LodSurface::new(
+        list,
+        grid_size,
+        spacing_m,
+        DVec2::new(camera.position.x, camera.position.y),
+    );
     let (staging, _) = scene.uploads();
     measure_view(&geometry, lod, truth_positions, &surface, staging, exact, errors);
-    let mut view_errors: Vec<f32> = errors.errors_px.iter().copied().filter(|e| !e.is_nan()).collect();
+    let mut view_errors: Vec<f32> =
+        errors.errors_px.iter().copied().filter(|e| !e.is_nan()).collect();
     let mut mirror: Vec<f32> = errors.mirror_m.iter().copied().filter(|e| !e.is_nan()).collect();
     mirror.sort_unstable_by(f32::total_cmp);
-    let mut tiles_per_level = vec![0; list.tiles.iter().map(|t| t.key.level as usize + 1).max().unwrap_or(0)];
+    let mut tiles_per_level =
+        vec![0; list.tiles.iter().map(|t| t.key.level as usize + 1).max().unwrap_or(0)];
     for tile in &list.tiles {
         tiles_per_level[tile.key.level as usize] += 1;
     }
     Ok(ViewRow {
         t,
         errors: ErrorSummary::of(&mut view_errors),
-        coverage_mismatch: (errors.lod_only + errors.truth_only) as f64 / errors.errors_px.len().max(1) as f64,
+        coverage_mismatch: (errors.lod_only + errors.truth_only) as f64
+            / errors.errors_px.len().max(1) as f64,
         holes: errors.holes,
         skirt_pixels: errors.skirt_pixels,
         max_surface_px: errors.max_surface_px,

@@ -50,7 +50,10 @@ mod tests {
     fn nearest_rank_percentiles() {
         let mut values: Vec<f32> = (1..=1000).rev().map(|v| v as f32).collect();
         let summary = ErrorSummary::of(&mut values);
-        assert_eq!((summary.p50_px, summary.p99_px, summary.p999_px, summary.max_px), (500.0, 990.0, 999.0, 1000.0));
+        assert_eq!(
+            (summary.p50_px, summary.p99_px, summary.p999_px, summary.max_px),
+            (500.0, 990.0, 999.0, 1000.0)
+        );
         assert_eq!(summary.mean_px, 500.5);
         assert_eq!(ErrorSummary::of(&mut []), ErrorSummary::default());
         assert_eq!(percentile(&[3.0], 0.0), 3.0);

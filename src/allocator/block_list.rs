@@ -163,7 +163,10 @@ impl BlockList {
                 return Err(format!("block {slot}: prev link {} != {prev}", block.prev));
             }
             if block.offset != expected_offset {
-                return Err(format!("block {slot} starts at {} not {expected_offset}", block.offset));
+                return Err(format!(
+                    "block {slot} starts at {} not {expected_offset}",
+                    block.offset
+                ));
             }
             if block.size == 0 {
                 return Err(format!("block {slot} is empty"));

@@ -305,7 +305,8 @@ impl FreeIndex {
                     problem = Some(format!("free index heap order broken at {slot}"));
                 }
             }
-            let expected = node.size.max(self.subtree_max(node.left)).max(self.subtree_max(node.right));
+            let expected =
+                node.size.max(self.subtree_max(node.left)).max(self.subtree_max(node.right));
             if node.max_size != expected && problem.is_none() {
                 problem = Some(format!("free index max_size stale at {slot}"));
             }

@@ -222,7 +222,8 @@ impl ContiguousAllocator {
     pub fn release(&mut self, generator: GeneratorId) -> Result<bool, AllocError> {
         self.check_generator(generator)?;
         let had = self.owner[generator.0 as usize] != NIL;
-        if had && self.config.frames_in_flight > 0 && self.retiring.len() >= self.retiring.max_len() {
+        if had && self.config.frames_in_flight > 0 && self.retiring.len() >= self.retiring.max_len()
+        {
             return Err(AllocError::RetireQueueFull {
                 waiting: self.retiring.len(),
                 more: 1,
@@ -367,7 +368,8 @@ impl ContiguousAllocator {
         let mut listed = self.blocks.iter().filter(|(_, b)| b.state == BlockState::Free);
         let mut matches = true;
         self.free.for_each(&mut |slot, offset, size| {
-            let same = listed.next().is_some_and(|(s, b)| (s, b.offset, b.size) == (slot, offset, size));
+            let same =
+                listed.next().is_some_and(|(s, b)| (s, b.offset, b.size) == (slot, offset, size));
             matches &= same;
         });
         if !matches || listed.next().is_some() {
@@ -379,7 +381,9 @@ impl ContiguousAllocator {
                 BlockState::Free => {}
                 BlockState::Live { generator } => {
                     if self.owner.get(generator as usize) != Some(&slot) {
-                        return Err(format!("live block {slot} not owned by generator {generator}"));
+                        return Err(format!(
+                            "live block {slot} not owned by generator {generator}"
+                        ));
                     }
                     if block.offset % self.config.alignment != 0 {
                         return Err(format!("block {slot} at {} is unaligned", block.offset));

@@ -36,7 +36,10 @@ impl ContiguousAllocator {
     /// Pass 1 for the generators in `requests`: see the module documentation.
     /// On success the returned plan hands out the ranges for pass 2; on failure
     /// the allocator is exactly as it was before the call.
-    pub fn allocate<'a>(&'a mut self, requests: &'a [Request]) -> Result<FramePlan<'a>, AllocError> {
+    pub fn allocate<'a>(
+        &'a mut self,
+        requests: &'a [Request],
+    ) -> Result<FramePlan<'a>, AllocError> {
         self.validate(requests)?;
         self.release_old(requests);
         self.sort_by_format(requests);
@@ -87,7 +90,11 @@ impl ContiguousAllocator {
             let capacity = self.config.capacity;
             let aligned = align_up(request.size, self.config.alignment).filter(|&s| s <= capacity);
             let Some(aligned) = aligned else {
-                return Err(AllocError::TooLarge { generator: generator.0, size: request.size, capacity });
+                return Err(AllocError::TooLarge {
+                    generator: generator.0,
+                    size: request.size,
+                    capacity,
+                });
             };
             self.scratch.sizes.push(aligned);
             replacing += usize::from(self.owner[g] != NIL);

@@ -152,7 +152,8 @@ pub fn replay(moves: &[Move], k: u32) -> u64 {
         match mv {
             Move::Allocate { mask, new } => {
                 requests.clear();
-                let moved = (0..64).filter(|s| mask & (1 << s) != 0).map(|s| at_slot[s].expect("occupied"));
+                let moved =
+                    (0..64).filter(|s| mask & (1 << s) != 0).map(|s| at_slot[s].expect("occupied"));
                 let idle = (0..k).map(GeneratorId).filter(|g| allocator.block_range(*g).is_none());
                 for generator in moved.chain(idle.take(new as usize)) {
                     requests.push(Request { generator, format: VertexFormat(0), size: 1 });

@@ -53,14 +53,20 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
     config.scene.lod.tau_px = args.view.tau;
     config.fov_x_deg = args.view.fov;
     let grid_size = config.scene.lod.grid_size;
-    let mut display = Display::new(&config, Arc::clone(&source), summary).context("opening a headless display")?;
+    let mut display = Display::new(&config, Arc::clone(&source), summary)
+        .context("opening a headless display")?;
     let region = TruthRegion::covering_tiles(&layout, grid_size);
-    let mesh = TruthMesh::load(source.as_ref(), region).with_context(|| format!("{dataset_name}: the full-resolution mesh"))?;
-    let truth = TruthPass::new(display.context().gl(), &mesh).context("uploading the full-resolution mesh")?;
-    let views: Vec<(f64, Camera)> =
-        path.frame_times(args.views.max(1)).map(|t| (t, path.sample(t).camera(args.view.fov, [args.view.size.x, args.view.size.y]))).collect();
+    let mesh = TruthMesh::load(source.as_ref(), region)
+        .with_context(|| format!("{dataset_name}: the full-resolution mesh"))?;
+    let truth = TruthPass::new(display.context().gl(), &mesh)
+        .context("uploading the full-resolution mesh")?;
+    let views: Vec<(f64, Camera)> = path
+        .frame_times(args.views.max(1))
+        .map(|t| (t, path.sample(t).camera(args.view.fov, [args.view.size.x, args.view.size.y])))
+        .collect();
     let exact = |x: f64, y: f64| pyramid.exact_height(x, y);
-    let run = measure_flight(&mut display, &truth, &exact, layout.spacing_m, &views).context("measuring the views")?;
+    let run = measure_flight(&mut display, &truth, &exact, layout.spacing_m, &views)
+        .context("measuring the views")?;
     let info = display.info();
     let report = json!({
         "dataset": dataset_name,
@@ -109,7 +115,11 @@ fn check_args(args: &AccuracyArgs) -> Result<()> {
 
 /// The accuracy tool draws off screen: `auto` means headless EGL.
 fn headless(backend: GlBackend) -> GlBackend {
-    if backend == GlBackend::Auto { GlBackend::Egl } else { backend }
+    if backend == GlBackend::Auto {
+        GlBackend::Egl
+    } else {
+        backend
+    }
 }
 
 fn mean(run: &AccuracyRun, f: impl Fn(&ridgeline::accuracy::ViewRow) -> f64) -> f64 {
@@ -118,8 +128,12 @@ fn mean(run: &AccuracyRun, f: impl Fn(&ridgeline::accuracy::ViewRow) -> f64) -> 
 
 fn write_outputs(args: &AccuracyArgs, run: &AccuracyRun, report: &serde_json::Value) -> Result<()> {
     let out = &args.out;
-    std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create the output folder", out.display()))?;
-    super::write_beside(&out.join("accuracy.json"), serde_json::to_string_pretty(report)?.as_bytes())?;
+    std::fs::create_dir_all(out)
+        .with_context(|| format!("{}: cannot create the output folder", out.display()))?;
+    super::write_beside(
+        &out.join("accuracy.json"),
+        serde_json::to_string_pretty(report)?.as_bytes(),
+    )?;
     if let Some(worst) = &run.worst {
         super::save_png(&worst.heat_map, &out.join("heat_map.png"))?;
         super::save_png(&worst.picture, &out.join("picture.png"))?;
@@ -130,29 +144,76 @@ fn write_outputs(args: &AccuracyArgs, run: &AccuracyRun, report: &serde_json::Va
 fn print_tables(run: &AccuracyRun) -> Result<()> {
     use std::fmt::Write as _;
     let mut out = String::new();
-    writeln!(out, "{:>8} {:>8} {:>8} {:>8} {:>8} {:>9} {:>9} {:>9} {:>9}", "t s", "p50 px", "p99 px", "p99.9 px", "max px", "mismatch", "lod tris", "truth tris", "mirror m")?;
+    writeln!(
+        out,
+        "{:>8} {:>8} {:>8} {:>8} {:>8} {:>9} {:>9} {:>9} {:>9}",
+        "t s",
+        "p50 px",
+        "p99 px",
+        "p99.9 px",
+        "max px",
+        "mismatch",
+        "lod tris",
+        "truth tris",
+        "mirror m"
+    )?;
     for v in &run.views {
         let e = &v.errors;
         writeln!(
             out,
             "{:>8.1} {:>8.3} {:>8.3} {:>8.3} {:>8.3} {:>8.4}% {:>9} {:>9} {:>9.4}",
-            v.t, e.p50_px, e.p99_px, e.p999_px, e.max_px, 100.0 * v.coverage_mismatch, v.triangles_lod, v.triangles_truth, v.mirror_p99_m
+            v.t,
+            e.p50_px,
+            e.p99_px,
+            e.p999_px,
+            e.max_px,
+            100.0 * v.coverage_mismatch,
+            v.triangles_lod,
+            v.triangles_truth,
+            v.mirror_p99_m
         )?;
     }
     let s = &run.summary;
     writeln!(out)?;
     writeln!(out, "  tau               {} px", run.tau_px)?;
     writeln!(out, "  error             p50 {:.3}, p99 {:.3}, p99.9 {:.3}, max {:.3} px over {} terrain pixels", s.p50_px, s.p99_px, s.p999_px, s.max_px, s.pixels)?;
-    writeln!(out, "  skirts            {} terrain pixels show one; max error off skirts {:.3} px", run.skirt_pixels, run.max_surface_px)?;
-    writeln!(out, "  coverage mismatch {:.4}% of pixels, {} holes", 100.0 * run.coverage_mismatch, run.holes)?;
-    let ratio = mean(run, |v| v.triangles_truth as f64) / mean(run, |v| v.triangles_lod as f64).max(1.0);
-    writeln!(out, "  triangles         LOD {:.0}, full resolution {:.0} ({ratio:.2}x)", mean(run, |v| v.triangles_lod as f64), mean(run, |v| v.triangles_truth as f64))?;
+    writeln!(
+        out,
+        "  skirts            {} terrain pixels show one; max error off skirts {:.3} px",
+        run.skirt_pixels, run.max_surface_px
+    )?;
+    writeln!(
+        out,
+        "  coverage mismatch {:.4}% of pixels, {} holes",
+        100.0 * run.coverage_mismatch,
+        run.holes
+    )?;
+    let ratio =
+        mean(run, |v| v.triangles_truth as f64) / mean(run, |v| v.triangles_lod as f64).max(1.0);
+    writeln!(
+        out,
+        "  triangles         LOD {:.0}, full resolution {:.0} ({ratio:.2}x)",
+        mean(run, |v| v.triangles_lod as f64),
+        mean(run, |v| v.triangles_truth as f64)
+    )?;
     let (lod_ms, truth_ms) = (mean(run, |v| v.lod_frame_ms), mean(run, |v| v.truth_frame_ms));
-    writeln!(out, "  frame ms          LOD {lod_ms:.1}, full resolution {truth_ms:.1} ({:.2}x)", truth_ms / lod_ms.max(1e-9))?;
+    writeln!(
+        out,
+        "  frame ms          LOD {lod_ms:.1}, full resolution {truth_ms:.1} ({:.2}x)",
+        truth_ms / lod_ms.max(1e-9)
+    )?;
     if let Some(worst) = &run.worst {
-        writeln!(out, "  worst view        t = {:.1} s (heat_map.png, picture.png)", run.views[worst.index].t)?;
+        writeln!(
+            out,
+            "  worst view        t = {:.1} s (heat_map.png, picture.png)",
+            run.views[worst.index].t
+        )?;
     }
     let verdict = if s.p999_px <= run.tau_px { "confirmed" } else { "NOT confirmed" };
-    writeln!(out, "  bound             p99.9 {:.3} px <= tau {} px: {verdict}", s.p999_px, run.tau_px)?;
+    writeln!(
+        out,
+        "  bound             p99.9 {:.3} px <= tau {} px: {verdict}",
+        s.p999_px, run.tau_px
+    )?;
     super::print(&out)
 }

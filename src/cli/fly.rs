@@ -51,7 +51,10 @@ pub struct FlyArgs {
 
 pub fn run(args: &FlyArgs) -> Result<()> {
     args.view.check()?;
-    if !(args.warning_above.is_finite() && args.caution_below.is_finite() && args.caution_below >= 0.0) {
+    if !(args.warning_above.is_finite()
+        && args.caution_below.is_finite()
+        && args.caution_below >= 0.0)
+    {
         bail!("--warning-above and --caution-below must be finite metres, the caution band not negative");
     }
     let bar = Bar::new();
@@ -70,7 +73,13 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     config.fov_x_deg = args.view.fov;
     let mut display = Display::new(&config, source, summary).context("opening the display")?;
     let info = display.info().clone();
-    println!("ridgeline fly: {} on {} ({}), {}", dataset_name, info.backend.name(), info.version, info.renderer);
+    println!(
+        "ridgeline fly: {} on {} ({}), {}",
+        dataset_name,
+        info.backend.name(),
+        info.version,
+        info.renderer
+    );
     if info.requested == GlesVersion::Es2 {
         // Mesa answers an ES 2.0 request with a newer context; the renderer
         // then uses only what ES 2.0 has.
@@ -97,11 +106,13 @@ struct Row {
 }
 
 fn fly_headless(args: &FlyArgs, display: &mut Display, path: &FlightPath) -> Result<Vec<Row>> {
-    std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create the output folder", args.out.display()))?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("{}: cannot create the output folder", args.out.display()))?;
     let frames = args.frames.max(1);
     // Start-up: page in the terrain around the first pose, as a display would
     // before it is shown, so the first frame is not drawn from the root alone.
-    let first = path.sample(path.start_time()).camera(args.view.fov, [args.view.size.x, args.view.size.y]);
+    let first =
+        path.sample(path.start_time()).camera(args.view.fov, [args.view.size.x, args.view.size.y]);
     display.settle(&first, 10_000)?;
     let every = (frames / args.snapshots.max(1)).max(1);
     let mut rows = Vec::with_capacity(frames as usize);
@@ -141,7 +152,12 @@ fn fly_window(args: &FlyArgs, display: &mut Display, path: &FlightPath) -> Resul
     Ok(rows)
 }
 
-fn write_stats(args: &FlyArgs, info: &ridgeline::gl::GlInfo, dataset: &str, rows: &[Row]) -> Result<()> {
+fn write_stats(
+    args: &FlyArgs,
+    info: &ridgeline::gl::GlInfo,
+    dataset: &str,
+    rows: &[Row],
+) -> Result<()> {
     let frames: Vec<serde_json::Value> = rows
         .iter()
         .map(|row| {
@@ -198,16 +214,46 @@ fn print_summary(rows: &[Row]) -> Result<()> {
     let mut frame_ms: Vec<f64> = rows.iter().map(|r| r.stats.frame_ms).collect();
     frame_ms.sort_by(f64::total_cmp);
     let pick = |q: f64| frame_ms[((frame_ms.len() - 1) as f64 * q).round() as usize];
-    let mean = |f: &dyn Fn(&FrameStats) -> f64| rows.iter().map(|r| f(&r.stats)).sum::<f64>() / rows.len() as f64;
+    let mean = |f: &dyn Fn(&FrameStats) -> f64| {
+        rows.iter().map(|r| f(&r.stats)).sum::<f64>() / rows.len() as f64
+    };
     let uploaded: u64 = rows.iter().map(|r| r.stats.scene.bytes_uploaded).sum();
     let last = rows.last().expect("rows is not empty");
     writeln!(out)?;
     writeln!(out, "  frames            {}", rows.len())?;
-    writeln!(out, "  frame ms          mean {:.1}, p50 {:.1}, p95 {:.1}, max {:.1}", mean(&|s| s.frame_ms), pick(0.5), pick(0.95), pick(1.0))?;
-    writeln!(out, "  cpu ms            clipmap {:.2}, select {:.2}, tiles {:.2}", mean(&|s| s.clipmap_ms), mean(&|s| s.scene.cpu_ms.select_ms), mean(&|s| s.scene.cpu_ms.tiles_ms))?;
-    writeln!(out, "  tiles             mean {:.0} ({:.0} triangles, {:.0} draw calls)", mean(&|s| s.scene.tiles as f64), mean(&|s| s.scene.triangles as f64), mean(&|s| s.draw_calls as f64))?;
-    writeln!(out, "  uploaded          {:.1} MB in all, {:.0} KB per frame", uploaded as f64 / 1e6, uploaded as f64 / 1e3 / rows.len() as f64)?;
-    writeln!(out, "  allocator         {:.1} MB used at the end", last.stats.scene.allocator_used_bytes as f64 / 1e6)?;
+    writeln!(
+        out,
+        "  frame ms          mean {:.1}, p50 {:.1}, p95 {:.1}, max {:.1}",
+        mean(&|s| s.frame_ms),
+        pick(0.5),
+        pick(0.95),
+        pick(1.0)
+    )?;
+    writeln!(
+        out,
+        "  cpu ms            clipmap {:.2}, select {:.2}, tiles {:.2}",
+        mean(&|s| s.clipmap_ms),
+        mean(&|s| s.scene.cpu_ms.select_ms),
+        mean(&|s| s.scene.cpu_ms.tiles_ms)
+    )?;
+    writeln!(
+        out,
+        "  tiles             mean {:.0} ({:.0} triangles, {:.0} draw calls)",
+        mean(&|s| s.scene.tiles as f64),
+        mean(&|s| s.scene.triangles as f64),
+        mean(&|s| s.draw_calls as f64)
+    )?;
+    writeln!(
+        out,
+        "  uploaded          {:.1} MB in all, {:.0} KB per frame",
+        uploaded as f64 / 1e6,
+        uploaded as f64 / 1e3 / rows.len() as f64
+    )?;
+    writeln!(
+        out,
+        "  allocator         {:.1} MB used at the end",
+        last.stats.scene.allocator_used_bytes as f64 / 1e6
+    )?;
     writeln!(out, "  resident nodes    {} at the end", last.stats.resident_nodes)?;
     super::print(&out)
 }

@@ -35,8 +35,9 @@ pub struct ImportArgs {
 pub fn run(args: &ImportArgs) -> Result<()> {
     let started = Instant::now();
     let grid = match args.synthetic {
-        Some(size) => pyramid::synthetic_grid(size)
-            .with_context(|| format!("--synthetic {size}: the size must be 1..={MAX_SYNTHETIC_SIZE}"))?,
+        Some(size) => pyramid::synthetic_grid(size).with_context(|| {
+            format!("--synthetic {size}: the size must be 1..={MAX_SYNTHETIC_SIZE}")
+        })?,
         None => read_dem_files(&args.files)?,
     };
     let options = BuildOptions { node_size: args.node_size, border: args.border };
@@ -44,7 +45,8 @@ pub fn run(args: &ImportArgs) -> Result<()> {
     let built = pyramid::build(&grid, &options, &bar).context("building the node pyramid")?;
     let input_bytes = grid.heights.len() * 4;
     drop(grid);
-    std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create the cache", args.out.display()))?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("{}: cannot create the cache", args.out.display()))?;
     let path = args.out.join(FILE_NAME);
     pyramid::write_atomic(&built, &path, &bar)?;
     bar.finish();
@@ -64,4 +66,3 @@ pub fn run(args: &ImportArgs) -> Result<()> {
 fn read_dem_files(files: &[PathBuf]) -> Result<ElevationGrid> {
     Ok(ridgeline::dem::import_files(files)?)
 }
-

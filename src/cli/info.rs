@@ -60,7 +60,8 @@ struct Georef {
 pub fn run(args: &InfoArgs) -> Result<()> {
     let pyramid = Pyramid::open(&args.cache)?;
     let summary = summarise(&pyramid);
-    let text = if args.json { serde_json::to_string_pretty(&summary)? + "\n" } else { table(&summary) };
+    let text =
+        if args.json { serde_json::to_string_pretty(&summary)? + "\n" } else { table(&summary) };
     super::print(&text)
 }
 
@@ -107,8 +108,15 @@ macro_rules! line {
 
 fn table(s: &Summary) -> String {
     let mut out = String::new();
-    line!(out, "{} (format {}, {:.1} MB, all checksums verified)", s.path.display(), s.format_version, s.file_bytes as f64 / 1e6);
-    line!(out, 
+    line!(
+        out,
+        "{} (format {}, {:.1} MB, all checksums verified)",
+        s.path.display(),
+        s.format_version,
+        s.file_bytes as f64 / 1e6
+    );
+    line!(
+        out,
         "samples   {} x {}, {:.2} x {:.2} m apart, extent {:.2} x {:.2} km",
         s.samples[0],
         s.samples[1],
@@ -118,12 +126,31 @@ fn table(s: &Summary) -> String {
         s.extent.north_m / 1e3
     );
     line!(out, "georef    {}", describe_georef(&s.georef));
-    line!(out, "nodes     {} cells + {} border posts, {} levels, {} nodes", s.node_size, s.border, s.levels, s.node_count);
-    line!(out, "heights   {:.1} .. {:.1} m, {} voids filled", s.height_min, s.height_max, s.voids_filled);
+    line!(
+        out,
+        "nodes     {} cells + {} border posts, {} levels, {} nodes",
+        s.node_size,
+        s.border,
+        s.levels,
+        s.node_count
+    );
+    line!(
+        out,
+        "heights   {:.1} .. {:.1} m, {} voids filled",
+        s.height_min,
+        s.height_max,
+        s.voids_filled
+    );
     line!(out, "level  nodes        delta max (m)  heights (m)");
     for (lod, level) in s.level_details.iter().enumerate() {
         let nodes = format!("{} x {}", level.nodes[0], level.nodes[1]);
-        line!(out, "{lod:>5}  {nodes:<11}  {:>13.3}  {:.1} .. {:.1}", level.delta_max, level.height_min, level.height_max);
+        line!(
+            out,
+            "{lod:>5}  {nodes:<11}  {:>13.3}  {:.1} .. {:.1}",
+            level.delta_max,
+            level.height_min,
+            level.height_max
+        );
     }
     out
 }
@@ -134,7 +161,9 @@ fn describe_georef(g: &Georef) -> String {
             format!("WGS 84 longitude {west:.5}..{east:.5}, latitude {south:.5}..{north:.5}")
         }
         (Crs::Projected { epsg: Some(code) }, ..) => format!("EPSG:{code}, origin {:?}", g.origin),
-        (Crs::Projected { epsg: None }, ..) => format!("projected (unknown EPSG), origin {:?}", g.origin),
+        (Crs::Projected { epsg: None }, ..) => {
+            format!("projected (unknown EPSG), origin {:?}", g.origin)
+        }
         _ => "local frame, no georeference".to_string(),
     }
 }

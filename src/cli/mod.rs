@@ -70,8 +70,10 @@ fn write_beside(path: &Path, bytes: &[u8]) -> Result<()> {
     let mut partial = path.as_os_str().to_owned();
     partial.push(".tmp");
     let partial = std::path::PathBuf::from(partial);
-    std::fs::write(&partial, bytes).with_context(|| format!("{}: cannot write", partial.display()))?;
-    std::fs::rename(&partial, path).with_context(|| format!("{}: cannot rename into place", path.display()))
+    std::fs::write(&partial, bytes)
+        .with_context(|| format!("{}: cannot write", partial.display()))?;
+    std::fs::rename(&partial, path)
+        .with_context(|| format!("{}: cannot rename into place", path.display()))
 }
 
 /// Writes `image` as a PNG at `path`, beside and renamed.
@@ -83,8 +85,11 @@ fn save_png(image: &image::RgbaImage, path: &Path) -> Result<()> {
 
 /// Parses `--size WIDTHxHEIGHT`.
 fn parse_size(text: &str) -> Result<UVec2, String> {
-    let (w, h) = text.split_once(['x', 'X']).ok_or_else(|| format!("size `{text}` is not WIDTHxHEIGHT"))?;
-    let parse = |s: &str| s.trim().parse::<u32>().map_err(|_| format!("size `{text}`: `{s}` is not a whole number"));
+    let (w, h) =
+        text.split_once(['x', 'X']).ok_or_else(|| format!("size `{text}` is not WIDTHxHEIGHT"))?;
+    let parse = |s: &str| {
+        s.trim().parse::<u32>().map_err(|_| format!("size `{text}`: `{s}` is not a whole number"))
+    };
     let size = UVec2::new(parse(w)?, parse(h)?);
     if size.x == 0 || size.y == 0 || size.x > 16384 || size.y > 16384 {
         return Err(format!("size `{text}` must be between 1x1 and 16384x16384"));

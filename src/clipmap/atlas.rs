@@ -193,7 +193,9 @@ impl NodeAtlas {
             }
             match (entry.state, entry.node) {
                 (SlotState::Empty, None) => {}
-                (SlotState::Empty, Some(id)) => return Err(format!("empty slot {slot} holds {id:?}")),
+                (SlotState::Empty, Some(id)) => {
+                    return Err(format!("empty slot {slot} holds {id:?}"))
+                }
                 (_, None) => return Err(format!("{:?} slot {slot} holds nothing", entry.state)),
                 (_, Some(id)) if self.index.get(&id) != Some(&slot) => {
                     return Err(format!("slot {slot} holds {id:?} but the index disagrees"));
@@ -202,13 +204,20 @@ impl NodeAtlas {
             }
         }
         let resident = self.slot_count() - counts[SlotState::Empty as usize];
-        if resident != self.resident_count() || counts[SlotState::Empty as usize] != self.free.len() as u32 {
-            return Err(format!("{resident} resident slots, index {}, free {}", self.index.len(), self.free.len()));
+        if resident != self.resident_count()
+            || counts[SlotState::Empty as usize] != self.free.len() as u32
+        {
+            return Err(format!(
+                "{resident} resident slots, index {}, free {}",
+                self.index.len(),
+                self.free.len()
+            ));
         }
         if counts[SlotState::Unused as usize] != self.unused.len() {
             return Err("the LRU list's length disagrees with the unused slots".into());
         }
-        let in_order = self.lru().zip(self.lru().skip(1)).all(|(a, b)| self.last_used(a) <= self.last_used(b));
+        let in_order =
+            self.lru().zip(self.lru().skip(1)).all(|(a, b)| self.last_used(a) <= self.last_used(b));
         if !in_order {
             return Err("the LRU list is not ordered by last use".into());
         }
@@ -240,7 +249,11 @@ mod tests {
             assert_eq!(atlas.insert(id, &mut data, SlotState::Used, 1).unwrap().evicted, None);
             assert!(data.heights.is_empty());
         }
-        assert_eq!(atlas.insert(ids[3], &mut node(3.0), SlotState::Used, 1), None, "all slots in use");
+        assert_eq!(
+            atlas.insert(ids[3], &mut node(3.0), SlotState::Used, 1),
+            None,
+            "all slots in use"
+        );
         // Frame 2 wants only ids 0 and 2; frame 3 only id 2 (and the pinned root, always).
         for (frame, wanted) in [(2, vec![ids[0], ids[2]]), (3, vec![ids[2]])] {
             for id in wanted {
@@ -253,7 +266,11 @@ mod tests {
         assert_eq!(order, vec![ids[1], ids[0]], "id 1 was last used in frame 1, id 0 in frame 2");
         let mut data = node(3.0);
         let first = atlas.insert(ids[3], &mut data, SlotState::Used, 3).unwrap();
-        assert_eq!((first.evicted, data.heights[0]), (Some(ids[1]), 1.0), "the old buffer comes back");
+        assert_eq!(
+            (first.evicted, data.heights[0]),
+            (Some(ids[1]), 1.0),
+            "the old buffer comes back"
+        );
         let second = atlas.insert(ids[4], &mut node(4.0), SlotState::Used, 3).unwrap();
         assert_eq!(second.evicted, Some(ids[0]));
         assert_eq!(atlas.insert(ids[1], &mut node(1.0), SlotState::Used, 3), None);

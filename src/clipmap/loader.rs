@@ -60,7 +60,9 @@ impl Loader {
         let layout: NodeLayout = *source.layout();
         let (pool, worker) = match mode {
             LoaderMode::Inline => (1, None),
-            LoaderMode::Thread { queue } => (queue + 2, Some(spawn(source.clone(), queue, queue + 2)?)),
+            LoaderMode::Thread { queue } => {
+                (queue + 2, Some(spawn(source.clone(), queue, queue + 2)?))
+            }
         };
         Ok(Loader {
             source,
@@ -144,17 +146,18 @@ fn spawn(source: Arc<dyn NodeSource>, queue: usize, pool: usize) -> std::io::Res
     let (result_tx, result_rx) = mpsc::sync_channel::<Loaded>(pool);
     let stop = Arc::new(AtomicBool::new(false));
     let stop_flag = stop.clone();
-    let handle = std::thread::Builder::new().name("ridgeline-node-loader".into()).spawn(move || {
-        while let Ok(Request { id, mut data }) = request_rx.recv() {
-            if stop_flag.load(Ordering::Relaxed) {
-                break;
+    let handle =
+        std::thread::Builder::new().name("ridgeline-node-loader".into()).spawn(move || {
+            while let Ok(Request { id, mut data }) = request_rx.recv() {
+                if stop_flag.load(Ordering::Relaxed) {
+                    break;
+                }
+                let outcome = source.read_node(id, &mut data);
+                if result_tx.send(Loaded { id, data, outcome }).is_err() {
+                    break;
+                }
             }
-            let outcome = source.read_node(id, &mut data);
-            if result_tx.send(Loaded { id, data, outcome }).is_err() {
-                break;
-            }
-        }
-    })?;
+        })?;
     Ok(Worker { requests: Some(request_tx), results: Some(result_rx), stop, handle: Some(handle) })
 }
 

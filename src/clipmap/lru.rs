@@ -98,7 +98,10 @@ mod tests {
         list.remove(5);
         assert_eq!(list.iter().collect::<Vec<_>>(), vec![0, 1]);
         assert_eq!((list.len(), list.contains(1), list.contains(3)), (2, true, false));
-        assert_eq!((list.pop_front(), list.pop_front(), list.pop_front()), (Some(0), Some(1), None));
+        assert_eq!(
+            (list.pop_front(), list.pop_front(), list.pop_front()),
+            (Some(0), Some(1), None)
+        );
         assert_eq!(list.iter().count(), 0);
     }
 }

@@ -31,9 +31,9 @@ pub use atlas::{NodeAtlas, SlotState};
 pub use loader::LoaderMode;
 pub use quadtree::{ClippedQuadtree, Entry};
 
+use crate::node::{NodeData, NodeError, NodeId, NodeLayout, NodeSource};
 use hash::{node_map, node_set, NodeMap, NodeSet};
 use loader::{Loaded, Loader};
-use crate::node::{NodeData, NodeError, NodeId, NodeLayout, NodeSource};
 
 /// Settings shared by all views.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -216,7 +216,11 @@ impl Clipmap {
 
     /// Adds a view at `position` (metres: x east, y north, z altitude),
     /// immediately answering lookups from whatever is resident.
-    pub fn add_view(&mut self, config: ViewConfig, position: DVec3) -> Result<ViewId, ClipmapError> {
+    pub fn add_view(
+        &mut self,
+        config: ViewConfig,
+        position: DVec3,
+    ) -> Result<ViewId, ClipmapError> {
         validate_view(config)?;
         check_position(position)?;
         let mut view = ClippedQuadtree::new(config, &self.layout, position);
@@ -467,7 +471,12 @@ fn validate_view(config: ViewConfig) -> Result<(), ClipmapError> {
     }
     let max = ViewConfig::max_load_distance(node_count);
     if !(view_distance > 0.0 && view_distance <= load_distance && load_distance <= max) {
-        return Err(ClipmapError::Distances { view: view_distance, load: load_distance, max, node_count });
+        return Err(ClipmapError::Distances {
+            view: view_distance,
+            load: load_distance,
+            max,
+            node_count,
+        });
     }
     Ok(())
 }

@@ -120,7 +120,9 @@ impl ClippedQuadtree {
         let half = self.config.node_count as f64 / 2.0;
         for lod in 0..layout.levels {
             let [w, h] = layout.node_size_m(lod);
-            let corner = |p: f64, side: f64| (p / side + 0.5 - half).floor().clamp(-COORD_LIMIT, COORD_LIMIT) as i64;
+            let corner = |p: f64, side: f64| {
+                (p / side + 0.5 - half).floor().clamp(-COORD_LIMIT, COORD_LIMIT) as i64
+            };
             self.origins[lod as usize] = [corner(self.position.x, w), corner(self.position.y, h)];
         }
     }
@@ -173,18 +175,27 @@ impl ClippedQuadtree {
     /// only the nodes that entered a moved window are new, and only entries
     /// inside the footprint of a node inserted into or evicted from the
     /// atlas (`changes`, coarsest first) can name a different node.
-    pub(crate) fn refresh_changes(&mut self, layout: &NodeLayout, atlas: &NodeAtlas, changes: &[NodeId]) {
+    pub(crate) fn refresh_changes(
+        &mut self,
+        layout: &NodeLayout,
+        atlas: &NodeAtlas,
+        changes: &[NodeId],
+    ) {
         let n = self.config.node_count as i64;
         for lod in (0..layout.levels).rev() {
             let [ox, oy] = self.origins[lod as usize];
             let [px, py] = self.refreshed[lod as usize];
             if [ox, oy] != [px, py] {
-                let entered = |x: i64, y: i64| !((px..px + n).contains(&x) && (py..py + n).contains(&y));
+                let entered =
+                    |x: i64, y: i64| !((px..px + n).contains(&x) && (py..py + n).contains(&y));
                 self.refresh_nodes(layout, atlas, lod, ox..ox + n, oy..oy + n, entered);
                 self.refreshed[lod as usize] = [ox, oy];
             }
         }
-        debug_assert!(changes.windows(2).all(|w| w[0].lod >= w[1].lod), "changes are coarsest first");
+        debug_assert!(
+            changes.windows(2).all(|w| w[0].lod >= w[1].lod),
+            "changes are coarsest first"
+        );
         for id in changes {
             for lod in (0..=id.lod).rev() {
                 let shift = id.lod - lod;

@@ -43,9 +43,14 @@ pub fn read(path: &Path) -> Result<RawGrid, ImportError> {
     let values_start = tokens.consumed.saturating_sub(token.len() as u64 + 1);
     let (needed, actual) = (values_start + 2 * samples - 1, file_len(path)?);
     if actual < needed {
-        return Err(fail(Problem::Truncated { what: format!("{width} x {height} values"), needed, actual }));
+        return Err(fail(Problem::Truncated {
+            what: format!("{width} x {height} values"),
+            needed,
+            actual,
+        }));
     }
-    let georef = GeoRef { crs: sidecar_crs(path)?, origin: header.origin(), spacing: header.spacing };
+    let georef =
+        GeoRef { crs: sidecar_crs(path)?, origin: header.origin(), spacing: header.spacing };
     let mut grid = RawGrid::voids(path, width, height, georef);
     let mut count = 0u64;
     // `token` already holds the first value (the header parser stopped at it).
@@ -71,7 +76,8 @@ fn store(grid: &mut RawGrid, k: u64, token: &[u8], nodata: NoData) -> Result<(),
     let value: f64 = text.parse().map_err(|_| {
         ImportError::new(&grid.path, Problem::NotANumber { row, column, token: text.to_string() })
     })?;
-    let height = classify(value, Some(nodata)).ok_or_else(|| non_finite(&grid.path, row, column, value))?;
+    let height =
+        classify(value, Some(nodata)).ok_or_else(|| non_finite(&grid.path, row, column, value))?;
     let index = grid.index(column as u32, grid.height - 1 - row as u32);
     grid.heights[index] = height;
     Ok(())
@@ -114,8 +120,9 @@ impl Header {
             token.clear();
             tokens.next_into(token)?;
             let text = String::from_utf8_lossy(token);
-            let value =
-                text.parse().map_err(|_| Problem::Header(format!("{key} {text:?} is not a number")))?;
+            let value = text
+                .parse()
+                .map_err(|_| Problem::Header(format!("{key} {text:?} is not a number")))?;
             fields.push((key, value));
         }
         Header::from_fields(&fields)
@@ -147,7 +154,9 @@ impl Header {
             _ => return Err(Problem::Header("need cellsize, or dx and dy".into())),
         };
         if !spacing.iter().all(|s| s.is_finite() && *s > 0.0) || !x.is_finite() || !y.is_finite() {
-            return Err(Problem::Header(format!("spacing {spacing:?} or corner ({x}, {y}) is not usable")));
+            return Err(Problem::Header(format!(
+                "spacing {spacing:?} or corner ({x}, {y}) is not usable"
+            )));
         }
         let nodata = NoData(get("nodata_value").unwrap_or(DEFAULT_NODATA));
         Ok(Header {
@@ -186,7 +195,8 @@ fn sidecar_crs(path: &Path) -> Result<Crs, ImportError> {
     if !prj.exists() {
         return Ok(Crs::Local);
     }
-    let text = String::from_utf8_lossy(&super::raw::read_bounded(&prj, MAX_PRJ_LEN)?).to_ascii_uppercase();
+    let text =
+        String::from_utf8_lossy(&super::raw::read_bounded(&prj, MAX_PRJ_LEN)?).to_ascii_uppercase();
     let text = text.trim_start();
     if text.starts_with("GEOGCS") || text.starts_with("GEOGCRS") {
         Ok(Crs::Geographic)

@@ -151,7 +151,13 @@ fn parse_uhl(uhl: &[u8], dsi: &[u8]) -> Result<DtedHeader, String> {
     if lon_tenths == 0 {
         return Err("UHL longitude interval is zero".into());
     }
-    Ok(DtedHeader { level, origin: [lon, lat], interval_tenths: [lon_tenths, lat_tenths], columns, rows })
+    Ok(DtedHeader {
+        level,
+        origin: [lon, lat],
+        interval_tenths: [lon_tenths, lat_tenths],
+        columns,
+        rows,
+    })
 }
 
 /// The product level from the DSI designator `DTED0`, `DTED1` or `DTED2`.
@@ -221,5 +227,7 @@ fn check_record(record: &[u8], column: u32) -> Result<impl Iterator<Item = i32> 
             "longitude count {longitude_count} and latitude count {latitude_count}, expected {column} and 0"
         )));
     }
-    Ok(body[8..].chunks_exact(2).map(|pair| signed_magnitude(u16::from_be_bytes([pair[0], pair[1]]))))
+    Ok(body[8..]
+        .chunks_exact(2)
+        .map(|pair| signed_magnitude(u16::from_be_bytes([pair[0], pair[1]]))))
 }

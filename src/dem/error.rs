@@ -36,7 +36,9 @@ pub enum Problem {
     SizeMismatch { expected: u64, actual: u64 },
     #[error("file size {actual} bytes matches neither SRTM3 (1201 x 1201, 2884802 bytes) nor SRTM1 (3601 x 3601, 25934402 bytes)")]
     HgtSize { actual: u64 },
-    #[error("absurd dimensions {width} x {height}: refused (at least 1 x 1, at most {max} samples)")]
+    #[error(
+        "absurd dimensions {width} x {height}: refused (at least 1 x 1, at most {max} samples)"
+    )]
     AbsurdDimensions { width: u64, height: u64, max: u64 },
     #[error("bad header: {0}")]
     Header(String),

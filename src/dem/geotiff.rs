@@ -36,7 +36,8 @@ pub fn read(path: &Path) -> Result<RawGrid, ImportError> {
     let fail = |problem| ImportError::new(path, problem);
     check_magic(path)?;
     let file = File::open(path).map_err(|e| fail(e.into()))?;
-    let mut decoder = Decoder::new(BufReader::new(file)).map_err(|e| fail(e.into()))?.with_limits(limits());
+    let mut decoder =
+        Decoder::new(BufReader::new(file)).map_err(|e| fail(e.into()))?.with_limits(limits());
     let (width, height) = decoder.dimensions().map_err(|e| fail(e.into()))?;
     let (width, height) = check_dimensions(path, width.into(), height.into())?;
     let bytes_per_sample = sample_bytes(&mut decoder).map_err(fail)?;
@@ -77,7 +78,9 @@ fn limits() -> Limits {
 fn sample_bytes(decoder: &mut Decoder<BufReader<File>>) -> Result<u64, Problem> {
     match decoder.colortype()? {
         ColorType::Gray(bits @ (8 | 16 | 32 | 64)) => Ok(u64::from(bits / 8)),
-        other => Err(Problem::Unsupported(format!("{other:?} pixels (need one 8/16/32/64-bit sample)"))),
+        other => {
+            Err(Problem::Unsupported(format!("{other:?} pixels (need one 8/16/32/64-bit sample)")))
+        }
     }
 }
 
@@ -103,7 +106,8 @@ fn check_chunks(
     };
     let offsets = decoder.get_tag_u64_vec(offsets_tag).map_err(|e| fail(e.into()))?;
     let counts = decoder.get_tag_u64_vec(counts_tag).map_err(|e| fail(e.into()))?;
-    let compression = decoder.find_tag_unsigned::<u16>(Tag::Compression).map_err(|e| fail(e.into()))?;
+    let compression =
+        decoder.find_tag_unsigned::<u16>(Tag::Compression).map_err(|e| fail(e.into()))?;
     let actual = file_len(path)?;
     for (index, (&offset, &count)) in offsets.iter().zip(&counts).enumerate() {
         let end = offset.saturating_add(count);
@@ -114,9 +118,13 @@ fn check_chunks(
     }
     // The decoder has checked that there are as many counts as offsets.
     let stored: u64 = counts.iter().sum();
-    let ratio = if compression.unwrap_or(UNCOMPRESSED) == UNCOMPRESSED { 1 } else { MAX_COMPRESSION_RATIO };
+    let ratio =
+        if compression.unwrap_or(UNCOMPRESSED) == UNCOMPRESSED { 1 } else { MAX_COMPRESSION_RATIO };
     if stored.saturating_mul(ratio) < image_bytes {
-        return Err(fail(Problem::SizeMismatch { expected: image_bytes.div_ceil(ratio), actual: stored }));
+        return Err(fail(Problem::SizeMismatch {
+            expected: image_bytes.div_ceil(ratio),
+            actual: stored,
+        }));
     }
     Ok(())
 }
@@ -128,8 +136,9 @@ fn gdal_nodata(decoder: &mut Decoder<BufReader<File>>) -> Result<Option<NoData>,
     };
     let text = value.into_string()?;
     let text = text.trim_matches(|c: char| c == '\0' || c.is_whitespace());
-    let number =
-        text.parse().map_err(|_| Problem::Header(format!("GDAL nodata {text:?} is not a number")))?;
+    let number = text
+        .parse()
+        .map_err(|_| Problem::Header(format!("GDAL nodata {text:?} is not a number")))?;
     Ok(Some(NoData(number)))
 }
 

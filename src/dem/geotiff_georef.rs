@@ -65,7 +65,10 @@ struct Affine {
 }
 
 /// The georeference of a raster `height` rows high and how its rows are stored.
-pub fn georef<R: Read + Seek>(decoder: &mut Decoder<R>, height: u32) -> Result<(GeoRef, Placement), Problem> {
+pub fn georef<R: Read + Seek>(
+    decoder: &mut Decoder<R>,
+    height: u32,
+) -> Result<(GeoRef, Placement), Problem> {
     let keys = GeoKeys::read(decoder)?;
     let affine = affine(decoder)?;
     let crs = keys.crs()?;
@@ -86,15 +89,15 @@ fn affine<R: Read + Seek>(decoder: &mut Decoder<R>) -> Result<Affine, Problem> {
     let affine = if let Some(matrix) = decoder.find_tag(Tag::ModelTransformationTag)? {
         from_matrix(&matrix.into_f64_vec()?)?
     } else {
-        let scale = decoder.find_tag(Tag::ModelPixelScaleTag)?.map(|v| v.into_f64_vec()).transpose()?;
+        let scale =
+            decoder.find_tag(Tag::ModelPixelScaleTag)?.map(|v| v.into_f64_vec()).transpose()?;
         let tie = decoder.find_tag(Tag::ModelTiepointTag)?.map(|v| v.into_f64_vec()).transpose()?;
         match (scale, tie) {
             (Some(scale), Some(tie)) => from_scale_and_tiepoint(&scale, &tie)?,
-            _ => {
-                return Err(Problem::Header(
-                    "no georeference: need ModelPixelScale with ModelTiepoint, or ModelTransformation".into(),
-                ))
-            }
+            _ => return Err(Problem::Header(
+                "no georeference: need ModelPixelScale with ModelTiepoint, or ModelTransformation"
+                    .into(),
+            )),
         }
     };
     let Affine { x0, dx, y0, dy } = affine;
@@ -140,7 +143,9 @@ struct GeoKeys(Vec<(u16, u16)>);
 impl GeoKeys {
     fn read<R: Read + Seek>(decoder: &mut Decoder<R>) -> Result<GeoKeys, Problem> {
         let Some(directory) = decoder.find_tag(Tag::GeoKeyDirectoryTag)? else {
-            return Err(Problem::Header("no GeoKeyDirectory: the coordinate system is unknown".into()));
+            return Err(Problem::Header(
+                "no GeoKeyDirectory: the coordinate system is unknown".into(),
+            ));
         };
         let directory = directory.into_u16_vec()?;
         let count = directory.get(3).copied().unwrap_or(0) as usize;
@@ -169,7 +174,9 @@ impl GeoKeys {
             Some(MODEL_GEOGRAPHIC) => match self.get(GEOGRAPHIC_TYPE) {
                 None | Some(USER_DEFINED) => Ok(Crs::Geographic),
                 Some(code) if WGS84_LIKE.contains(&code) => Ok(Crs::Geographic),
-                Some(code) => Err(Problem::Unsupported(format!("geographic CRS EPSG:{code} (need WGS 84)"))),
+                Some(code) => {
+                    Err(Problem::Unsupported(format!("geographic CRS EPSG:{code} (need WGS 84)")))
+                }
             },
             Some(MODEL_PROJECTED) => {
                 if let Some(units) = self.get(PROJ_LINEAR_UNITS).filter(|&u| u != LINEAR_METRE) {
@@ -177,12 +184,13 @@ impl GeoKeys {
                         "projected linear units {units} (need metres, 9001)"
                     )));
                 }
-                let epsg = self.get(PROJECTED_CS_TYPE).filter(|&c| c != USER_DEFINED).map(u32::from);
+                let epsg =
+                    self.get(PROJECTED_CS_TYPE).filter(|&c| c != USER_DEFINED).map(u32::from);
                 Ok(Crs::Projected { epsg })
             }
-            Some(other) => {
-                Err(Problem::Unsupported(format!("GTModelType {other} (need 1 projected or 2 geographic)")))
-            }
+            Some(other) => Err(Problem::Unsupported(format!(
+                "GTModelType {other} (need 1 projected or 2 geographic)"
+            ))),
             None => Err(Problem::Header("GeoKeyDirectory has no GTModelType".into())),
         }
     }

@@ -19,7 +19,9 @@ pub const ALIGNMENT_TOLERANCE: f64 = 0.01;
 /// Joins `grids` (at least one) into one grid on the first grid's lattice.
 pub fn mosaic(mut grids: Vec<RawGrid>) -> Result<RawGrid, ImportError> {
     if grids.len() <= 1 {
-        return grids.pop().ok_or_else(|| ImportError::new(std::path::Path::new(""), Problem::NoInput));
+        return grids
+            .pop()
+            .ok_or_else(|| ImportError::new(std::path::Path::new(""), Problem::NoInput));
     }
     let reference = grids[0].georef;
     let mut placed = Vec::with_capacity(grids.len());
@@ -29,8 +31,9 @@ pub fn mosaic(mut grids: Vec<RawGrid>) -> Result<RawGrid, ImportError> {
         bounds.include(offset, [grid.width, grid.height]);
         if bounds.samples() > MAX_SAMPLES {
             let [w, h] = bounds.size();
-            let why =
-                format!("with this file the mosaic would be {w} x {h} samples, more than {MAX_SAMPLES}");
+            let why = format!(
+                "with this file the mosaic would be {w} x {h} samples, more than {MAX_SAMPLES}"
+            );
             return Err(ImportError::new(&grid.path, Problem::Mosaic(why)));
         }
         placed.push(offset);
@@ -56,7 +59,8 @@ fn lattice_offset(reference: &GeoRef, grid: &RawGrid) -> Result<[i64; 2], Import
             georef.crs, reference.crs
         ));
     }
-    let relative = |a: usize| (georef.spacing[a] - reference.spacing[a]).abs() / reference.spacing[a];
+    let relative =
+        |a: usize| (georef.spacing[a] - reference.spacing[a]).abs() / reference.spacing[a];
     if relative(0) > SPACING_TOLERANCE || relative(1) > SPACING_TOLERANCE {
         return fail(format!(
             "spacing {:?} differs from the first file's {:?}",

@@ -59,7 +59,8 @@ impl RawGrid {
 /// Refuses zero or absurd dimensions before anything is allocated, and
 /// returns them as `u32`.
 pub fn check_dimensions(path: &Path, width: u64, height: u64) -> Result<(u32, u32), ImportError> {
-    let absurd = || ImportError::new(path, Problem::AbsurdDimensions { width, height, max: MAX_SAMPLES });
+    let absurd =
+        || ImportError::new(path, Problem::AbsurdDimensions { width, height, max: MAX_SAMPLES });
     if width == 0 || height == 0 || width.saturating_mul(height) > MAX_SAMPLES {
         return Err(absurd());
     }
@@ -77,7 +78,10 @@ pub fn file_len(path: &Path) -> Result<u64, ImportError> {
 pub fn read_bounded(path: &Path, max_len: u64) -> Result<Vec<u8>, ImportError> {
     let len = file_len(path)?;
     if len > max_len {
-        return Err(ImportError::new(path, Problem::SizeMismatch { expected: max_len, actual: len }));
+        return Err(ImportError::new(
+            path,
+            Problem::SizeMismatch { expected: max_len, actual: len },
+        ));
     }
     let mut bytes = Vec::with_capacity(len as usize);
     let file = std::fs::File::open(path).map_err(|e| ImportError::new(path, e.into()))?;

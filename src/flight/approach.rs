@@ -66,13 +66,15 @@ const GRAVITY: f64 = 9.80665;
 /// terrain height at local `(x, y)` is `height_at(x, y)` (non-finite heights
 /// are ignored). Deterministic: the same inputs give the same path.
 pub fn builtin_approach(extent_m: [f64; 2], height_at: &dyn Fn(f64, f64) -> f32) -> FlightPath {
-    let extent = DVec2::from(extent_m.map(|e| if e.is_finite() { e.clamp(0.0, MAX_EXTENT_M) } else { 0.0 }));
+    let extent =
+        DVec2::from(extent_m.map(|e| if e.is_finite() { e.clamp(0.0, MAX_EXTENT_M) } else { 0.0 }));
     let track = Track::new(extent);
     let speed = (track.length / APPROACH_SECONDS).min(MAX_GROUND_SPEED);
     let rows = (APPROACH_SECONDS / ROW_INTERVAL_S).round() as usize + 1;
     let times: Vec<f64> = (0..rows).map(|k| k as f64 * ROW_INTERVAL_S).collect();
     let params: Vec<f64> = times.iter().map(|t| track.param_at_distance(speed * t)).collect();
-    let positions: Vec<DVec2> = params.iter().map(|&u| track.point(u).map(|c| round_to(c, 0.1))).collect();
+    let positions: Vec<DVec2> =
+        params.iter().map(|&u| track.point(u).map(|c| round_to(c, 0.1))).collect();
     let headings: Vec<f64> = params.iter().map(|&u| heading_of(track.tangent(u))).collect();
     let altitudes = altitudes(&times, &positions, height_at);
     let waypoints = (0..rows)
@@ -86,7 +88,8 @@ pub fn builtin_approach(extent_m: [f64; 2], height_at: &dyn Fn(f64, f64) -> f32)
             },
         })
         .collect();
-    FlightPath::new(waypoints).expect("the built-in approach keeps every value inside the path rules")
+    FlightPath::new(waypoints)
+        .expect("the built-in approach keeps every value inside the path rules")
 }
 
 /// [`builtin_approach`] as CSV text with a comment describing it, to copy and edit.
@@ -114,7 +117,8 @@ impl Track {
         let control = TRACK.map(|fraction| DVec2::from(fraction) * extent);
         let mut track = Track { control, cumulative: vec![0.0], length: 0.0 };
         for i in 1..=TRACK_PIECES {
-            let step = track.point(i as f64 / TRACK_PIECES as f64) - track.point((i - 1) as f64 / TRACK_PIECES as f64);
+            let step = track.point(i as f64 / TRACK_PIECES as f64)
+                - track.point((i - 1) as f64 / TRACK_PIECES as f64);
             track.length += step.length();
             track.cumulative.push(track.length);
         }
@@ -138,7 +142,11 @@ impl Track {
         }
         let piece = self.cumulative.partition_point(|&d| d <= distance).clamp(1, TRACK_PIECES);
         let (before, after) = (self.cumulative[piece - 1], self.cumulative[piece]);
-        let within = if after > before { ((distance - before) / (after - before)).clamp(0.0, 1.0) } else { 0.0 };
+        let within = if after > before {
+            ((distance - before) / (after - before)).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
         (piece as f64 - 1.0 + within) / TRACK_PIECES as f64
     }
 }
@@ -163,8 +171,15 @@ fn altitudes(times: &[f64], positions: &[DVec2], height_at: &dyn Fn(f64, f64) ->
     let raised: Vec<f64> = (0..times.len())
         .map(|k| {
             let nominal = start + (end - start) * times[k] / duration;
-            let legs = [k.checked_sub(1).and_then(|i| leg_highest[i]), leg_highest.get(k).copied().flatten()];
-            let floor = legs.into_iter().flatten().map(|h| h + MIN_CLEARANCE_M).fold(f64::NEG_INFINITY, f64::max);
+            let legs = [
+                k.checked_sub(1).and_then(|i| leg_highest[i]),
+                leg_highest.get(k).copied().flatten(),
+            ];
+            let floor = legs
+                .into_iter()
+                .flatten()
+                .map(|h| h + MIN_CLEARANCE_M)
+                .fold(f64::NEG_INFINITY, f64::max);
             nominal.max(floor)
         })
         .collect();
@@ -175,7 +190,10 @@ fn altitudes(times: &[f64], positions: &[DVec2], height_at: &dyn Fn(f64, f64) ->
 
 /// The highest terrain sampled along each straight leg between waypoints
 /// (`None` where every sample is a void).
-fn highest_terrain_per_leg(positions: &[DVec2], terrain: &dyn Fn(DVec2) -> Option<f64>) -> Vec<Option<f64>> {
+fn highest_terrain_per_leg(
+    positions: &[DVec2],
+    terrain: &dyn Fn(DVec2) -> Option<f64>,
+) -> Vec<Option<f64>> {
     let along = |leg: &[DVec2], i: usize| leg[0].lerp(leg[1], i as f64 / LEG_SAMPLES as f64);
     positions
         .windows(2)
@@ -210,9 +228,11 @@ fn pitch(k: usize, positions: &[DVec2], altitudes: &[f64]) -> f64 {
 /// Coordinated-turn bank at waypoint `k` from the turn rate around it.
 fn bank(k: usize, times: &[f64], headings: &[f64], speed: f64) -> f64 {
     let (before, after) = (k.saturating_sub(1), (k + 1).min(times.len() - 1));
-    let turn_rate = heading_difference(headings[before], headings[after]).to_radians() / (times[after] - times[before]);
+    let turn_rate = heading_difference(headings[before], headings[after]).to_radians()
+        / (times[after] - times[before]);
     let bank = (speed * turn_rate / GRAVITY).atan().to_degrees().clamp(-MAX_BANK_DEG, MAX_BANK_DEG);
-    let fade = (times[k] / BANK_FADE_S).min((times[times.len() - 1] - times[k]) / BANK_FADE_S).min(1.0);
+    let fade =
+        (times[k] / BANK_FADE_S).min((times[times.len() - 1] - times[k]) / BANK_FADE_S).min(1.0);
     bank * fade
 }
 

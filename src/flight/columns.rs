@@ -72,7 +72,9 @@ impl Column {
             Column::X | Column::Y => (-2.5e7, 2.5e7, "metres", " (farther is off the earth)"),
             Column::Lat => (-90.0, 90.0, "degrees", ""),
             Column::Lon => (-180.0, 180.0, "degrees", ""),
-            Column::Altitude => (-11_000.0, 100_000.0, "metres", " (the deepest ocean to the edge of space)"),
+            Column::Altitude => {
+                (-11_000.0, 100_000.0, "metres", " (the deepest ocean to the edge of space)")
+            }
             Column::Heading => (-360.0, 360.0, "degrees", ""),
             Column::Pitch => (-90.0, 90.0, "degrees", ""),
             Column::Roll => (-180.0, 180.0, "degrees", ""),

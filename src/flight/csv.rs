@@ -47,7 +47,9 @@ pub enum PathProblem {
     Io(#[from] std::io::Error),
     #[error("{bytes} bytes is too large for a camera path (at most {MAX_FILE_BYTES})")]
     TooLarge { bytes: u64 },
-    #[error("no header: expected `t,x,y,alt,heading,pitch,roll` or `t,lat,lon,alt,heading,pitch,roll`")]
+    #[error(
+        "no header: expected `t,x,y,alt,heading,pitch,roll` or `t,lat,lon,alt,heading,pitch,roll`"
+    )]
     NoHeader,
     #[error("header (line {line}), column {position} `{name}`: unknown column; the columns are t, x, y (or lat, lon), alt, heading, pitch, roll")]
     UnknownColumn { line: usize, position: usize, name: String },
@@ -55,7 +57,9 @@ pub enum PathProblem {
     DuplicateColumn { line: usize, column: Column },
     #[error("header (line {line}), column `{}`: missing", column.name())]
     MissingColumn { line: usize, column: Column },
-    #[error("header (line {line}), columns `x,y` and `lat,lon`: give the position one way, not both")]
+    #[error(
+        "header (line {line}), columns `x,y` and `lat,lon`: give the position one way, not both"
+    )]
     MixedPosition { line: usize },
     #[error("header (line {line}), columns `lat,lon`: the dataset is not in longitude/latitude ({}), so positions must be `x,y` metres east and north of its south-west corner", describe_crs(crs))]
     LatLonNeedsGeographic { line: usize, crs: Crs },
@@ -89,7 +93,11 @@ struct Header {
 impl FlightPath {
     /// Reads and parses the camera path file at `path` for a dataset with
     /// `georef` and `extent_samples` samples (east, north).
-    pub fn read(path: &Path, georef: &GeoRef, extent_samples: [u32; 2]) -> Result<FlightPath, PathError> {
+    pub fn read(
+        path: &Path,
+        georef: &GeoRef,
+        extent_samples: [u32; 2],
+    ) -> Result<FlightPath, PathError> {
         let fail = |problem| PathError { path: path.to_path_buf(), problem };
         let bytes = std::fs::metadata(path).map_err(|e| fail(e.into()))?.len();
         if bytes > MAX_FILE_BYTES {
@@ -106,7 +114,8 @@ impl FlightPath {
         georef: &GeoRef,
         extent_samples: [u32; 2],
     ) -> Result<FlightPath, PathError> {
-        parse_lines(text, georef, extent_samples).map_err(|problem| PathError { path: path.to_path_buf(), problem })
+        parse_lines(text, georef, extent_samples)
+            .map_err(|problem| PathError { path: path.to_path_buf(), problem })
     }
 
     /// The path as CSV with the `t,x,y,...` header. Numbers are written in
@@ -122,10 +131,17 @@ impl FlightPath {
     }
 }
 
-fn parse_lines(text: &str, georef: &GeoRef, extent_samples: [u32; 2]) -> Result<FlightPath, PathProblem> {
+fn parse_lines(
+    text: &str,
+    georef: &GeoRef,
+    extent_samples: [u32; 2],
+) -> Result<FlightPath, PathProblem> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let mut lines =
-        text.lines().enumerate().map(|(index, line)| (index + 1, line)).filter(|(_, line)| is_content(line));
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .map(|(index, line)| (index + 1, line))
+        .filter(|(_, line)| is_content(line));
     let (header_line, header_text) = lines.next().ok_or(PathProblem::NoHeader)?;
     let header = parse_header(header_line, header_text, georef, extent_samples)?;
     let mut waypoints: Vec<Waypoint> = Vec::new();
@@ -134,7 +150,12 @@ fn parse_lines(text: &str, georef: &GeoRef, extent_samples: [u32; 2]) -> Result<
         let waypoint = parse_row(&header, row, line, row_text)?;
         if let Some(previous) = waypoints.last() {
             if waypoint.t <= previous.t {
-                return Err(PathProblem::TimeNotIncreasing { row, line, t: waypoint.t, previous: previous.t });
+                return Err(PathProblem::TimeNotIncreasing {
+                    row,
+                    line,
+                    t: waypoint.t,
+                    previous: previous.t,
+                });
             }
         }
         waypoints.push(waypoint);
@@ -151,7 +172,12 @@ fn is_content(line: &str) -> bool {
     !line.is_empty() && !line.starts_with('#')
 }
 
-fn parse_header(line: usize, text: &str, georef: &GeoRef, extent_samples: [u32; 2]) -> Result<Header, PathProblem> {
+fn parse_header(
+    line: usize,
+    text: &str,
+    georef: &GeoRef,
+    extent_samples: [u32; 2],
+) -> Result<Header, PathProblem> {
     let mut columns = Vec::new();
     for (index, name) in text.split(',').map(str::trim).enumerate() {
         let column = Column::from_name(name).ok_or_else(|| PathProblem::UnknownColumn {
@@ -170,8 +196,15 @@ fn parse_header(line: usize, text: &str, georef: &GeoRef, extent_samples: [u32; 
         return Err(PathProblem::MixedPosition { line });
     }
     let position = if geographic { [Column::Lat, Column::Lon] } else { [Column::X, Column::Y] };
-    let required =
-        [Column::Time, position[0], position[1], Column::Altitude, Column::Heading, Column::Pitch, Column::Roll];
+    let required = [
+        Column::Time,
+        position[0],
+        position[1],
+        Column::Altitude,
+        Column::Heading,
+        Column::Pitch,
+        Column::Roll,
+    ];
     if let Some(&column) = required.iter().find(|&&column| !has(column)) {
         return Err(PathProblem::MissingColumn { line, column });
     }
@@ -183,7 +216,12 @@ fn parse_header(line: usize, text: &str, georef: &GeoRef, extent_samples: [u32; 
     Ok(Header { line, columns, geographic })
 }
 
-fn parse_row(header: &Header, row: usize, line: usize, text: &str) -> Result<Waypoint, PathProblem> {
+fn parse_row(
+    header: &Header,
+    row: usize,
+    line: usize,
+    text: &str,
+) -> Result<Waypoint, PathProblem> {
     let cells: Vec<&str> = text.split(',').collect();
     let expected = header.columns.len();
     if cells.len() != expected {
@@ -195,8 +233,12 @@ fn parse_row(header: &Header, row: usize, line: usize, text: &str) -> Result<Way
     }
     let mut values = [0.0; Column::ALL.len()];
     for (&column, cell) in header.columns.iter().zip(cells) {
-        values[column as usize] =
-            column.parse(cell).map_err(|problem| PathProblem::Value { row, line, column, problem })?;
+        values[column as usize] = column.parse(cell).map_err(|problem| PathProblem::Value {
+            row,
+            line,
+            column,
+            problem,
+        })?;
     }
     let value = |column: Column| values[column as usize];
     let horizontal = match &header.geographic {

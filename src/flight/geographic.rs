@@ -44,14 +44,20 @@ impl Equirectangular {
     /// (`georef.crs` should be `Crs::Geographic`) with `extent_samples`
     /// samples east and north.
     pub fn new(georef: &GeoRef, extent_samples: [u32; 2]) -> Self {
-        debug_assert_eq!(georef.crs, crate::geo::Crs::Geographic, "origin and spacing must be degrees");
-        let metres_per_degree = DVec2::from(metres_per_degree(georef.centre_latitude(extent_samples)));
+        debug_assert_eq!(
+            georef.crs,
+            crate::geo::Crs::Geographic,
+            "origin and spacing must be degrees"
+        );
+        let metres_per_degree =
+            DVec2::from(metres_per_degree(georef.centre_latitude(extent_samples)));
         Equirectangular { origin_deg: DVec2::from(georef.origin), metres_per_degree }
     }
 
     /// Local metres (east, north of the south-west sample) of a point.
     pub fn to_local(&self, lat: f64, lon: f64) -> DVec2 {
-        let delta_deg = DVec2::new(wrap_longitude(lon - self.origin_deg.x), lat - self.origin_deg.y);
+        let delta_deg =
+            DVec2::new(wrap_longitude(lon - self.origin_deg.x), lat - self.origin_deg.y);
         delta_deg * self.metres_per_degree
     }
 

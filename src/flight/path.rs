@@ -41,12 +41,20 @@ impl FlightPath {
         }
         for (index, waypoint) in waypoints.iter().enumerate() {
             for (column, value) in waypoint_values(waypoint) {
-                column.check(value).map_err(|problem| InvalidPath::Value { index, column, problem })?;
+                column.check(value).map_err(|problem| InvalidPath::Value {
+                    index,
+                    column,
+                    problem,
+                })?;
             }
         }
         for (index, pair) in waypoints.windows(2).enumerate() {
             if pair[1].t <= pair[0].t {
-                return Err(InvalidPath::TimeNotIncreasing { index: index + 1, t: pair[1].t, previous: pair[0].t });
+                return Err(InvalidPath::TimeNotIncreasing {
+                    index: index + 1,
+                    t: pair[1].t,
+                    previous: pair[0].t,
+                });
             }
         }
         Ok(FlightPath { waypoints })
@@ -56,7 +64,9 @@ impl FlightPath {
     pub(super) fn from_checked(waypoints: Vec<Waypoint>) -> Self {
         debug_assert!(!waypoints.is_empty());
         debug_assert!(waypoints.windows(2).all(|pair| pair[0].t < pair[1].t));
-        debug_assert!(waypoints.iter().all(|w| waypoint_values(w).iter().all(|(_, v)| v.is_finite())));
+        debug_assert!(waypoints
+            .iter()
+            .all(|w| waypoint_values(w).iter().all(|(_, v)| v.is_finite())));
         FlightPath { waypoints }
     }
 
@@ -80,7 +90,11 @@ impl FlightPath {
     /// [`Pose::lerp`]). Times before the first or after the last waypoint give
     /// that waypoint's pose; a NaN time gives the first.
     pub fn sample(&self, t: f64) -> Pose {
-        let t = if t.is_nan() { self.start_time() } else { t.clamp(self.start_time(), self.end_time()) };
+        let t = if t.is_nan() {
+            self.start_time()
+        } else {
+            t.clamp(self.start_time(), self.end_time())
+        };
         // First waypoint strictly after t; 0 is impossible once t is clamped.
         let after = self.waypoints.partition_point(|w| w.t <= t);
         let Some(next) = self.waypoints.get(after) else {
@@ -96,7 +110,9 @@ impl FlightPath {
     pub fn frame_times(&self, n: u32) -> impl Iterator<Item = f64> + use<> {
         let (start, end) = (self.start_time(), self.end_time());
         let last = n.saturating_sub(1).max(1) as f64;
-        (0..n).map(move |k| if k as f64 == last { end } else { start + (end - start) * (k as f64 / last) })
+        (0..n).map(
+            move |k| if k as f64 == last { end } else { start + (end - start) * (k as f64 / last) },
+        )
     }
 }
 

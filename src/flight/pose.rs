@@ -38,7 +38,9 @@ impl Pose {
         let lerp = |a: f64, b: f64| a + (b - a) * s;
         Pose {
             position: self.position.lerp(to.position, s),
-            heading_deg: normalize_heading(self.heading_deg + heading_difference(self.heading_deg, to.heading_deg) * s),
+            heading_deg: normalize_heading(
+                self.heading_deg + heading_difference(self.heading_deg, to.heading_deg) * s,
+            ),
             pitch_deg: lerp(self.pitch_deg, to.pitch_deg),
             roll_deg: lerp(self.roll_deg, to.roll_deg),
         }

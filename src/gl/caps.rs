@@ -111,7 +111,8 @@ impl Capabilities {
             reported,
             level: if core3 { GlesVersion::Es3 } else { GlesVersion::Es2 },
             glsl_es_100: es || reported.at_least(4, 1) || has("GL_ARB_ES2_compatibility"),
-            glsl_es_300: core3 && (es || reported.at_least(4, 3) || has("GL_ARB_ES3_compatibility")),
+            glsl_es_300: core3
+                && (es || reported.at_least(4, 3) || has("GL_ARB_ES3_compatibility")),
             vertex_array_objects: core((3, 0), (3, 0))
                 || has("GL_OES_vertex_array_object")
                 || (!es && has("GL_ARB_vertex_array_object")),
@@ -120,7 +121,8 @@ impl Capabilities {
             instancing: core((3, 0), (3, 3)),
             rgba8_renderbuffer: !es || core((3, 0), (3, 0)) || has("GL_OES_rgb8_rgba8"),
             depth24_renderbuffer: !es || core((3, 0), (3, 0)) || has("GL_OES_depth24"),
-            float_colour_buffer: core((3, 2), (3, 0)) || (core3 && has("GL_EXT_color_buffer_float")),
+            float_colour_buffer: core((3, 2), (3, 0))
+                || (core3 && has("GL_EXT_color_buffer_float")),
             limits,
         }
     }
@@ -158,7 +160,13 @@ fn read_limits(gl: &glow::Context) -> Limits {
 mod tests {
     use super::*;
 
-    fn caps(api: GlApi, major: u32, minor: u32, exts: &[&str], requested: GlesVersion) -> Capabilities {
+    fn caps(
+        api: GlApi,
+        major: u32,
+        minor: u32,
+        exts: &[&str],
+        requested: GlesVersion,
+    ) -> Capabilities {
         let extensions = exts.iter().map(|s| s.to_string()).collect();
         let reported = ReportedVersion { api, major, minor };
         Capabilities::from_strings(reported, &extensions, requested, Limits::default())
@@ -202,7 +210,10 @@ mod tests {
         assert_eq!(c.level, GlesVersion::Es3);
         assert!(c.glsl_es_300 && c.vertex_array_objects && c.instancing && c.uint32_indices);
         assert!(!c.base_vertex && !c.float_colour_buffer);
-        assert!(caps(GlApi::Es, 3, 0, &["GL_EXT_color_buffer_float"], GlesVersion::Es3).float_colour_buffer);
+        assert!(
+            caps(GlApi::Es, 3, 0, &["GL_EXT_color_buffer_float"], GlesVersion::Es3)
+                .float_colour_buffer
+        );
         let es32 = caps(GlApi::Es, 3, 2, &[], GlesVersion::Es3);
         assert!(es32.base_vertex && es32.float_colour_buffer);
     }

@@ -27,7 +27,8 @@ macro_rules! gl_check {
 #[inline(always)]
 pub fn errors_at(gl: &glow::Context, file: &'static str, line: u32) -> Result<(), GlError> {
     if cfg!(debug_assertions) {
-        first_error(gl).map_or(Ok(()), |code| Err(GlError::Gl { code, name: error_name(code), file, line }))
+        first_error(gl)
+            .map_or(Ok(()), |code| Err(GlError::Gl { code, name: error_name(code), file, line }))
     } else {
         Ok(())
     }

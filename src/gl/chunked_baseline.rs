@@ -56,7 +56,12 @@ impl ChunkedBaseline {
     /// or whose bytes lie in the frame's `dirty` ranges of `staging` (the
     /// scene's staging copy); frees the buffers of tiles no longer drawn; and
     /// draws the tiles into the bound target (not cleared).
-    pub fn frame(&mut self, list: &DrawList, staging: &[u8], dirty: &[Range<u32>]) -> Result<BaselineFrameStats, GlError> {
+    pub fn frame(
+        &mut self,
+        list: &DrawList,
+        staging: &[u8],
+        dirty: &[Range<u32>],
+    ) -> Result<BaselineFrameStats, GlError> {
         self.wanted.clear();
         self.wanted.extend(list.tiles.iter().map(|t| (t.key, t.byte_offset)));
         self.buffers.retain(|key, _| self.wanted.contains(key));
@@ -72,7 +77,12 @@ impl ChunkedBaseline {
             match self.buffers.get(&key) {
                 Some(buffer) => buffer.upload_range(0, bytes)?,
                 None => {
-                    let buffer = Buffer::new(&self.gl, BufferTarget::Vertices, self.tile_bytes, BufferUsage::Static)?;
+                    let buffer = Buffer::new(
+                        &self.gl,
+                        BufferTarget::Vertices,
+                        self.tile_bytes,
+                        BufferUsage::Static,
+                    )?;
                     buffer.upload_range(0, bytes)?;
                     self.buffers.insert(key, buffer);
                 }
@@ -81,7 +91,8 @@ impl ChunkedBaseline {
             stats.bytes_uploaded += self.tile_bytes as u64;
         }
         let buffers = &self.buffers;
-        let buffer_of = |tile: &crate::render::TileUniforms| buffers.get(&(tile.key, tile.byte_offset));
+        let buffer_of =
+            |tile: &crate::render::TileUniforms| buffers.get(&(tile.key, tile.byte_offset));
         self.pass.draw_from(list, TerrainOutput::Colour, TileVertices::PerTile(&buffer_of))?;
         stats.buffers = self.buffers.len();
         Ok(stats)

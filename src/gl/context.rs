@@ -171,12 +171,17 @@ impl GlContext {
         if !caps.glsl_es_100 {
             return Err(GlError::ContextCreation {
                 backend: backend.name(),
-                reason: format!("{version} cannot compile GLSL ES 1.00 (no GL_ARB_ES2_compatibility)"),
+                reason: format!(
+                    "{version} cannot compile GLSL ES 1.00 (no GL_ARB_ES2_compatibility)"
+                ),
             });
         }
         let gl = Rc::new(Gl::new(glow, caps));
-        let offscreen =
-            if backend.is_headless() { Some(OffscreenTarget::new(&gl, request.size)?) } else { None };
+        let offscreen = if backend.is_headless() {
+            Some(OffscreenTarget::new(&gl, request.size)?)
+        } else {
+            None
+        };
         let info = GlInfo {
             backend,
             platform: platform_name,

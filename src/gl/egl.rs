@@ -58,8 +58,10 @@ fn open_on(device: &Device, version: GlesVersion) -> Result<(EglHeadless, glow::
         GlesVersion::Es3 => Api::GLES3,
     };
     // No surface type: the context is only made current surfaceless.
-    let template =
-        ConfigTemplateBuilder::new().with_api(api).with_surface_type(ConfigSurfaceTypes::empty()).build();
+    let template = ConfigTemplateBuilder::new()
+        .with_api(api)
+        .with_surface_type(ConfigSurfaceTypes::empty())
+        .build();
     let config = find_config(&display, template)?;
     let major = if version == GlesVersion::Es2 { 2 } else { 3 };
     let attributes = ContextAttributesBuilder::new()
@@ -87,7 +89,8 @@ fn find_config(
 ) -> Result<glutin::api::egl::config::Config, String> {
     // SAFETY: the template names no native window, so no handle must outlive
     // the call.
-    let mut configs = unsafe { display.find_configs(template) }.map_err(|e| format!("configs: {e}"))?;
+    let mut configs =
+        unsafe { display.find_configs(template) }.map_err(|e| format!("configs: {e}"))?;
     configs.next().ok_or_else(|| "no EGL config for the requested ES version".to_owned())
 }
 
@@ -107,7 +110,9 @@ fn load_glow(display: &Display) -> glow::Context {
     // SAFETY: the context is current on this thread, and eglGetProcAddress
     // returns entry points valid for it (null for unknown names, which glow
     // treats as not loaded).
-    unsafe { glow::Context::from_loader_function_cstr(|name: &CStr| display.get_proc_address(name)) }
+    unsafe {
+        glow::Context::from_loader_function_cstr(|name: &CStr| display.get_proc_address(name))
+    }
 }
 
 /// The device's name where EGL_EXT_device_query_name gives one, and

@@ -22,8 +22,8 @@
 //! unsafe here is allowed per item, each block with a `// SAFETY:` comment.
 
 mod caps;
-mod chunked_baseline;
 pub mod check;
+mod chunked_baseline;
 mod context;
 mod egl;
 mod error;
@@ -39,21 +39,21 @@ mod terrain_pass;
 mod truth_pass;
 mod window;
 
-pub use chunked_baseline::{BaselineFrameStats, ChunkedBaseline};
 pub use caps::{Capabilities, GlApi, GlesVersion, Limits, ReportedVersion};
+pub use chunked_baseline::{BaselineFrameStats, ChunkedBaseline};
 pub use context::{ContextRequest, GlBackend, GlContext, GlInfo, OpenedBackend};
 pub use error::{GlError, ShaderStage};
 pub use handle::Gl;
 pub use objects::{
     Buffer, BufferTarget, BufferUsage, Framebuffer, Program, Renderbuffer, Shader, VertexArray,
 };
-pub use offscreen::OffscreenTarget;
 pub(crate) use offscreen::read_positions;
+pub use offscreen::OffscreenTarget;
 pub use renderer::GlRenderer;
 pub use smoke::{SmokePass, SMOKE_TRIANGLE};
 pub use terrain_pass::TerrainOutput;
 pub use truth_pass::{
-    TruthChunk, TruthError, TruthFrameStats, TruthMesh, TruthPass, TruthRegion, CHUNK_CELLS, CHUNK_TRIANGLES,
-    MAX_TRUTH_POSTS,
+    TruthChunk, TruthError, TruthFrameStats, TruthMesh, TruthPass, TruthRegion, CHUNK_CELLS,
+    CHUNK_TRIANGLES, MAX_TRUTH_POSTS,
 };
 pub use window::WindowEvents;

@@ -40,9 +40,16 @@ impl OffscreenTarget {
         OffscreenTarget::with_colour(gl, glow::RGBA32F, size)
     }
 
-    fn with_colour(gl: &Rc<Gl>, colour_format: u32, size: UVec2) -> Result<OffscreenTarget, GlError> {
-        let depth_format =
-            if gl.caps().depth24_renderbuffer { glow::DEPTH_COMPONENT24 } else { glow::DEPTH_COMPONENT16 };
+    fn with_colour(
+        gl: &Rc<Gl>,
+        colour_format: u32,
+        size: UVec2,
+    ) -> Result<OffscreenTarget, GlError> {
+        let depth_format = if gl.caps().depth24_renderbuffer {
+            glow::DEPTH_COMPONENT24
+        } else {
+            glow::DEPTH_COMPONENT16
+        };
         let colour = Renderbuffer::new(gl, colour_format, size)?;
         let depth = Renderbuffer::new(gl, depth_format, size)?;
         let framebuffer = Framebuffer::new(gl)?;
@@ -113,7 +120,9 @@ pub(crate) fn read_rgba(gl: &Gl, size: UVec2) -> Result<RgbaImage, GlError> {
         );
     }
     gl_check!(gl)?;
-    let top_down: Vec<u8> = bottom_up.chunks_exact(row_bytes.max(1)).rev().flatten().copied().collect();
-    RgbaImage::from_raw(size.x, size.y, top_down)
-        .ok_or_else(|| GlError::InvalidRequest(format!("read-back of {}x{} pixels", size.x, size.y)))
+    let top_down: Vec<u8> =
+        bottom_up.chunks_exact(row_bytes.max(1)).rev().flatten().copied().collect();
+    RgbaImage::from_raw(size.x, size.y, top_down).ok_or_else(|| {
+        GlError::InvalidRequest(format!("read-back of {}x{} pixels", size.x, size.y))
+    })
 }

@@ -47,9 +47,8 @@ struct OsMesaApi {
 static API: OnceLock<Result<OsMesaApi, (String, String)>> = OnceLock::new();
 
 fn api() -> Result<&'static OsMesaApi, GlError> {
-    API.get_or_init(|| load(&LIBRARY_NAMES)).as_ref().map_err(|(library, reason)| GlError::LibraryMissing {
-        library: library.clone(),
-        reason: reason.clone(),
+    API.get_or_init(|| load(&LIBRARY_NAMES)).as_ref().map_err(|(library, reason)| {
+        GlError::LibraryMissing { library: library.clone(), reason: reason.clone() }
     })
 }
 
@@ -62,7 +61,9 @@ fn load(names: &[&'static str]) -> Result<OsMesaApi, (String, String)> {
         // SAFETY: loading libOSMesa runs Mesa's initialisers, which have no
         // preconditions on the caller.
         match unsafe { libloading::Library::new(name) } {
-            Ok(library) => return resolve(library, name).map_err(|reason| (name.to_owned(), reason)),
+            Ok(library) => {
+                return resolve(library, name).map_err(|reason| (name.to_owned(), reason))
+            }
             Err(e) => failures.push(e.to_string()),
         }
     }
@@ -200,7 +201,8 @@ mod tests {
 
     #[test]
     fn a_missing_library_is_named() {
-        let Err((library, reason)) = load(&["libRidgelineAbsent.so.1", "libRidgelineAbsent.so"]) else {
+        let Err((library, reason)) = load(&["libRidgelineAbsent.so.1", "libRidgelineAbsent.so"])
+        else {
             panic!("a library that does not exist loaded");
         };
         assert_eq!(library, "libRidgelineAbsent.so.1 or libRidgelineAbsent.so");

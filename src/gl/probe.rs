@@ -25,7 +25,9 @@ pub fn parse_x11_display(display: &str) -> Option<X11Address> {
     let number: u16 = number.parse().ok()?;
     match host {
         "" | "unix" => Some(X11Address::Local(PathBuf::from(format!("/tmp/.X11-unix/X{number}")))),
-        host if !host.contains('/') => Some(X11Address::Tcp(host.to_owned(), 6000u16.checked_add(number)?)),
+        host if !host.contains('/') => {
+            Some(X11Address::Tcp(host.to_owned(), 6000u16.checked_add(number)?))
+        }
         _ => None,
     }
 }
@@ -92,7 +94,8 @@ mod tests {
 
     #[test]
     fn parses_local_and_remote_displays() {
-        let local = |n: &str| Some(X11Address::Local(PathBuf::from(format!("/tmp/.X11-unix/X{n}"))));
+        let local =
+            |n: &str| Some(X11Address::Local(PathBuf::from(format!("/tmp/.X11-unix/X{n}"))));
         assert_eq!(parse_x11_display(":0"), local("0"));
         assert_eq!(parse_x11_display(":99.0"), local("99"));
         assert_eq!(parse_x11_display("unix:3"), local("3"));

@@ -80,7 +80,10 @@ impl RenderBackend for GlRenderer {
     fn draw(&mut self, list: &DrawList) -> Result<(), GlError> {
         let Some(frame) = list.frame else { return Ok(()) };
         let horizon = palette::SKY_HORIZON;
-        self.clear(frame.viewport, self.sentinel.unwrap_or([horizon[0], horizon[1], horizon[2], 1.0]))?;
+        self.clear(
+            frame.viewport,
+            self.sentinel.unwrap_or([horizon[0], horizon[1], horizon[2], 1.0]),
+        )?;
         if self.sentinel.is_none() {
             self.sky.draw(&frame)?;
         }

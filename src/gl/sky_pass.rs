@@ -33,11 +33,13 @@ pub struct SkyPass {
 
 impl SkyPass {
     pub fn new(gl: &Rc<Gl>) -> Result<SkyPass, GlError> {
-        let program = Program::build(gl, "sky", VERTEX_SOURCE, FRAGMENT_SOURCE, &[(CORNER, "a_corner")])?;
+        let program =
+            Program::build(gl, "sky", VERTEX_SOURCE, FRAGMENT_SOURCE, &[(CORNER, "a_corner")])?;
         let bytes: &[u8] = bytemuck::cast_slice(&TRIANGLE);
         let corners = Buffer::new(gl, BufferTarget::Vertices, bytes.len(), BufferUsage::Static)?;
         corners.upload_range(0, bytes)?;
-        let vertex_array = if gl.caps().vertex_array_objects { Some(VertexArray::new(gl)?) } else { None };
+        let vertex_array =
+            if gl.caps().vertex_array_objects { Some(VertexArray::new(gl)?) } else { None };
         Ok(SkyPass {
             gl: Rc::clone(gl),
             inverse_view_projection: program.uniform_location("u_inverse_view_projection"),

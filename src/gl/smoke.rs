@@ -33,13 +33,19 @@ pub struct SmokePass {
 
 impl SmokePass {
     pub fn new(gl: &Rc<Gl>) -> Result<SmokePass, GlError> {
-        let program =
-            Program::build(gl, "smoke", VERTEX_SOURCE, FRAGMENT_SOURCE, &[(POSITION, "a_position")])?;
+        let program = Program::build(
+            gl,
+            "smoke",
+            VERTEX_SOURCE,
+            FRAGMENT_SOURCE,
+            &[(POSITION, "a_position")],
+        )?;
         let colour = program.uniform_location("u_colour");
         let bytes: &[u8] = bytemuck::cast_slice(&SMOKE_TRIANGLE);
         let vertices = Buffer::new(gl, BufferTarget::Vertices, bytes.len(), BufferUsage::Static)?;
         vertices.upload_range(0, bytes)?;
-        let vertex_array = if gl.caps().vertex_array_objects { Some(VertexArray::new(gl)?) } else { None };
+        let vertex_array =
+            if gl.caps().vertex_array_objects { Some(VertexArray::new(gl)?) } else { None };
         Ok(SmokePass { gl: Rc::clone(gl), program, colour, vertices, vertex_array })
     }
 

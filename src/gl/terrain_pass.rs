@@ -103,13 +103,17 @@ impl TerrainPass {
         let position = TerrainProgram::build(gl, "terrain positions", POSITION_SOURCE)?;
         let grid = TileGrid::new(grid_size);
         let vertex_bytes: &[u8] = bytemuck::cast_slice(&grid.vertices);
-        let grid_vertices = Buffer::new(gl, BufferTarget::Vertices, vertex_bytes.len(), BufferUsage::Static)?;
+        let grid_vertices =
+            Buffer::new(gl, BufferTarget::Vertices, vertex_bytes.len(), BufferUsage::Static)?;
         grid_vertices.upload_range(0, vertex_bytes)?;
         let index_bytes: &[u8] = bytemuck::cast_slice(&grid.indices);
-        let grid_indices = Buffer::new(gl, BufferTarget::Indices, index_bytes.len(), BufferUsage::Static)?;
+        let grid_indices =
+            Buffer::new(gl, BufferTarget::Indices, index_bytes.len(), BufferUsage::Static)?;
         grid_indices.upload_range(0, index_bytes)?;
-        let heights = Buffer::new(gl, BufferTarget::Vertices, buffer_bytes as usize, BufferUsage::Dynamic)?;
-        let vertex_array = if gl.caps().vertex_array_objects { Some(VertexArray::new(gl)?) } else { None };
+        let heights =
+            Buffer::new(gl, BufferTarget::Vertices, buffer_bytes as usize, BufferUsage::Dynamic)?;
+        let vertex_array =
+            if gl.caps().vertex_array_objects { Some(VertexArray::new(gl)?) } else { None };
         Ok(TerrainPass {
             gl: Rc::clone(gl),
             colour,
@@ -143,7 +147,12 @@ impl TerrainPass {
 
     /// [`Self::draw`] with the tiles' vertex data where `vertices` says.
     #[allow(unsafe_code)]
-    pub fn draw_from(&self, list: &DrawList, output: TerrainOutput, vertices: TileVertices<'_>) -> Result<(), GlError> {
+    pub fn draw_from(
+        &self,
+        list: &DrawList,
+        output: TerrainOutput,
+        vertices: TileVertices<'_>,
+    ) -> Result<(), GlError> {
         let Some(frame) = list.frame else { return Ok(()) };
         let gl = &self.gl;
         let program = match output {
@@ -204,9 +213,16 @@ impl TerrainPass {
         vertices: TileVertices<'_>,
     ) {
         // SAFETY: the terrain program is bound and its location comes from it.
-        unsafe { self.gl.uniform_matrix_4_f32_slice(at.view_projection.as_ref(), false, &view_projection.to_cols_array()) };
+        unsafe {
+            self.gl.uniform_matrix_4_f32_slice(
+                at.view_projection.as_ref(),
+                false,
+                &view_projection.to_cols_array(),
+            )
+        };
         for tile in &list.tiles {
-            let (in_near, in_far) = frame.slices.tile_slices(tile, &frame.posts, self.grid_size as f32);
+            let (in_near, in_far) =
+                frame.slices.tile_slices(tile, &frame.posts, self.grid_size as f32);
             if !(if near_slice { in_near } else { in_far }) {
                 continue;
             }
@@ -231,10 +247,29 @@ impl TerrainPass {
         // SAFETY: the tile's vertex buffer is bound and holds a whole tile's
         // vertices from `offset`.
         unsafe {
-            gl.uniform_4_f32(at.tile.as_ref(), tile.first_post[0], tile.first_post[1], tile.post_step, 0.0);
-            gl.uniform_4_f32(at.morph.as_ref(), tile.morph[0], tile.morph[1], tile.skirt_depth, 0.0);
+            gl.uniform_4_f32(
+                at.tile.as_ref(),
+                tile.first_post[0],
+                tile.first_post[1],
+                tile.post_step,
+                0.0,
+            );
+            gl.uniform_4_f32(
+                at.morph.as_ref(),
+                tile.morph[0],
+                tile.morph[1],
+                tile.skirt_depth,
+                0.0,
+            );
             gl.vertex_attrib_pointer_f32(HEIGHT, 2, glow::FLOAT, false, VERTEX_STRIDE, offset);
-            gl.vertex_attrib_pointer_f32(NORMAL, 4, glow::BYTE, true, VERTEX_STRIDE, offset + NORMAL_OFFSET);
+            gl.vertex_attrib_pointer_f32(
+                NORMAL,
+                4,
+                glow::BYTE,
+                true,
+                VERTEX_STRIDE,
+                offset + NORMAL_OFFSET,
+            );
             gl.draw_elements(glow::TRIANGLES, self.index_count, glow::UNSIGNED_SHORT, 0);
         }
     }
@@ -248,9 +283,21 @@ fn set_frame_uniforms(gl: &Gl, at: &Locations, frame: &FrameUniforms) {
     let haze = palette::SKY_HORIZON;
     // SAFETY: the program is bound; locations come from it.
     unsafe {
-        gl.uniform_4_f32(at.frame.as_ref(), frame.camera_altitude as f32, curvature as f32, 0.0, 0.0);
+        gl.uniform_4_f32(
+            at.frame.as_ref(),
+            frame.camera_altitude as f32,
+            curvature as f32,
+            0.0,
+            0.0,
+        );
         let posts = &frame.posts;
-        gl.uniform_4_f32(at.posts.as_ref(), posts.spacing[0], posts.spacing[1], posts.offset[0], posts.offset[1]);
+        gl.uniform_4_f32(
+            at.posts.as_ref(),
+            posts.spacing[0],
+            posts.spacing[1],
+            posts.offset[0],
+            posts.offset[1],
+        );
         gl.uniform_3_f32(at.sun.as_ref(), sun.x, sun.y, sun.z);
         let awareness = (frame.warning_above_m, frame.caution_below_m, frame.fog_distance_m);
         gl.uniform_4_f32(at.awareness.as_ref(), awareness.0, awareness.1, awareness.2, 0.0);

@@ -13,10 +13,11 @@
 
 mod mesh;
 
-pub use mesh::{TruthChunk, TruthError, TruthMesh, TruthRegion, CHUNK_CELLS, CHUNK_TRIANGLES, MAX_TRUTH_POSTS};
+pub use mesh::{
+    TruthChunk, TruthError, TruthMesh, TruthRegion, CHUNK_CELLS, CHUNK_TRIANGLES, MAX_TRUTH_POSTS,
+};
 
 use std::rc::Rc;
-
 
 use super::error::GlError;
 use super::handle::Gl;
@@ -58,19 +59,29 @@ impl TruthPass {
     /// Uploads `mesh` into the vertex buffer of a terrain pass whose tile
     /// grid is a chunk.
     pub fn new(gl: &Rc<Gl>, mesh: &TruthMesh) -> Result<TruthPass, GlError> {
-        let vertices: Vec<_> = mesh.chunks.iter().flat_map(|c| c.vertices.iter().copied()).collect();
+        let vertices: Vec<_> =
+            mesh.chunks.iter().flat_map(|c| c.vertices.iter().copied()).collect();
         let bytes: &[u8] = bytemuck::cast_slice(&vertices);
-        let too_large = || GlError::InvalidRequest(format!("truth mesh of {} bytes exceeds 2^32-1", bytes.len()));
+        let too_large = || {
+            GlError::InvalidRequest(format!("truth mesh of {} bytes exceeds 2^32-1", bytes.len()))
+        };
         let size = u32::try_from(bytes.len()).map_err(|_| too_large())?;
         let terrain = TerrainPass::new(gl, CHUNK_CELLS, size)?;
         terrain.upload(bytes, &[0..size])?;
-        debug_assert!(mesh.chunks.iter().all(|c| c.vertices.len() == grid::vertex_count(CHUNK_CELLS)));
+        debug_assert!(mesh
+            .chunks
+            .iter()
+            .all(|c| c.vertices.len() == grid::vertex_count(CHUNK_CELLS)));
         let chunks = mesh
             .chunks
             .iter()
             .enumerate()
             .map(|(k, chunk)| ChunkDraw {
-                key: TileKey::new(0, chunk.first_post[0] / CHUNK_CELLS, chunk.first_post[1] / CHUNK_CELLS),
+                key: TileKey::new(
+                    0,
+                    chunk.first_post[0] / CHUNK_CELLS,
+                    chunk.first_post[1] / CHUNK_CELLS,
+                ),
                 first_post: mesh.chunk_first_post(chunk),
                 byte_offset: k as u32 * tile_bytes(CHUNK_CELLS),
             })
@@ -95,15 +106,13 @@ impl TruthPass {
         let tiles = self
             .chunks
             .iter()
-            .map(|chunk| {
-                TileUniforms {
-                    key: chunk.key,
-                    first_post: frame.posts.number(chunk.first_post),
-                    post_step: 1.0,
-                    morph: NO_MORPH,
-                    skirt_depth: 0.0,
-                    byte_offset: chunk.byte_offset,
-                }
+            .map(|chunk| TileUniforms {
+                key: chunk.key,
+                first_post: frame.posts.number(chunk.first_post),
+                post_step: 1.0,
+                morph: NO_MORPH,
+                skirt_depth: 0.0,
+                byte_offset: chunk.byte_offset,
             })
             .collect();
         let indices_per_tile = grid::index_count(CHUNK_CELLS) as u32;
@@ -167,7 +176,8 @@ mod tests {
         assert_eq!(display.scene().draw_list().frame, Some(display.frame_uniforms(camera)));
         let levels = display.scene().draw_list().tiles.iter().map(|t| t.key.level).collect();
         let lod = display.read_pixels().expect("read LOD");
-        let mesh = TruthMesh::load(earth.as_ref(), TruthRegion::whole(earth.layout())).expect("mesh");
+        let mesh =
+            TruthMesh::load(earth.as_ref(), TruthRegion::whole(earth.layout())).expect("mesh");
         let truth = TruthPass::new(display.context().gl(), &mesh).expect("truth pass");
         let stats = display.render_truth(camera, &truth).expect("truth frame");
         assert_eq!((stats.triangles, stats.draw_calls), (2 * 512 * 512, 16));
@@ -196,7 +206,11 @@ mod tests {
         let (lod, truth, levels) = lod_and_truth(1.0, &camera);
         assert!(levels.iter().all(|&l| l == 0), "a rough earth keeps level 0 at tau 1 px");
         let differing = lod.pixels().zip(truth.pixels()).filter(|(a, b)| a != b).count();
-        println!("level 0 only: {} tiles, {differing} pixels differ, coverage {:.3}", levels.len(), coverage(&truth));
+        println!(
+            "level 0 only: {} tiles, {differing} pixels differ, coverage {:.3}",
+            levels.len(),
+            coverage(&truth)
+        );
         assert!(coverage(&truth) > 0.6, "the truth covers the picture below the horizon");
         assert!(differing * 200 < lod.pixels().len(), "{differing} pixels differ");
         let (coarse, truth, levels) = lod_and_truth(16.0, &camera);

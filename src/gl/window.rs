@@ -101,11 +101,15 @@ impl WindowContext {
     }
 
     pub(crate) fn make_current(&self) -> Result<(), GlError> {
-        self.context.make_current(&self.surface).map_err(|e| creation(&format!("make current: {e}")))
+        self.context
+            .make_current(&self.surface)
+            .map_err(|e| creation(&format!("make current: {e}")))
     }
 
     pub(crate) fn swap_buffers(&self) -> Result<(), GlError> {
-        self.surface.swap_buffers(&self.context).map_err(|e| creation(&format!("swap buffers: {e}")))
+        self.surface
+            .swap_buffers(&self.context)
+            .map_err(|e| creation(&format!("swap buffers: {e}")))
     }
 
     /// Handles pending window events, waiting up to `timeout` for one, and
@@ -135,14 +139,17 @@ fn new_event_loop() -> Result<EventLoop<()>, GlError> {
 /// gives OpenGL ES directly), GLX where EGL is missing.
 #[allow(unsafe_code)]
 fn window_system_display(event_loop: &EventLoop<()>) -> Result<Display, GlError> {
-    let raw_display =
-        event_loop.display_handle().map_err(|e| GlError::NoDisplay { reason: e.to_string() })?.as_raw();
+    let raw_display = event_loop
+        .display_handle()
+        .map_err(|e| GlError::NoDisplay { reason: e.to_string() })?
+        .as_raw();
     let preference =
         DisplayApiPreference::EglThenGlx(Box::new(winit::platform::x11::register_xlib_error_hook));
     // SAFETY: `raw_display` is the event loop's live connection, and the
     // event loop outlives every GL object made from this display (it is the
     // last field of WindowContext).
-    unsafe { Display::new(raw_display, preference) }.map_err(|e| creation(&format!("GL display: {e}")))
+    unsafe { Display::new(raw_display, preference) }
+        .map_err(|e| creation(&format!("GL display: {e}")))
 }
 
 /// Prefers a config with 24 depth bits, no multisampling (the read-back
@@ -151,10 +158,12 @@ fn window_system_display(event_loop: &EventLoop<()>) -> Result<Display, GlError>
 fn pick_config(display: &Display, template: ConfigTemplate) -> Result<Config, GlError> {
     // SAFETY: the template names no native window whose handle must stay
     // valid.
-    let configs =
-        unsafe { display.find_configs(template) }.map_err(|e| creation(&format!("configs: {e}")))?;
+    let configs = unsafe { display.find_configs(template) }
+        .map_err(|e| creation(&format!("configs: {e}")))?;
     configs
-        .max_by_key(|config| (config.depth_size() >= 24, config.num_samples() == 0, config.alpha_size() == 8))
+        .max_by_key(|config| {
+            (config.depth_size() >= 24, config.num_samples() == 0, config.alpha_size() == 8)
+        })
         .ok_or_else(|| creation("no config offers the requested OpenGL ES version"))
 }
 
@@ -165,7 +174,8 @@ fn surface_and_context(
     version: GlesVersion,
 ) -> Result<(Surface<WindowSurface>, PossiblyCurrentContext), GlError> {
     let display = config.display();
-    let raw_window = window.window_handle().map_err(|e| creation(&format!("window handle: {e}")))?.as_raw();
+    let raw_window =
+        window.window_handle().map_err(|e| creation(&format!("window handle: {e}")))?.as_raw();
     let major = if version == GlesVersion::Es2 { 2 } else { 3 };
     let context_attributes = ContextAttributesBuilder::new()
         .with_context_api(ContextApi::Gles(Some(Version::new(major, 0))))
@@ -188,7 +198,8 @@ fn surface_and_context(
             .map_err(|e| creation(&format!("surface: {e}")))?;
         (surface, context)
     };
-    let context = context.make_current(&surface).map_err(|e| creation(&format!("make current: {e}")))?;
+    let context =
+        context.make_current(&surface).map_err(|e| creation(&format!("make current: {e}")))?;
     Ok((surface, context))
 }
 

@@ -40,7 +40,12 @@ impl TileKey {
     pub fn children(self) -> [TileKey; 4] {
         debug_assert!(self.level > 0, "level-0 tiles have no children");
         let (l, x, y) = (self.level - 1, self.x * 2, self.y * 2);
-        [TileKey::new(l, x, y), TileKey::new(l, x + 1, y), TileKey::new(l, x, y + 1), TileKey::new(l, x + 1, y + 1)]
+        [
+            TileKey::new(l, x, y),
+            TileKey::new(l, x + 1, y),
+            TileKey::new(l, x, y + 1),
+            TileKey::new(l, x + 1, y + 1),
+        ]
     }
 
     pub fn parent(self) -> TileKey {
@@ -68,7 +73,13 @@ pub struct LodConfig {
 
 impl Default for LodConfig {
     fn default() -> Self {
-        LodConfig { grid_size: 32, view_distance: 3.0, morph_range: 0.3, tau_px: 1.0, max_tiles: 2048 }
+        LodConfig {
+            grid_size: 32,
+            view_distance: 3.0,
+            morph_range: 0.3,
+            tau_px: 1.0,
+            max_tiles: 2048,
+        }
     }
 }
 

@@ -39,7 +39,10 @@ pub struct RingInputs<'a> {
 
 impl LevelRanges {
     pub fn new(config: &LodConfig, inputs: RingInputs<'_>) -> Self {
-        let mut ranges = LevelRanges { split: Vec::with_capacity(inputs.delta_per_level.len() + 1), morph_range: 0.0 };
+        let mut ranges = LevelRanges {
+            split: Vec::with_capacity(inputs.delta_per_level.len() + 1),
+            morph_range: 0.0,
+        };
         ranges.update(config, inputs);
         ranges
     }

@@ -100,14 +100,20 @@ impl TileSelector {
     }
 
     /// Distance to the tile's box, or `None` if the frustum excludes it.
-    fn visible_distance(&self, key: TileKey, view: &View<'_>, terrain: &dyn TileBounds) -> Option<f64> {
+    fn visible_distance(
+        &self,
+        key: TileKey,
+        view: &View<'_>,
+        terrain: &dyn TileBounds,
+    ) -> Option<f64> {
         let (min, max) = tile_box(key, self.config.grid_size, terrain, view.eye);
         let distance = box_distance(min, max);
         let (mut lo, hi) = (min, max);
         if view.curvature {
             // The surface drops with horizontal distance; the box must reach the
             // drop at its far corner.
-            let far = DVec3::new(min.x.abs().max(max.x.abs()), min.y.abs().max(max.y.abs()), 0.0).length();
+            let far = DVec3::new(min.x.abs().max(max.x.abs()), min.y.abs().max(max.y.abs()), 0.0)
+                .length();
             lo.z -= curvature_drop(far);
         }
         view.frustum.intersects_box(lo.as_vec3(), hi.as_vec3()).then_some(distance)
@@ -122,7 +128,12 @@ pub fn tiles_at(samples: [u32; 2], grid_size: u32, level: u8) -> [u32; 2] {
 }
 
 /// The tile's bounding box relative to `eye`, in f64.
-pub fn tile_box(key: TileKey, grid_size: u32, terrain: &dyn TileBounds, eye: DVec3) -> (DVec3, DVec3) {
+pub fn tile_box(
+    key: TileKey,
+    grid_size: u32,
+    terrain: &dyn TileBounds,
+    eye: DVec3,
+) -> (DVec3, DVec3) {
     let [sx, sy] = terrain.spacing_m();
     let span = ((grid_size as u64) << key.level) as f64;
     let (lo_h, hi_h) = terrain.height_bounds(key, grid_size);

@@ -75,7 +75,11 @@ impl BuiltPyramid {
 }
 
 /// Builds the pyramid of `grid`, using every core rayon offers.
-pub fn build(grid: &ElevationGrid, options: &BuildOptions, progress: &dyn Progress) -> Result<BuiltPyramid, BuildError> {
+pub fn build(
+    grid: &ElevationGrid,
+    options: &BuildOptions,
+    progress: &dyn Progress,
+) -> Result<BuiltPyramid, BuildError> {
     let (layout, stats) = check_input(grid, options)?;
     let mut levels = Vec::with_capacity(layout.levels as usize);
     let mut summaries = Vec::with_capacity(layout.levels as usize);
@@ -90,7 +94,10 @@ pub fn build(grid: &ElevationGrid, options: &BuildOptions, progress: &dyn Progre
         progress.phase(&format!("level {lod}: delta"), grid.height as u64);
         let deltas = level_deltas(grid, &raster, nodes, layout.span(lod), progress);
         node_summaries.iter_mut().zip(deltas).for_each(|(s, delta)| s.delta = delta);
-        debug_assert_eq!(heights.len(), node_summaries.len() * (layout.stored_side() as usize).pow(2));
+        debug_assert_eq!(
+            heights.len(),
+            node_summaries.len() * (layout.stored_side() as usize).pow(2)
+        );
         summaries.push(summarise_level(nodes, &node_summaries));
         levels.push(BuiltLevel { heights, summaries: node_summaries });
     }
@@ -99,7 +106,10 @@ pub fn build(grid: &ElevationGrid, options: &BuildOptions, progress: &dyn Progre
 }
 
 /// The layout for `grid` and its height statistics, or why it cannot be built.
-fn check_input(grid: &ElevationGrid, options: &BuildOptions) -> Result<(NodeLayout, GridStats), BuildError> {
+fn check_input(
+    grid: &ElevationGrid,
+    options: &BuildOptions,
+) -> Result<(NodeLayout, GridStats), BuildError> {
     let BuildOptions { node_size, border } = *options;
     if !(1..=MAX_NODE_SIZE).contains(&node_size) || border > MAX_BORDER {
         return Err(BuildError::InvalidOptions(format!(
@@ -109,20 +119,34 @@ fn check_input(grid: &ElevationGrid, options: &BuildOptions) -> Result<(NodeLayo
     let samples = [grid.width, grid.height];
     let expected = (grid.width as usize).checked_mul(grid.height as usize);
     if samples.contains(&0) || expected != Some(grid.heights.len()) {
-        return Err(BuildError::InvalidGrid(format!("{samples:?} samples but {} heights", grid.heights.len())));
+        return Err(BuildError::InvalidGrid(format!(
+            "{samples:?} samples but {} heights",
+            grid.heights.len()
+        )));
     }
     if let Some(problem) = grid.georef.problem(samples) {
         return Err(BuildError::InvalidGrid(problem));
     }
     if let Some(index) = grid.heights.par_iter().position_any(|h| !h.is_finite()) {
         let (i, j) = (index % grid.width as usize, index / grid.width as usize);
-        return Err(BuildError::InvalidGrid(format!("height at sample ({i}, {j}) is {}", grid.heights[index])));
+        return Err(BuildError::InvalidGrid(format!(
+            "height at sample ({i}, {j}) is {}",
+            grid.heights[index]
+        )));
     }
     let levels = NodeLayout::levels_for(samples, node_size);
     if levels > MAX_LEVELS {
-        return Err(BuildError::InvalidOptions(format!("{levels} levels exceed {MAX_LEVELS}; use larger nodes")));
+        return Err(BuildError::InvalidOptions(format!(
+            "{levels} levels exceed {MAX_LEVELS}; use larger nodes"
+        )));
     }
-    let layout = NodeLayout { levels, node_size, border, samples, spacing_m: grid.georef.spacing_m(samples) };
+    let layout = NodeLayout {
+        levels,
+        node_size,
+        border,
+        samples,
+        spacing_m: grid.georef.spacing_m(samples),
+    };
     let (height_min, height_max) = min_max(&grid.heights);
     Ok((layout, GridStats { height_min, height_max, voids_filled: grid.voids_filled }))
 }
@@ -136,7 +160,11 @@ fn min_max(heights: &[f32]) -> (f32, f32) {
 
 /// Cuts level `raster.lod` into its nodes, border included (Kühnert's split
 /// and stitch), in parallel; summaries carry min and max, delta comes later.
-fn split_level(raster: &LevelRaster, layout: &NodeLayout, progress: &dyn Progress) -> (Vec<f32>, Vec<NodeSummary>) {
+fn split_level(
+    raster: &LevelRaster,
+    layout: &NodeLayout,
+    progress: &dyn Progress,
+) -> (Vec<f32>, Vec<NodeSummary>) {
     let [nodes_x, nodes_y] = layout.nodes_at(raster.lod);
     let side = layout.stored_side() as usize;
     let mut heights = vec![0.0f32; nodes_x as usize * nodes_y as usize * side * side];
@@ -156,13 +184,20 @@ fn split_level(raster: &LevelRaster, layout: &NodeLayout, progress: &dyn Progres
 /// Copies node `(x, y)`'s window of the raster into `posts`; posts past the
 /// raster's edge repeat its edge (Kühnert's rule for borders without a
 /// neighbour). Returns the min and max of the centre posts.
-fn cut_node(raster: &LevelRaster, layout: &NodeLayout, x: u32, y: u32, posts: &mut [f32]) -> NodeSummary {
+fn cut_node(
+    raster: &LevelRaster,
+    layout: &NodeLayout,
+    x: u32,
+    y: u32,
+    posts: &mut [f32],
+) -> NodeSummary {
     let side = layout.stored_side() as usize;
     let border = layout.border as i64;
     let centre = border as usize..=border as usize + layout.node_size as usize;
     let first = |node: u32| node as i64 * layout.node_size as i64 - border;
     let clamp = |index: i64, count: u32| index.clamp(0, count as i64 - 1) as u32;
-    let columns: Vec<usize> = (0..side as i64).map(|p| clamp(first(x) + p, raster.cols) as usize).collect();
+    let columns: Vec<usize> =
+        (0..side as i64).map(|p| clamp(first(x) + p, raster.cols) as usize).collect();
     let mut summary = NodeSummary { min: f32::INFINITY, max: f32::NEG_INFINITY, delta: 0.0 };
     for (q, out) in posts.chunks_exact_mut(side).enumerate() {
         let row = raster.row(clamp(first(y) + q as i64, raster.rows));

@@ -40,7 +40,10 @@ pub(crate) fn level_deltas(
             },
         )
         .map(|(worst, _)| worst)
-        .reduce(|| vec![0.0; node_count], |a, b| a.iter().zip(&b).map(|(x, y)| x.max(*y)).collect());
+        .reduce(
+            || vec![0.0; node_count],
+            |a, b| a.iter().zip(&b).map(|(x, y)| x.max(*y)).collect(),
+        );
     worst.into_iter().map(round_up_to_f32).collect()
 }
 
@@ -62,7 +65,8 @@ fn row_distances(grid: &ElevationGrid, raster: &LevelRaster, j: u32, out: &mut [
     let samples = &grid.heights[j as usize * grid.width as usize..][..grid.width as usize];
     for (k, (samples, out)) in samples.chunks(step).zip(out.chunks_mut(step)).enumerate() {
         let k1 = (k + 1).min(last);
-        let (h00, h10, h01, h11) = (south[k] as f64, south[k1] as f64, north[k] as f64, north[k1] as f64);
+        let (h00, h10, h01, h11) =
+            (south[k] as f64, south[k1] as f64, north[k] as f64, north[k1] as f64);
         // cell_surface with fv fixed: base + fu * slope on each triangle.
         let (north_west_base, north_west_slope) = (h00 + fv * (h01 - h00), h11 - h01);
         let (south_east_base, south_east_slope) = (h00 + fv * (h11 - h10), h10 - h00);
@@ -77,7 +81,14 @@ fn row_distances(grid: &ElevationGrid, raster: &LevelRaster, j: u32, out: &mut [
 /// `|sample - (base + fu * slope)|` for samples `first, first + 1, ...` of a
 /// cell, `fu = a / step`.
 #[inline]
-fn distances_to_line(samples: &[f32], first: usize, base: f64, slope: f64, inv_step: f64, out: &mut [f64]) {
+fn distances_to_line(
+    samples: &[f32],
+    first: usize,
+    base: f64,
+    slope: f64,
+    inv_step: f64,
+    out: &mut [f64],
+) {
     for (a, (&sample, out)) in (first..).zip(samples.iter().zip(out)) {
         *out = (sample as f64 - (base + a as f64 * inv_step * slope)).abs();
     }
@@ -93,7 +104,8 @@ fn record_row(row_error: &[f64], j: u32, nodes: [u32; 2], span: u64, worst: &mut
         for x in 0..nodes[0] as u64 {
             let first = x * span;
             let end = ((x + 1) * span).min(last_sample);
-            let largest = row_error[first as usize..=end as usize].iter().fold(0.0f64, |a, &b| a.max(b));
+            let largest =
+                row_error[first as usize..=end as usize].iter().fold(0.0f64, |a, &b| a.max(b));
             let slot = &mut worst[(y * nodes[0] as u64 + x) as usize];
             *slot = slot.max(largest);
         }

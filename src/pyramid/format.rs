@@ -115,14 +115,21 @@ pub(crate) fn encode_header(info: &PyramidInfo, nodes: &[NodeSummary]) -> Vec<u8
     let layout = &info.layout;
     debug_assert_eq!(nodes.len() as u64, layout.node_count());
     debug_assert_eq!(info.levels.len(), layout.levels as usize);
-    let header_len = header_len(info.levels.len() as u64, nodes.len() as u64).expect("in-memory sizes fit u64");
+    let header_len =
+        header_len(info.levels.len() as u64, nodes.len() as u64).expect("in-memory sizes fit u64");
     let record_len = record_len(layout);
     let mut e = Encoder::default();
     e.bytes.extend_from_slice(&MAGIC);
     e.u32(VERSION);
     e.u64(header_len);
     e.u64(header_len + nodes.len() as u64 * record_len);
-    for v in [layout.node_size, layout.border, layout.levels as u32, layout.samples[0], layout.samples[1]] {
+    for v in [
+        layout.node_size,
+        layout.border,
+        layout.levels as u32,
+        layout.samples[0],
+        layout.samples[1],
+    ] {
         e.u32(v);
     }
     layout.spacing_m.iter().for_each(|&v| e.f64(v));
@@ -173,19 +180,27 @@ pub(crate) fn decode_header(path: &Path, bytes: &[u8]) -> Result<DecodedHeader, 
     }
     let version = d.u32().ok_or_else(short)?;
     if version != VERSION {
-        return Err(PyramidError::Version { path: path.to_path_buf(), found: version, supported: VERSION });
+        return Err(PyramidError::Version {
+            path: path.to_path_buf(),
+            found: version,
+            supported: VERSION,
+        });
     }
     let fixed = read_fixed(&mut d).ok_or_else(short)?;
     if fixed.file_len != bytes.len() as u64 {
         let problem = format!("header says {} bytes, the file has {}", fixed.file_len, bytes.len());
-        return Err(if fixed.file_len > bytes.len() as u64 { truncated(problem) } else { corrupt(problem) });
+        return Err(if fixed.file_len > bytes.len() as u64 {
+            truncated(problem)
+        } else {
+            corrupt(problem)
+        });
     }
     let layout = fixed.layout;
     check_layout(&layout).map_err(corrupt)?;
     let node_count = layout.node_count();
     let expected_header = header_len(layout.levels as u64, node_count);
-    let expected_file = expected_header
-        .and_then(|h| node_count.checked_mul(record_len(&layout))?.checked_add(h));
+    let expected_file =
+        expected_header.and_then(|h| node_count.checked_mul(record_len(&layout))?.checked_add(h));
     if fixed.node_count != node_count
         || fixed.record_len as u64 != record_len(&layout)
         || expected_header != Some(fixed.header_len)
@@ -204,7 +219,8 @@ pub(crate) fn decode_header(path: &Path, bytes: &[u8]) -> Result<DecodedHeader, 
         return Err(corrupt("header padding is not zero".into()));
     }
     let levels = read_levels(&mut d, &layout).map_err(corrupt)?;
-    let nodes = read_nodes(&mut d, node_count, fixed.header_len, record_len(&layout)).map_err(corrupt)?;
+    let nodes =
+        read_nodes(&mut d, node_count, fixed.header_len, record_len(&layout)).map_err(corrupt)?;
     let georef = GeoRef { crs: crs_from_code(fixed.crs).map_err(corrupt)?, ..fixed.georef };
     let info = PyramidInfo { layout, georef, stats: fixed.stats, levels };
     check_stats(&info).map_err(corrupt)?;
@@ -230,16 +246,19 @@ struct Fixed {
 fn read_fixed(d: &mut Decoder) -> Option<Fixed> {
     let header_len = d.u64()?;
     let file_len = d.u64()?;
-    let [node_size, border, levels, samples_x, samples_y] = [d.u32()?, d.u32()?, d.u32()?, d.u32()?, d.u32()?];
+    let [node_size, border, levels, samples_x, samples_y] =
+        [d.u32()?, d.u32()?, d.u32()?, d.u32()?, d.u32()?];
     let spacing_m = [d.f64()?, d.f64()?];
     let crs = (d.u32()?, d.u32()?);
     // The crs is decoded once the checksum has been checked.
-    let georef = GeoRef { crs: Crs::Local, origin: [d.f64()?, d.f64()?], spacing: [d.f64()?, d.f64()?] };
+    let georef =
+        GeoRef { crs: Crs::Local, origin: [d.f64()?, d.f64()?], spacing: [d.f64()?, d.f64()?] };
     let stats = GridStats { height_min: d.f32()?, height_max: d.f32()?, voids_filled: d.u64()? };
     let node_count = d.u64()?;
     let record_len = d.u32()?;
     let levels = u8::try_from(levels).unwrap_or(u8::MAX);
-    let layout = NodeLayout { levels, node_size, border, samples: [samples_x, samples_y], spacing_m };
+    let layout =
+        NodeLayout { levels, node_size, border, samples: [samples_x, samples_y], spacing_m };
     Some(Fixed { header_len, file_len, layout, crs, georef, stats, node_count, record_len })
 }
 
@@ -247,10 +266,16 @@ fn read_fixed(d: &mut Decoder) -> Option<Fixed> {
 pub(crate) fn check_layout(layout: &NodeLayout) -> Result<(), String> {
     use super::build::{MAX_BORDER, MAX_NODE_SIZE};
     if !(1..=MAX_NODE_SIZE).contains(&layout.node_size) || layout.border > MAX_BORDER {
-        return Err(format!("node size {} or border {} out of range", layout.node_size, layout.border));
+        return Err(format!(
+            "node size {} or border {} out of range",
+            layout.node_size, layout.border
+        ));
     }
     if layout.samples.contains(&0) || !(1..=MAX_LEVELS).contains(&layout.levels) {
-        return Err(format!("samples {:?} or levels {} out of range", layout.samples, layout.levels));
+        return Err(format!(
+            "samples {:?} or levels {} out of range",
+            layout.samples, layout.levels
+        ));
     }
     if layout.levels != NodeLayout::levels_for(layout.samples, layout.node_size) {
         return Err(format!("{} levels do not end in one root node", layout.levels));
@@ -266,25 +291,42 @@ fn read_levels(d: &mut Decoder, layout: &NodeLayout) -> Result<Vec<LevelSummary>
         .map(|lod| {
             let short = || "level table cut short".to_string();
             let nodes = [d.u32().ok_or_else(short)?, d.u32().ok_or_else(short)?];
-            let [delta_max, height_min, height_max] =
-                [d.f32().ok_or_else(short)?, d.f32().ok_or_else(short)?, d.f32().ok_or_else(short)?];
+            let [delta_max, height_min, height_max] = [
+                d.f32().ok_or_else(short)?,
+                d.f32().ok_or_else(short)?,
+                d.f32().ok_or_else(short)?,
+            ];
             if nodes != layout.nodes_at(lod) {
-                return Err(format!("level {lod} has {nodes:?} nodes, the layout {:?}", layout.nodes_at(lod)));
+                return Err(format!(
+                    "level {lod} has {nodes:?} nodes, the layout {:?}",
+                    layout.nodes_at(lod)
+                ));
             }
             Ok(LevelSummary { nodes, delta_max, height_min, height_max })
         })
         .collect()
 }
 
-fn read_nodes(d: &mut Decoder, count: u64, header_len: u64, record_len: u64) -> Result<Vec<NodeSummary>, String> {
+fn read_nodes(
+    d: &mut Decoder,
+    count: u64,
+    header_len: u64,
+    record_len: u64,
+) -> Result<Vec<NodeSummary>, String> {
     (0..count)
         .map(|index| {
             let short = || "node table cut short".to_string();
             let offset = d.u64().ok_or_else(short)?;
-            let summary =
-                NodeSummary { min: d.f32().ok_or_else(short)?, max: d.f32().ok_or_else(short)?, delta: d.f32().ok_or_else(short)? };
+            let summary = NodeSummary {
+                min: d.f32().ok_or_else(short)?,
+                max: d.f32().ok_or_else(short)?,
+                delta: d.f32().ok_or_else(short)?,
+            };
             if offset != header_len + index * record_len {
-                return Err(format!("node {index} at offset {offset}, expected {}", header_len + index * record_len));
+                return Err(format!(
+                    "node {index} at offset {offset}, expected {}",
+                    header_len + index * record_len
+                ));
             }
             check_summary(&summary).map_err(|p| format!("node {index}: {p}"))?;
             Ok(summary)
@@ -324,7 +366,10 @@ pub(crate) fn encode_record(heights: &[f32], summary: &NodeSummary, out: &mut [u
 
 /// The heights bytes of a record after checking its checksum and that it
 /// repeats the node table's `expected` summary.
-pub(crate) fn check_record<'a>(record: &'a [u8], expected: &NodeSummary) -> Result<&'a [u8], String> {
+pub(crate) fn check_record<'a>(
+    record: &'a [u8],
+    expected: &NodeSummary,
+) -> Result<&'a [u8], String> {
     let (body, crc) = record.split_at(record.len() - 4);
     if crc32fast::hash(body) != u32::from_le_bytes(crc.try_into().expect("4 bytes")) {
         return Err("checksum mismatch".into());

@@ -95,8 +95,10 @@ impl Pyramid {
     fn sample(&self, i: u32, j: u32) -> f32 {
         let layout = &self.info.layout;
         let [nodes_x, nodes_y] = layout.nodes_at(0);
-        let (x, y) = ((i / layout.node_size).min(nodes_x - 1), (j / layout.node_size).min(nodes_y - 1));
-        let (p, q) = (i - x * layout.node_size + layout.border, j - y * layout.node_size + layout.border);
+        let (x, y) =
+            ((i / layout.node_size).min(nodes_x - 1), (j / layout.node_size).min(nodes_y - 1));
+        let (p, q) =
+            (i - x * layout.node_size + layout.border, j - y * layout.node_size + layout.border);
         let index = layout.node_index(NodeId::new(0, x, y)).expect("the node of a sample exists");
         let post = q as u64 * layout.stored_side() as u64 + p as u64;
         let at = (self.header_len + index * self.record_len + 4 * post) as usize;
@@ -114,7 +116,9 @@ impl Pyramid {
     /// found is reported.
     fn verify_nodes(&self) -> Result<(), PyramidError> {
         let damaged = (0..self.nodes.len() as u64).into_par_iter().find_map_any(|index| {
-            check_record(self.record(index), &self.nodes[index as usize]).err().map(|problem| (index, problem))
+            check_record(self.record(index), &self.nodes[index as usize])
+                .err()
+                .map(|problem| (index, problem))
         });
         match damaged {
             None => Ok(()),

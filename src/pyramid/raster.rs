@@ -24,7 +24,12 @@ impl<'a> LevelRaster<'a> {
     /// Level 0: the grid itself, borrowed.
     pub fn finest(grid: &'a ElevationGrid) -> Self {
         debug_assert_eq!(grid.heights.len(), grid.width as usize * grid.height as usize);
-        LevelRaster { lod: 0, cols: grid.width, rows: grid.height, heights: Cow::Borrowed(&grid.heights) }
+        LevelRaster {
+            lod: 0,
+            cols: grid.width,
+            rows: grid.height,
+            heights: Cow::Borrowed(&grid.heights),
+        }
     }
 
     /// Row `m` of posts, west to east.
@@ -78,7 +83,11 @@ mod tests {
                     for k in -2..raster.cols as i64 + 2 {
                         let i = (k * step).clamp(0, width as i64 - 1) as u32;
                         let j = (m * step).clamp(0, height as i64 - 1) as u32;
-                        assert_eq!(clamped(&raster, k, m), grid.at(i, j), "lod {lod} post ({k}, {m})");
+                        assert_eq!(
+                            clamped(&raster, k, m),
+                            grid.at(i, j),
+                            "lod {lod} post ({k}, {m})"
+                        );
                     }
                 }
                 raster = raster.downsample();

@@ -25,7 +25,13 @@ pub fn synthetic_grid(size: u32) -> Option<ElevationGrid> {
             *h = height_at(i as f64 * SPACING_M, j as f64 * SPACING_M, i as u32, j as u32);
         }
     });
-    Some(ElevationGrid { width: size, height: size, heights, georef: GeoRef::local([SPACING_M; 2]), voids_filled: 0 })
+    Some(ElevationGrid {
+        width: size,
+        height: size,
+        heights,
+        georef: GeoRef::local([SPACING_M; 2]),
+        voids_filled: 0,
+    })
 }
 
 /// Height in metres at `(x, y)` metres: a few sine hills and ridges plus a

@@ -18,7 +18,11 @@ use super::progress::Progress;
 const RECORDS_PER_BATCH: usize = 256;
 
 /// Writes `pyramid` to `path` atomically. The directory must exist.
-pub fn write_atomic(pyramid: &BuiltPyramid, path: &Path, progress: &dyn Progress) -> Result<(), PyramidError> {
+pub fn write_atomic(
+    pyramid: &BuiltPyramid,
+    path: &Path,
+    progress: &dyn Progress,
+) -> Result<(), PyramidError> {
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
     let name = path.file_name().ok_or_else(|| {
         let source = std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a file path");
@@ -38,7 +42,11 @@ pub fn write_atomic(pyramid: &BuiltPyramid, path: &Path, progress: &dyn Progress
 }
 
 /// Writes the whole file at `path` and flushes it to disk.
-fn write_file(pyramid: &BuiltPyramid, path: &Path, progress: &dyn Progress) -> Result<(), PyramidError> {
+fn write_file(
+    pyramid: &BuiltPyramid,
+    path: &Path,
+    progress: &dyn Progress,
+) -> Result<(), PyramidError> {
     let layout = pyramid.layout();
     let header = encode_header(&pyramid.info, &pyramid.node_summaries());
     let record_len = record_len(layout) as usize;
@@ -49,11 +57,15 @@ fn write_file(pyramid: &BuiltPyramid, path: &Path, progress: &dyn Progress) -> R
     let posts = (layout.stored_side() as usize).pow(2);
     let mut batch = vec![0u8; RECORDS_PER_BATCH * record_len];
     for (heights, summaries) in pyramid.levels() {
-        for (nodes, summaries) in heights.chunks(RECORDS_PER_BATCH * posts).zip(summaries.chunks(RECORDS_PER_BATCH)) {
+        for (nodes, summaries) in
+            heights.chunks(RECORDS_PER_BATCH * posts).zip(summaries.chunks(RECORDS_PER_BATCH))
+        {
             let bytes = &mut batch[..summaries.len() * record_len];
-            bytes.par_chunks_mut(record_len).zip(nodes.par_chunks(posts)).zip(summaries).for_each(
-                |((record, heights), summary)| encode_record(heights, summary, record),
-            );
+            bytes
+                .par_chunks_mut(record_len)
+                .zip(nodes.par_chunks(posts))
+                .zip(summaries)
+                .for_each(|((record, heights), summary)| encode_record(heights, summary, record));
             file.write_all(bytes).map_err(PyramidError::io(path))?;
             progress.advance(bytes.len() as u64);
         }

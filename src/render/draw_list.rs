@@ -105,7 +105,15 @@ impl DepthSlices {
         let [x0, y0] = tile.post_position(posts, 0.0, 0.0);
         let [x1, y1] = tile.post_position(posts, cells, cells);
         // Horizontal distance from the camera to the tile's rectangle, and to its far corner.
-        let nearest = |lo: f32, hi: f32| if lo > 0.0 { lo } else if hi < 0.0 { -hi } else { 0.0 };
+        let nearest = |lo: f32, hi: f32| {
+            if lo > 0.0 {
+                lo
+            } else if hi < 0.0 {
+                -hi
+            } else {
+                0.0
+            }
+        };
         let (dx, dy) = (nearest(x0.min(x1), x0.max(x1)), nearest(y0.min(y1), y0.max(y1)));
         let min_distance = (dx * dx + dy * dy).sqrt() as f64;
         let far_x = x0.abs().max(x1.abs()) as f64;
@@ -113,7 +121,10 @@ impl DepthSlices {
         let vertical = self.max_drop_m as f64;
         let max_distance = (far_x * far_x + far_y * far_y + vertical * vertical).sqrt();
         let split = self.split_m as f64;
-        (min_distance * (self.min_depth_share as f64) < split, max_distance > split * SLICE_OVERLAP as f64)
+        (
+            min_distance * (self.min_depth_share as f64) < split,
+            max_distance > split * SLICE_OVERLAP as f64,
+        )
     }
 }
 
@@ -164,7 +175,9 @@ impl TileUniforms {
     /// Camera-relative position of the tile's post `(i, j)`, metres, as
     /// `terrain.vert` computes it.
     pub fn post_position(&self, posts: &PostFrame, i: f32, j: f32) -> [f32; 2] {
-        let at = |k: usize, n: f32| (self.first_post[k] + n * self.post_step) * posts.spacing[k] - posts.offset[k];
+        let at = |k: usize, n: f32| {
+            (self.first_post[k] + n * self.post_step) * posts.spacing[k] - posts.offset[k]
+        };
         [at(0, i), at(1, j)]
     }
 }
@@ -194,7 +207,13 @@ impl DrawList {
     }
 
     /// Rebuilds the list for `frame` (its camera) from the tile cache's draws.
-    pub fn build(&mut self, frame: FrameUniforms, draws: &[TileDraw], ranges: &LevelRanges, geometry: TileGeometry<'_>) {
+    pub fn build(
+        &mut self,
+        frame: FrameUniforms,
+        draws: &[TileDraw],
+        ranges: &LevelRanges,
+        geometry: TileGeometry<'_>,
+    ) {
         self.frame = Some(frame);
         self.tiles.clear();
         for draw in draws {
@@ -219,7 +238,12 @@ impl DrawList {
     }
 }
 
-fn tile_uniforms(draw: &TileDraw, posts: &PostFrame, ranges: &LevelRanges, geometry: &TileGeometry<'_>) -> TileUniforms {
+fn tile_uniforms(
+    draw: &TileDraw,
+    posts: &PostFrame,
+    ranges: &LevelRanges,
+    geometry: &TileGeometry<'_>,
+) -> TileUniforms {
     let key = draw.key;
     let step = 1i64 << key.level;
     let span = geometry.grid_size as i64 * step;
@@ -252,7 +276,14 @@ mod tests {
 
     fn tile(x: u32, first_post: [f32; 2]) -> TileUniforms {
         let key = TileKey::new(0, x, 0);
-        TileUniforms { key, first_post, post_step: 1.0, morph: [0.0, 1.0], skirt_depth: 1.0, byte_offset: 0 }
+        TileUniforms {
+            key,
+            first_post,
+            post_step: 1.0,
+            morph: [0.0, 1.0],
+            skirt_depth: 1.0,
+            byte_offset: 0,
+        }
     }
 
     fn frame(posts: PostFrame) -> FrameUniforms {
@@ -266,7 +297,13 @@ mod tests {
             viewport: [1, 1],
             fog_distance_m: 1.0,
             posts,
-            slices: DepthSlices { near: Mat4::IDENTITY, far: None, split_m: 1.0, min_depth_share: 1.0, max_drop_m: 0.0 },
+            slices: DepthSlices {
+                near: Mat4::IDENTITY,
+                far: None,
+                split_m: 1.0,
+                min_depth_share: 1.0,
+                max_drop_m: 0.0,
+            },
         }
     }
 
@@ -283,7 +320,10 @@ mod tests {
         };
         // Terrain from 0 to 20 m: the camera is 1000 m or more above it.
         let heights = (0.0, 20.0);
-        assert!(DepthSlices::new(&camera, 2000.0, 150_000.0, heights).far.is_none(), "a 2 km near plane resolves 150 km alone");
+        assert!(
+            DepthSlices::new(&camera, 2000.0, 150_000.0, heights).far.is_none(),
+            "a 2 km near plane resolves 150 km alone"
+        );
         let slices = DepthSlices::new(&camera, 1.0, 150_000.0, heights);
         assert!(slices.far.is_some());
         assert!((slices.split_m - 387.3).abs() < 0.1, "split {}", slices.split_m);
@@ -292,7 +332,11 @@ mod tests {
         let under = TileUniforms { first_post: [-2.0, -2.0], ..tile(0, [0.0, 0.0]) };
         let ahead = TileUniforms { first_post: [0.0, 200.0], ..tile(1, [0.0, 0.0]) };
         let far = TileUniforms { first_post: [0.0, 10_000.0], ..tile(2, [0.0, 0.0]) };
-        assert_eq!(slices.tile_slices(&under, &posts, 4.0), (true, true), "1 km above it, it may reach past the split");
+        assert_eq!(
+            slices.tile_slices(&under, &posts, 4.0),
+            (true, true),
+            "1 km above it, it may reach past the split"
+        );
         assert_eq!(slices.tile_slices(&ahead, &posts, 4.0), (false, true));
         assert_eq!(slices.tile_slices(&far, &posts, 4.0), (false, true));
     }
@@ -302,7 +346,12 @@ mod tests {
         // Posts 10 m apart, the camera 5 m east of the anchor; tiles of 4
         // cells with centres 1015, -25 (the camera's tile), 215 and 5015 m east.
         let posts = PostFrame { anchor: [0, 0], spacing: [10.0, 10.0], offset: [5.0, 0.0] };
-        let tiles = vec![tile(0, [100.0, -2.0]), tile(1, [-4.0, -2.0]), tile(2, [20.0, -2.0]), tile(3, [500.0, -2.0])];
+        let tiles = vec![
+            tile(0, [100.0, -2.0]),
+            tile(1, [-4.0, -2.0]),
+            tile(2, [20.0, -2.0]),
+            tile(3, [500.0, -2.0]),
+        ];
         let mut list = DrawList { frame: Some(frame(posts)), tiles, ..DrawList::default() };
         list.sort_front_to_back(4);
         let order: Vec<u32> = list.tiles.iter().map(|t| t.key.x).collect();
@@ -319,6 +368,9 @@ mod tests {
         let tile = TileUniforms { first_post: posts.number(post), ..tile(0, [0.0, 0.0]) };
         let [x, y] = tile.post_position(&posts, 0.0, 0.0);
         let exact = [post[0] as f64 * spacing[0] - eye.x, post[1] as f64 * spacing[1] - eye.y];
-        assert!((x as f64 - exact[0]).abs() < 0.01 && (y as f64 - exact[1]).abs() < 0.01, "{x} {y} vs {exact:?}");
+        assert!(
+            (x as f64 - exact[0]).abs() < 0.01 && (y as f64 - exact[1]).abs() < 0.01,
+            "{x} {y} vs {exact:?}"
+        );
     }
 }

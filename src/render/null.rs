@@ -44,7 +44,10 @@ impl RenderBackend for NullBackend {
 
     fn upload(&mut self, staging: &[u8], ranges: &[Range<u32>]) -> Result<(), Self::Error> {
         for range in ranges {
-            assert!(range.end <= self.capacity && range.end as usize <= staging.len(), "upload past the buffer");
+            assert!(
+                range.end <= self.capacity && range.end as usize <= staging.len(),
+                "upload past the buffer"
+            );
             self.counts.upload_calls += 1;
             self.counts.bytes_uploaded += (range.end - range.start) as u64;
         }

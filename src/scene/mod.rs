@@ -130,12 +130,15 @@ impl Scene {
             config,
             selector: TileSelector::new(config.lod),
             cache: TileCache::new(cache_config, terrain)?,
-            ranges: LevelRanges::new(&config.lod, RingInputs {
-                tile_size_m: 1.0,
-                delta_per_level: &deltas,
-                height_range_m: 0.0,
-                perspective_scale: 1.0,
-            }),
+            ranges: LevelRanges::new(
+                &config.lod,
+                RingInputs {
+                    tile_size_m: 1.0,
+                    delta_per_level: &deltas,
+                    height_range_m: 0.0,
+                    perspective_scale: 1.0,
+                },
+            ),
             draw_list,
             height_range_m: (hi - lo) as f64,
             deltas,
@@ -162,7 +165,11 @@ impl Scene {
     }
 
     /// Prepares one frame for `camera`.
-    pub fn frame(&mut self, camera: &Camera, terrain: &dyn TerrainData) -> Result<FrameReport, SceneError> {
+    pub fn frame(
+        &mut self,
+        camera: &Camera,
+        terrain: &dyn TerrainData,
+    ) -> Result<FrameReport, SceneError> {
         camera.validate()?;
         let layout = *terrain.layout();
         let grid_size = self.config.lod.grid_size;
@@ -183,7 +190,12 @@ impl Scene {
                 perspective_scale: camera.perspective_scale(),
             };
             self.ranges.update(&lod, inputs);
-            let view = View { eye: camera.position, frustum: &frustum, ranges: &self.ranges, curvature: self.config.curvature };
+            let view = View {
+                eye: camera.position,
+                frustum: &frustum,
+                ranges: &self.ranges,
+                curvature: self.config.curvature,
+            };
             let selected = self.selector.select(&view, terrain);
             nearest_m = selected.iter().map(|t| t.distance).fold(f64::INFINITY, f64::min);
             let selected_at = Instant::now();
@@ -204,7 +216,8 @@ impl Scene {
         self.near_m = (nearest_m * NEAR_SHARE).min(f32::MAX as f64) as f32;
         let uniforms = self.frame_uniforms(camera, terrain);
         let start = Instant::now();
-        let geometry = TileGeometry { grid_size, spacing_m: layout.spacing_m, delta_per_level: &self.deltas };
+        let geometry =
+            TileGeometry { grid_size, spacing_m: layout.spacing_m, delta_per_level: &self.deltas };
         let draws = self.cache.draws();
         self.draw_list.build(uniforms, draws, &self.ranges, geometry);
         report.cpu_ms.draw_list_ms = ms(start, Instant::now());
@@ -264,9 +277,17 @@ pub fn clip_planes(camera: &Camera, terrain: &dyn TerrainData) -> (f32, f32) {
     let above = (camera.position.z - hi as f64).max(camera.position.z - lo as f64).abs();
     let clearance = (camera.position.z - hi as f64).max(1.0);
     let near = (clearance * 0.25).clamp(0.5, 50.0);
-    let extent = glam::DVec2::new(layout.samples[0] as f64 * layout.spacing_m[0], layout.samples[1] as f64 * layout.spacing_m[1]);
+    let extent = glam::DVec2::new(
+        layout.samples[0] as f64 * layout.spacing_m[0],
+        layout.samples[1] as f64 * layout.spacing_m[1],
+    );
     let eye = camera.position.truncate();
-    let corners = [glam::DVec2::ZERO, glam::DVec2::new(extent.x, 0.0), glam::DVec2::new(0.0, extent.y), extent];
+    let corners = [
+        glam::DVec2::ZERO,
+        glam::DVec2::new(extent.x, 0.0),
+        glam::DVec2::new(0.0, extent.y),
+        extent,
+    ];
     let data_far = corners.iter().map(|c| c.distance(eye)).fold(0.0, f64::max) + above;
     let horizon = (2.0 * EARTH_RADIUS_M * above.max(1.0)).sqrt() + 200_000.0;
     (near as f32, data_far.min(horizon).max(near * 10.0) as f32)

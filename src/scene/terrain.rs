@@ -21,7 +21,12 @@ pub trait TerrainData: ResidentNodes + TileBounds {
 /// Height bounds of a tile from the finest resident node that covers it:
 /// every level-0 sample under a node lies within its posts' range widened by
 /// its delta.
-pub fn node_height_bounds(nodes: &dyn ResidentNodes, tile: TileKey, grid_size: u32, fallback: (f32, f32)) -> (f32, f32) {
+pub fn node_height_bounds(
+    nodes: &dyn ResidentNodes,
+    tile: TileKey,
+    grid_size: u32,
+    fallback: (f32, f32),
+) -> (f32, f32) {
     let (node, _) = tile_node(tile, grid_size, nodes.layout().node_size);
     match best_resident(nodes, node) {
         Some((_, data)) => (data.min - data.delta, data.max + data.delta),

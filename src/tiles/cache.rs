@@ -16,10 +16,13 @@
 use super::grid::vertex_count;
 use super::vertex::{fill_tile, tile_bytes, tile_node, PostReader, TileVertex};
 use super::{best_resident, ResidentNodes};
-use crate::allocator::{AllocError, AllocatorConfig, ConfigError, ContiguousAllocator, GeneratorId, Request, VertexFormat};
+use crate::allocator::{
+    AllocError, AllocatorConfig, ConfigError, ContiguousAllocator, GeneratorId, Request,
+    VertexFormat,
+};
 use crate::lod::select::tiles_at;
-use crate::node::NodeId;
 use crate::lod::{SelectedTile, TileKey};
+use crate::node::NodeId;
 use std::collections::HashMap;
 use std::ops::Range;
 
@@ -148,7 +151,11 @@ impl TileCache {
     /// Makes the tile list for `selected`: releases unused tiles, generates
     /// new or improved ones, and lists the draws. On `BufferFull` nothing that
     /// was resident before has changed except that unused tiles were released.
-    pub fn update(&mut self, selected: &[SelectedTile], nodes: &dyn ResidentNodes) -> Result<&[TileDraw], TileError> {
+    pub fn update(
+        &mut self,
+        selected: &[SelectedTile],
+        nodes: &dyn ResidentNodes,
+    ) -> Result<&[TileDraw], TileError> {
         self.frame += 1;
         self.allocator.begin_frame();
         self.stats = TileFrameStats { tiles: selected.len(), ..TileFrameStats::default() };
@@ -156,7 +163,8 @@ impl TileCache {
         // Unused tiles go first so that their slots and bytes can serve new ones.
         for tile in selected {
             if let Some(&slot) = self.by_key.get(&tile.key) {
-                self.slots[slot as usize].as_mut().expect("mapped slots are full").last_frame = self.frame;
+                self.slots[slot as usize].as_mut().expect("mapped slots are full").last_frame =
+                    self.frame;
             }
         }
         self.release_unused();
@@ -204,7 +212,9 @@ impl TileCache {
             return Err(TileError::RootTooLarge { needed, max: self.config.max_tiles });
         }
         let roots: Vec<SelectedTile> = (0..ny)
-            .flat_map(|y| (0..nx).map(move |x| SelectedTile { key: TileKey::new(root, x, y), distance: 0.0 }))
+            .flat_map(|y| {
+                (0..nx).map(move |x| SelectedTile { key: TileKey::new(root, x, y), distance: 0.0 })
+            })
             .collect();
         self.update(&roots, nodes)?;
         for slot in self.slots.iter_mut().flatten() {
@@ -215,11 +225,18 @@ impl TileCache {
 
     /// Finds or reserves each selected tile's slot and queues the ones that
     /// need vertex data (new, or finer data is resident now).
-    fn mark_selected(&mut self, selected: &[SelectedTile], nodes: &dyn ResidentNodes) -> Result<(), TileError> {
+    fn mark_selected(
+        &mut self,
+        selected: &[SelectedTile],
+        nodes: &dyn ResidentNodes,
+    ) -> Result<(), TileError> {
         self.requests.clear();
         self.jobs.clear();
         if selected.len() > self.config.max_tiles as usize {
-            return Err(TileError::TooManyTiles { selected: selected.len(), max: self.config.max_tiles });
+            return Err(TileError::TooManyTiles {
+                selected: selected.len(),
+                max: self.config.max_tiles,
+            });
         }
         let layout = *nodes.layout();
         let size = tile_bytes(self.config.grid_size);
@@ -233,7 +250,11 @@ impl TileCache {
             let resident = self.slots[slot as usize].as_mut().expect("reserved");
             resident.last_frame = self.frame;
             if new || source.lod < resident.source_level {
-                self.requests.push(Request { generator: GeneratorId(slot), format: VertexFormat(0), size });
+                self.requests.push(Request {
+                    generator: GeneratorId(slot),
+                    format: VertexFormat(0),
+                    size,
+                });
                 self.jobs.push(Job { slot, new, source });
             }
         }
@@ -245,7 +266,8 @@ impl TileCache {
             selected: self.by_key.len() + 1,
             max: self.config.max_tiles,
         })?;
-        self.slots[slot as usize] = Some(Resident { key, source_level, last_frame: 0, pinned: false });
+        self.slots[slot as usize] =
+            Some(Resident { key, source_level, last_frame: 0, pinned: false });
         self.by_key.insert(key, slot);
         Ok(slot)
     }
@@ -254,7 +276,9 @@ impl TileCache {
         if let Some(resident) = self.slots[slot as usize].take() {
             self.by_key.remove(&resident.key);
             // A slot reserved this frame may not own a block yet.
-            self.allocator.release(GeneratorId(slot)).expect("slot ids are in range and retire room is sized");
+            self.allocator
+                .release(GeneratorId(slot))
+                .expect("slot ids are in range and retire room is sized");
             self.spare.push(slot);
         }
     }
@@ -276,11 +300,14 @@ impl TileCache {
         let requests = std::mem::take(&mut self.requests);
         let layout = *nodes.layout();
         let grid_size = self.config.grid_size;
-        let (slots, vertices, dirty, jobs) = (&mut self.slots, &mut self.vertices, &mut self.dirty, &self.jobs);
+        let (slots, vertices, dirty, jobs) =
+            (&mut self.slots, &mut self.vertices, &mut self.dirty, &self.jobs);
         let outcome = self.allocator.allocate(&requests).map(|mut plan| {
             let mut bytes_uploaded = 0u64;
             plan.fill(|index, request, bytes| {
-                let resident = slots[request.generator.0 as usize].as_mut().expect("queued tiles are reserved");
+                let resident = slots[request.generator.0 as usize]
+                    .as_mut()
+                    .expect("queued tiles are reserved");
                 let source = jobs[index].source;
                 let data = nodes.resident(source).expect("resident since mark_selected");
                 let reader = PostReader::new(&layout, resident.key, grid_size, source, data);
@@ -326,8 +353,13 @@ impl TileCache {
         for tile in selected {
             let slot = self.by_key[&tile.key];
             let resident = self.slots[slot as usize].expect("selected tiles are resident");
-            let range = self.allocator.block_range(GeneratorId(slot)).expect("resident tiles own a block");
-            self.draws.push(TileDraw { key: tile.key, byte_offset: range.start, source_level: resident.source_level });
+            let range =
+                self.allocator.block_range(GeneratorId(slot)).expect("resident tiles own a block");
+            self.draws.push(TileDraw {
+                key: tile.key,
+                byte_offset: range.start,
+                source_level: resident.source_level,
+            });
         }
         // Memory order keeps the attribute pointer moving forward.
         self.draws.sort_unstable_by_key(|d| d.byte_offset);

@@ -46,7 +46,8 @@ impl TileGrid {
         let post = |i: u32, j: u32| (i + j * (g + 1)) as u16;
         for j in 0..g {
             for i in 0..g {
-                let (sw, se, nw, ne) = (post(i, j), post(i + 1, j), post(i, j + 1), post(i + 1, j + 1));
+                let (sw, se, nw, ne) =
+                    (post(i, j), post(i + 1, j), post(i, j + 1), post(i + 1, j + 1));
                 indices.extend_from_slice(&[sw, se, ne, sw, ne, nw]);
             }
         }
@@ -132,6 +133,8 @@ mod tests {
         let grid = TileGrid::new(8);
         let skirt = &grid.vertices[81..];
         assert_eq!(skirt.len(), 36);
-        assert!(skirt.iter().all(|v| v.skirt == 1 && (v.i == 0 || v.j == 0 || v.i == 8 || v.j == 8)));
+        assert!(skirt
+            .iter()
+            .all(|v| v.skirt == 1 && (v.i == 0 || v.j == 0 || v.i == 8 || v.j == 8)));
     }
 }

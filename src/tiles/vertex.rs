@@ -46,7 +46,13 @@ pub struct PostReader<'a> {
 }
 
 impl<'a> PostReader<'a> {
-    pub fn new(layout: &'a NodeLayout, key: TileKey, grid_size: u32, node: NodeId, data: &'a NodeData) -> Self {
+    pub fn new(
+        layout: &'a NodeLayout,
+        key: TileKey,
+        grid_size: u32,
+        node: NodeId,
+        data: &'a NodeData,
+    ) -> Self {
         let span = (grid_size as i64) << key.level;
         let origin = [key.x as i64 * span, key.y as i64 * span];
         PostReader { layout, node, data, origin, stride: 1 << key.level }
@@ -83,7 +89,12 @@ pub fn sample_node(layout: &NodeLayout, data: &NodeData, fx: f64, fy: f64) -> f3
 
 /// Fills `out` (one tile's vertices, skirt included) from `reader`.
 /// `spacing_m` is the distance between the tile's posts, east and north.
-pub fn fill_tile(reader: &PostReader<'_>, grid_size: u32, spacing_m: [f64; 2], out: &mut [TileVertex]) {
+pub fn fill_tile(
+    reader: &PostReader<'_>,
+    grid_size: u32,
+    spacing_m: [f64; 2],
+    out: &mut [TileVertex],
+) {
     let g = grid_size as i64;
     debug_assert_eq!(out.len(), vertex_count(grid_size));
     let h = |i: i64, j: i64| reader.post(i, j) as f64;
@@ -100,7 +111,12 @@ pub fn fill_tile(reader: &PostReader<'_>, grid_size: u32, spacing_m: [f64; 2], o
             out[(i + j * (g + 1)) as usize] = TileVertex {
                 height: h(i, j) as f32,
                 target: target as f32,
-                normal: [quantize(own[0]), quantize(own[1]), quantize(parent[0]), quantize(parent[1])],
+                normal: [
+                    quantize(own[0]),
+                    quantize(own[1]),
+                    quantize(parent[0]),
+                    quantize(parent[1]),
+                ],
             };
         }
     }

@@ -6,7 +6,9 @@
 use std::sync::Arc;
 
 use glam::{DVec2, DVec3};
-use ridgeline::clipmap::{Clipmap, ClipmapConfig, Entry, LoaderMode, SlotState, UpdateStats, ViewConfig, ViewId};
+use ridgeline::clipmap::{
+    Clipmap, ClipmapConfig, Entry, LoaderMode, SlotState, UpdateStats, ViewConfig, ViewId,
+};
 use ridgeline::node::{NodeId, NodeSource};
 use ridgeline::procedural::{EarthParams, ProceduralEarth};
 
@@ -17,7 +19,12 @@ pub fn earth(seed: u64) -> Arc<ProceduralEarth> {
 
 pub const VIEW: ViewConfig = ViewConfig { node_count: 8, view_distance: 2.0, load_distance: 2.5 };
 
-pub fn clipmap(earth: &Arc<ProceduralEarth>, slots: u32, budget: u32, loader: LoaderMode) -> Clipmap {
+pub fn clipmap(
+    earth: &Arc<ProceduralEarth>,
+    slots: u32,
+    budget: u32,
+    loader: LoaderMode,
+) -> Clipmap {
     let config = ClipmapConfig { atlas_slots: slots, budget, loader };
     Clipmap::new(earth.clone(), config).unwrap()
 }
@@ -34,20 +41,31 @@ pub type Snapshot = Vec<(Option<NodeId>, SlotState, u64)>;
 
 pub fn snapshot(clipmap: &Clipmap) -> Snapshot {
     let atlas = clipmap.atlas();
-    (0..atlas.slot_count()).map(|s| (atlas.node_in(s), atlas.state(s), atlas.last_used(s))).collect()
+    (0..atlas.slot_count())
+        .map(|s| (atlas.node_in(s), atlas.state(s), atlas.last_used(s)))
+        .collect()
 }
 
 /// What one update may have done to the atlas: at most `budget` nodes
 /// arrived, all wanted; only unused nodes lost their slots, empty slots went
 /// first and the least recently used went before the others; the invariants
 /// hold and the root level stays pinned.
-pub fn check_frame(clipmap: &Clipmap, before: &Snapshot, stats: &UpdateStats) -> Result<(), String> {
+pub fn check_frame(
+    clipmap: &Clipmap,
+    before: &Snapshot,
+    stats: &UpdateStats,
+) -> Result<(), String> {
     let atlas = clipmap.atlas();
     atlas.check()?;
     let after = snapshot(clipmap);
     let arrived: Vec<usize> = (0..after.len()).filter(|&s| after[s].0 != before[s].0).collect();
     if arrived.len() as u32 > clipmap.config().budget || stats.applied != arrived.len() as u32 {
-        return Err(format!("{} nodes arrived, stats say {}, budget {}", arrived.len(), stats.applied, clipmap.config().budget));
+        return Err(format!(
+            "{} nodes arrived, stats say {}, budget {}",
+            arrived.len(),
+            stats.applied,
+            clipmap.config().budget
+        ));
     }
     let evicted: Vec<usize> = arrived.iter().copied().filter(|&s| before[s].0.is_some()).collect();
     if !evicted.is_empty() && after.iter().any(|s| s.1 == SlotState::Empty) {
@@ -62,14 +80,20 @@ pub fn check_frame(clipmap: &Clipmap, before: &Snapshot, stats: &UpdateStats) ->
     for &slot in &evicted {
         let (old, state, last_used) = before[slot];
         if state == SlotState::Pinned || clipmap.is_wanted(old.unwrap()) {
-            return Err(format!("evicted {old:?} from slot {slot}: {state:?}, wanted {}", clipmap.is_wanted(old.unwrap())));
+            return Err(format!(
+                "evicted {old:?} from slot {slot}: {state:?}, wanted {}",
+                clipmap.is_wanted(old.unwrap())
+            ));
         }
         // Every unused node that kept its slot was used no earlier.
         let older = (0..after.len()).find(|&s| {
             after[s].1 == SlotState::Unused && after[s].0 == before[s].0 && before[s].2 < last_used
         });
         if let Some(s) = older {
-            return Err(format!("slot {slot} (last used {last_used}) reused before slot {s} (last used {})", before[s].2));
+            return Err(format!(
+                "slot {slot} (last used {last_used}) reused before slot {s} (last used {})",
+                before[s].2
+            ));
         }
     }
     check_root(clipmap)
@@ -91,7 +115,9 @@ pub fn check_root(clipmap: &Clipmap) -> Result<(), String> {
 /// Whether `point` lies in the footprint of `id` (edges included).
 pub fn covers(clipmap: &Clipmap, id: NodeId, point: DVec2) -> bool {
     let size = clipmap.layout().node_size_m(id.lod);
-    let inside = |p: f64, k: u32, side: f64| p >= k as f64 * side - 1e-6 && p <= (k + 1) as f64 * side + 1e-6;
+    let inside = |p: f64, k: u32, side: f64| {
+        p >= k as f64 * side - 1e-6 && p <= (k + 1) as f64 * side + 1e-6
+    };
     inside(point.x, id.x, size[0]) && inside(point.y, id.y, size[1])
 }
 
@@ -102,7 +128,8 @@ pub fn covers(clipmap: &Clipmap, id: NodeId, point: DVec2) -> bool {
 pub fn check_height(clipmap: &Clipmap, view: ViewId, point: DVec2) -> Result<u8, String> {
     let sample = clipmap.height_at(view, point).map_err(|e| format!("height_at {point}: {e}"))?;
     let node = sample.node;
-    let slot = clipmap.atlas().slot_of(node).ok_or(format!("{node:?} answered but is not resident"))?;
+    let slot =
+        clipmap.atlas().slot_of(node).ok_or(format!("{node:?} answered but is not resident"))?;
     if clipmap.atlas().state(slot) == SlotState::Empty || !covers(clipmap, node, point) {
         return Err(format!("{node:?} in slot {slot} does not cover {point}"));
     }
@@ -122,7 +149,10 @@ pub fn check_height(clipmap: &Clipmap, view: ViewId, point: DVec2) -> Result<u8,
     }
     let exact = clipmap.exact_height(point).map_err(|e| e.to_string())?;
     if (sample.height_m - exact).abs() > sample.error_bound_m + 0.01 {
-        return Err(format!("{point}: {} from {node:?} vs exact {exact}, bound {}", sample.height_m, sample.error_bound_m));
+        return Err(format!(
+            "{point}: {} from {node:?} vs exact {exact}, bound {}",
+            sample.height_m, sample.error_bound_m
+        ));
     }
     Ok(node.lod)
 }
@@ -131,7 +161,8 @@ pub fn check_height(clipmap: &Clipmap, view: ViewId, point: DVec2) -> Result<u8,
 /// resident node at that level or coarser covering the point.
 pub fn check_lookup(clipmap: &Clipmap, view: ViewId, point: DVec2) -> Result<(), String> {
     let lod = clipmap.quadtree_lod(view, point);
-    let found = clipmap.lookup(view, point, lod).map_err(|e| format!("lookup {point} at {lod}: {e}"))?;
+    let found =
+        clipmap.lookup(view, point, lod).map_err(|e| format!("lookup {point} at {lod}: {e}"))?;
     if clipmap.atlas().node_in(found.slot) != Some(found.node) || found.node.lod < lod {
         return Err(format!("lookup at {lod} gave {found:?}"));
     }
@@ -159,14 +190,19 @@ pub fn check_entries(clipmap: &Clipmap, view: ViewId) -> Result<(), String> {
                     if let Some(slot) = clipmap.atlas().slot_of(id) {
                         break Entry { slot, atlas_lod: id.lod };
                     }
-                    id = id.parent().filter(|p| p.lod < layout.levels).ok_or("no resident ancestor")?;
+                    id = id
+                        .parent()
+                        .filter(|p| p.lod < layout.levels)
+                        .ok_or("no resident ancestor")?;
                 }
             } else {
                 Entry::NONE
             };
             let got = quadtree.entry(lod, x, y).ok_or("a window node has no entry")?;
             if got != expected {
-                return Err(format!("layer {lod} node ({x}, {y}): entry {got:?}, expected {expected:?}"));
+                return Err(format!(
+                    "layer {lod} node ({x}, {y}): entry {got:?}, expected {expected:?}"
+                ));
             }
         }
     }

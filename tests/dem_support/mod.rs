@@ -13,7 +13,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use ridgeline::dem::{ElevationGrid, ImportError, Problem};
 use tiff::encoder::colortype::ColorType;
 use tiff::encoder::compression::{CompressionAlgorithm, Deflate, Lzw};
-use tiff::encoder::{Compression, DirectoryEncoder, Predictor, TiffEncoder, TiffKindStandard, TiffValue};
+use tiff::encoder::{
+    Compression, DirectoryEncoder, Predictor, TiffEncoder, TiffKindStandard, TiffValue,
+};
 use tiff::tags::Tag;
 
 /// A scratch directory removed when dropped.
@@ -55,7 +57,10 @@ pub fn import_error(path: &Path) -> Problem {
 }
 
 pub fn assert_close(actual: f64, expected: f64, tolerance: f64, what: &str) {
-    assert!((actual - expected).abs() <= tolerance, "{what}: {actual} is not {expected} +- {tolerance}");
+    assert!(
+        (actual - expected).abs() <= tolerance,
+        "{what}: {actual} is not {expected} +- {tolerance}"
+    );
 }
 
 /// Checks a filled grid against the heights before filling (`None` =
@@ -63,7 +68,11 @@ pub fn assert_close(actual: f64, expected: f64, tolerance: f64, what: &str) {
 /// height inside the range of the nearest valid samples along its row and
 /// column, and equal to `plane` (if given) where valid samples enclose it on all four
 /// sides (the fill restores planes exactly there).
-pub fn check_filled(grid: &ElevationGrid, before: &[Option<f64>], plane: Option<&dyn Fn(u32, u32) -> f64>) {
+pub fn check_filled(
+    grid: &ElevationGrid,
+    before: &[Option<f64>],
+    plane: Option<&dyn Fn(u32, u32) -> f64>,
+) {
     let (w, h) = (grid.width, grid.height);
     assert_eq!(before.len(), (w * h) as usize);
     let voids = before.iter().filter(|v| v.is_none()).count() as u64;
@@ -95,9 +104,17 @@ pub fn check_filled(grid: &ElevationGrid, before: &[Option<f64>], plane: Option<
             let lo = nearest.iter().copied().fold(f64::INFINITY, f64::min);
             let hi = nearest.iter().copied().fold(f64::NEG_INFINITY, f64::max);
             let slack = 1e-3 * (1.0 + hi.abs());
-            assert!(filled >= lo - slack && filled <= hi + slack, "({i}, {j}) = {filled} outside {lo}..{hi}");
+            assert!(
+                filled >= lo - slack && filled <= hi + slack,
+                "({i}, {j}) = {filled} outside {lo}..{hi}"
+            );
             if let (4, Some(plane)) = (nearest.len(), plane) {
-                assert_close(filled, plane(i, j), 1e-3 * (1.0 + filled.abs()), "enclosed void on a plane");
+                assert_close(
+                    filled,
+                    plane(i, j),
+                    1e-3 * (1.0 + filled.abs()),
+                    "enclosed void on a plane",
+                );
             }
         }
     }
@@ -278,7 +295,8 @@ pub fn write_tiff_strips<C: ColorType>(
     [C::Inner]: TiffValue,
 {
     let file = BufWriter::new(File::create(path).unwrap());
-    let mut encoder = TiffEncoder::new(file).unwrap().with_compression(compression).with_predictor(predictor);
+    let mut encoder =
+        TiffEncoder::new(file).unwrap().with_compression(compression).with_predictor(predictor);
     let mut image = encoder.new_image::<C>(size[0], size[1]).unwrap();
     image.rows_per_strip(rows_per_strip).unwrap();
     geo.write(image.encoder());
@@ -359,7 +377,13 @@ fn compress(compression: TileCompression, bytes: &[u8]) -> Vec<u8> {
 }
 
 /// The predicted, native-endian bytes of tile `at` (column, row of tiles).
-fn tile_bytes(size: [u32; 2], tile: u32, at: [u32; 2], samples: &Samples, predictor: u16) -> Vec<u8> {
+fn tile_bytes(
+    size: [u32; 2],
+    tile: u32,
+    at: [u32; 2],
+    samples: &Samples,
+    predictor: u16,
+) -> Vec<u8> {
     let mut bytes = Vec::new();
     for r in 0..tile {
         let (row, c0) = (at[1] * tile + r, at[0] * tile);
@@ -367,11 +391,13 @@ fn tile_bytes(size: [u32; 2], tile: u32, at: [u32; 2], samples: &Samples, predic
         let index = |c: u32| (row * size[0] + c0 + c) as usize;
         match samples {
             Samples::I16(v) => {
-                let line: Vec<i16> = (0..tile).map(|c| if inside(c) { v[index(c)] } else { 0 }).collect();
+                let line: Vec<i16> =
+                    (0..tile).map(|c| if inside(c) { v[index(c)] } else { 0 }).collect();
                 bytes.extend(predict_i16(&line, predictor));
             }
             Samples::F32(v) => {
-                let line: Vec<f32> = (0..tile).map(|c| if inside(c) { v[index(c)] } else { 0.0 }).collect();
+                let line: Vec<f32> =
+                    (0..tile).map(|c| if inside(c) { v[index(c)] } else { 0.0 }).collect();
                 bytes.extend(predict_f32(&line, predictor));
             }
         }

@@ -92,7 +92,9 @@ pub fn window_display(test: &str) -> Option<WindowDisplay> {
         return Some(WindowDisplay { display, _server: None });
     }
     match Xvfb::start() {
-        Some(server) => Some(WindowDisplay { display: server.display.clone(), _server: Some(server) }),
+        Some(server) => {
+            Some(WindowDisplay { display: server.display.clone(), _server: Some(server) })
+        }
         None if !required("RIDGELINE_REQUIRE_WINDOW") => {
             eprintln!(
                 "\n*** SKIPPED {test}: no display answers and Xvfb is not installed.\n\

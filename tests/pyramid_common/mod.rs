@@ -10,7 +10,8 @@ use ridgeline::pyramid::{self, BuildOptions, BuiltPyramid, Silent};
 
 /// A fresh, empty scratch directory for one test.
 pub fn scratch_dir(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("{name}-{}", std::process::id()));
+    let dir =
+        PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("create scratch dir");
     dir
@@ -33,7 +34,11 @@ pub fn random_grid(width: u32, height: u32, seed: u64) -> ElevationGrid {
 }
 
 /// Builds `grid` and writes it to `dir/pyramid.rlp`.
-pub fn build_and_write(grid: &ElevationGrid, options: BuildOptions, dir: &std::path::Path) -> (BuiltPyramid, PathBuf) {
+pub fn build_and_write(
+    grid: &ElevationGrid,
+    options: BuildOptions,
+    dir: &std::path::Path,
+) -> (BuiltPyramid, PathBuf) {
     let built = pyramid::build(grid, &options, &Silent).expect("build");
     let path = dir.join(pyramid::FILE_NAME);
     pyramid::write_atomic(&built, &path, &Silent).expect("write");

@@ -52,7 +52,13 @@ impl Difference {
 
 impl std::fmt::Display for Difference {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{:.3}% of pixels over threshold, mean {:.3}, largest {}", self.share_over * 100.0, self.mean, self.largest)
+        write!(
+            f,
+            "{:.3}% of pixels over threshold, mean {:.3}, largest {}",
+            self.share_over * 100.0,
+            self.mean,
+            self.largest
+        )
     }
 }
 
@@ -79,7 +85,9 @@ pub fn difference_image(a: &RgbaImage, b: &RgbaImage, channel_threshold: u8) -> 
 pub fn save_evidence(image: &RgbaImage, name: &str) -> String {
     let dir = scratch_dir().join("render-failures");
     let path: PathBuf = dir.join(format!("{name}.png"));
-    let saved = std::fs::create_dir_all(&dir).map_err(|e| e.to_string()).and_then(|()| image.save(&path).map_err(|e| e.to_string()));
+    let saved = std::fs::create_dir_all(&dir)
+        .map_err(|e| e.to_string())
+        .and_then(|()| image.save(&path).map_err(|e| e.to_string()));
     match saved {
         Ok(()) => path.display().to_string(),
         Err(e) => format!("{} (not saved: {e})", path.display()),
@@ -88,10 +96,19 @@ pub fn save_evidence(image: &RgbaImage, name: &str) -> String {
 
 /// Compares `actual` against `expected`; on a mismatch saves both and their
 /// difference image and says where. Returns the difference either way.
-pub fn check_similar(name: &str, expected: &RgbaImage, actual: &RgbaImage, tolerance: &Tolerance) -> Result<Difference, String> {
+pub fn check_similar(
+    name: &str,
+    expected: &RgbaImage,
+    actual: &RgbaImage,
+    tolerance: &Tolerance,
+) -> Result<Difference, String> {
     if expected.dimensions() != actual.dimensions() {
         let saved = save_evidence(actual, &format!("{name}-actual"));
-        return Err(format!("{name}: size {:?}, expected {:?}; actual at {saved}", actual.dimensions(), expected.dimensions()));
+        return Err(format!(
+            "{name}: size {:?}, expected {:?}; actual at {saved}",
+            actual.dimensions(),
+            expected.dimensions()
+        ));
     }
     let difference = Difference::between(expected, actual, tolerance.channel_threshold);
     if difference.within(tolerance) {
@@ -99,13 +116,21 @@ pub fn check_similar(name: &str, expected: &RgbaImage, actual: &RgbaImage, toler
     }
     let expected_at = save_evidence(expected, &format!("{name}-expected"));
     let actual_at = save_evidence(actual, &format!("{name}-actual"));
-    let diff_at = save_evidence(&difference_image(expected, actual, tolerance.channel_threshold), &format!("{name}-diff"));
+    let diff_at = save_evidence(
+        &difference_image(expected, actual, tolerance.channel_threshold),
+        &format!("{name}-diff"),
+    );
     Err(format!(
         "{name}: {difference} exceeds {tolerance:?}\n  expected: {expected_at}\n  actual:   {actual_at}\n  diff:     {diff_at}"
     ))
 }
 
 /// [`check_similar`] that panics on a mismatch.
-pub fn assert_similar(name: &str, expected: &RgbaImage, actual: &RgbaImage, tolerance: &Tolerance) -> Difference {
+pub fn assert_similar(
+    name: &str,
+    expected: &RgbaImage,
+    actual: &RgbaImage,
+    tolerance: &Tolerance,
+) -> Difference {
     check_similar(name, expected, actual, tolerance).unwrap_or_else(|problem| panic!("{problem}"))
 }

@@ -63,13 +63,19 @@ pub fn pyramid() -> Arc<Pyramid> {
 
 /// Terrain height under `(x, y)`; the views stay inside the data.
 pub fn ground(x: f64, y: f64) -> f64 {
-    pyramid().exact_height(x, y).unwrap_or_else(|| panic!("({x}, {y}) is outside the terrain")) as f64
+    pyramid().exact_height(x, y).unwrap_or_else(|| panic!("({x}, {y}) is outside the terrain"))
+        as f64
 }
 
 /// A display whose frames are complete and repeatable: nodes load inline with
 /// a budget no view exhausts, and every view is settled before it is drawn.
 pub fn config(backend: GlBackend, version: GlesVersion) -> DisplayConfig {
-    DisplayConfig { version, loader: LoaderMode::Inline, load_budget: 1000, ..DisplayConfig::new(backend, SIZE) }
+    DisplayConfig {
+        version,
+        loader: LoaderMode::Inline,
+        load_budget: 1000,
+        ..DisplayConfig::new(backend, SIZE)
+    }
 }
 
 pub fn open(config: &DisplayConfig) -> Result<Display, DisplayError> {
@@ -114,7 +120,14 @@ impl View {
 /// about one row in the low view would show terrain beyond the data in the
 /// world; the high view shows no sky.
 pub const VIEWS: [View; 3] = [
-    View { name: "medium", x: 30_000.0, y: 40_000.0, altitude: 3_500.0, heading: 45.0, pitch: -8.0 },
+    View {
+        name: "medium",
+        x: 30_000.0,
+        y: 40_000.0,
+        altitude: 3_500.0,
+        heading: 45.0,
+        pitch: -8.0,
+    },
     View { name: "low", x: 20_000.0, y: 60_000.0, altitude: 2_600.0, heading: 120.0, pitch: -15.0 },
     View { name: "high", x: 35_000.0, y: 45_000.0, altitude: 9_000.0, heading: 0.0, pitch: -30.0 },
 ];
@@ -149,7 +162,8 @@ pub fn terrain_bounds(margin_m: f64) -> coverage::TerrainBounds {
     let pyramid = pyramid();
     let layout = *ridgeline::node::NodeSource::layout(&*pyramid);
     let [sx, sy] = layout.spacing_m;
-    let extent = DVec2::new((layout.samples[0] - 1) as f64 * sx, (layout.samples[1] - 1) as f64 * sy);
+    let extent =
+        DVec2::new((layout.samples[0] - 1) as f64 * sx, (layout.samples[1] - 1) as f64 * sy);
     // A triangle of the coarsest level may reach this far beyond a point on it.
     let coarsest_post = (1u64 << (layout.levels - 1)) as f64 * sx.max(sy);
     coverage::TerrainBounds {
@@ -169,7 +183,9 @@ pub fn drawn_tiles(display: &Display) -> BTreeSet<TileKey> {
 /// merely entered or left the view do not count).
 pub fn lod_changed(before: &BTreeSet<TileKey>, after: &BTreeSet<TileKey>) -> bool {
     let related = |key: &TileKey, other: &BTreeSet<TileKey>| {
-        other.contains(&key.parent()) || (key.level > 0 && key.children().iter().any(|child| other.contains(child)))
+        other.contains(&key.parent())
+            || (key.level > 0 && key.children().iter().any(|child| other.contains(child)))
     };
-    after.difference(before).any(|key| related(key, before)) || before.difference(after).any(|key| related(key, after))
+    after.difference(before).any(|key| related(key, before))
+        || before.difference(after).any(|key| related(key, after))
 }

@@ -5,12 +5,12 @@
 use glam::DVec3;
 use ridgeline::camera::Camera;
 use ridgeline::lod::morph::{morph_factor, morphed_height};
+use ridgeline::pyramid::{Pyramid, Silent};
 use ridgeline::render::DrawList;
+use ridgeline::scene::PreloadedTerrain;
 use ridgeline::tiles::grid::{edge_posts, vertex_count};
 use ridgeline::tiles::TileVertex;
 use std::collections::HashMap;
-use ridgeline::pyramid::{Pyramid, Silent};
-use ridgeline::scene::PreloadedTerrain;
 use std::sync::OnceLock;
 
 /// A cache under the target folder, shared by the test binaries (they run
@@ -47,23 +47,37 @@ pub fn camera(x: f64, y: f64, altitude: f64, heading: f64, pitch: f64) -> Camera
 
 /// Drawn height at every edge post and edge-segment midpoint of every tile,
 /// keyed by level-0 post coordinates (doubled, so midpoints are integers).
-pub fn edge_heights(list: &DrawList, staging: &[u8], altitude: f64, grid: u32) -> HashMap<(i64, i64), Vec<f64>> {
+pub fn edge_heights(
+    list: &DrawList,
+    staging: &[u8],
+    altitude: f64,
+    grid: u32,
+) -> HashMap<(i64, i64), Vec<f64>> {
     let mut heights: HashMap<(i64, i64), Vec<f64>> = HashMap::new();
     let count = vertex_count(grid);
     for tile in &list.tiles {
         let start = tile.byte_offset as usize;
         let bytes = &staging[start..start + count * std::mem::size_of::<TileVertex>()];
-        let vertices: Vec<TileVertex> = bytes.chunks_exact(std::mem::size_of::<TileVertex>()).map(bytemuck::pod_read_unaligned).collect();
+        let vertices: Vec<TileVertex> = bytes
+            .chunks_exact(std::mem::size_of::<TileVertex>())
+            .map(bytemuck::pod_read_unaligned)
+            .collect();
         let drawn = |i: u32, j: u32| {
             let v = vertices[(i + j * (grid + 1)) as usize];
             let posts = list.frame.expect("a built list has its frame").posts;
             let [x, y] = tile.post_position(&posts, i as f32, j as f32).map(f64::from);
             let distance = (x * x + y * y + (v.height as f64 - altitude).powi(2)).sqrt();
-            morphed_height(v.height, v.target, morph_factor(distance, tile.morph[0] as f64, tile.morph[1] as f64))
+            morphed_height(
+                v.height,
+                v.target,
+                morph_factor(distance, tile.morph[0] as f64, tile.morph[1] as f64),
+            )
         };
         let stride = 1i64 << tile.key.level;
-        let base = (tile.key.x as i64 * grid as i64 * stride, tile.key.y as i64 * grid as i64 * stride);
-        let at = |i: u32, j: u32| (2 * (base.0 + i as i64 * stride), 2 * (base.1 + j as i64 * stride));
+        let base =
+            (tile.key.x as i64 * grid as i64 * stride, tile.key.y as i64 * grid as i64 * stride);
+        let at =
+            |i: u32, j: u32| (2 * (base.0 + i as i64 * stride), 2 * (base.1 + j as i64 * stride));
         let posts: Vec<(u32, u32)> = edge_posts(grid).collect();
         for edge in posts.chunks(grid as usize + 1) {
             for pair in edge.windows(2) {
@@ -84,7 +98,8 @@ pub fn worst_edge_disagreement(list: &DrawList, staging: &[u8], altitude: f64, g
         .values()
         .filter(|values| values.len() > 1)
         .map(|values| {
-            let (lo, hi) = values.iter().fold((f64::MAX, f64::MIN), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+            let (lo, hi) =
+                values.iter().fold((f64::MAX, f64::MIN), |(lo, hi), &v| (lo.min(v), hi.max(v)));
             hi - lo
         })
         .fold(0.0, f64::max)

@@ -31,7 +31,12 @@ impl Renderbuffer {
         // implementation's maximum, so it fits GLsizei.
         unsafe {
             gl.bind_renderbuffer(glow::RENDERBUFFER, Some(raw));
-            gl.renderbuffer_storage(glow::RENDERBUFFER, internal_format, size.x as i32, size.y as i32);
+            gl.renderbuffer_storage(
+                glow::RENDERBUFFER,
+                internal_format,
+                size.x as i32,
+                size.y as i32,
+            );
         }
         gl_check!(gl)?;
         Ok(renderbuffer)

@@ -41,6 +41,7 @@ use super::error::GlError;
 /// Converts a byte count or dimension to the `GLsizei`/`GLsizeiptr` the GL
 /// takes, refusing what does not fit rather than wrapping.
 fn gl_size(value: usize, what: &str) -> Result<i32, GlError> {
-    i32::try_from(value)
-        .map_err(|_| GlError::InvalidRequest(format!("{what} {value} exceeds the GL's 2^31-1 limit")))
+    i32::try_from(value).map_err(|_| {
+        GlError::InvalidRequest(format!("{what} {value} exceeds the GL's 2^31-1 limit"))
+    })
 }

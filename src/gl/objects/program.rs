@@ -21,7 +21,12 @@ pub struct Shader {
 impl Shader {
     /// Compiles `source`; `name` (a file name, say) labels errors.
     #[allow(unsafe_code)]
-    pub fn compile(gl: &Rc<Gl>, stage: ShaderStage, name: &str, source: &str) -> Result<Shader, GlError> {
+    pub fn compile(
+        gl: &Rc<Gl>,
+        stage: ShaderStage,
+        name: &str,
+        source: &str,
+    ) -> Result<Shader, GlError> {
         let kind = match stage {
             ShaderStage::Vertex => glow::VERTEX_SHADER,
             ShaderStage::Fragment => glow::FRAGMENT_SHADER,
@@ -70,8 +75,10 @@ impl Program {
         fragment_source: &str,
         attributes: &[(u32, &str)],
     ) -> Result<Program, GlError> {
-        let vertex = Shader::compile(gl, ShaderStage::Vertex, &format!("{name}.vert"), vertex_source)?;
-        let fragment = Shader::compile(gl, ShaderStage::Fragment, &format!("{name}.frag"), fragment_source)?;
+        let vertex =
+            Shader::compile(gl, ShaderStage::Vertex, &format!("{name}.vert"), vertex_source)?;
+        let fragment =
+            Shader::compile(gl, ShaderStage::Fragment, &format!("{name}.frag"), fragment_source)?;
         // SAFETY: creating a name needs only a current context.
         let raw = unsafe { gl.create_program() }
             .map_err(|reason| GlError::ObjectCreation { what: "program", reason })?;

@@ -39,7 +39,10 @@ impl TruthRegion {
     /// whole number of tiles as the LOD display draws it.
     pub fn covering_tiles(layout: &NodeLayout, grid_size: u32) -> Self {
         let tiles = tiles_at(layout.samples, grid_size, 0);
-        TruthRegion { first: [0, 0], posts: tiles.map(|t| t.saturating_mul(grid_size).saturating_add(1)) }
+        TruthRegion {
+            first: [0, 0],
+            posts: tiles.map(|t| t.saturating_mul(grid_size).saturating_add(1)),
+        }
     }
 
     /// The region widened east and north to whole chunks, as posts per side
@@ -162,10 +165,16 @@ impl AxisMap {
 }
 
 impl MarginGrid {
-    fn load(source: &dyn NodeSource, layout: &NodeLayout, region: TruthRegion) -> Result<MarginGrid, TruthError> {
+    fn load(
+        source: &dyn NodeSource,
+        layout: &NodeLayout,
+        region: TruthRegion,
+    ) -> Result<MarginGrid, TruthError> {
         let [nx, ny] = layout.nodes_at(0);
-        let x = AxisMap::new(region.first[0], region.posts[0], layout.samples[0], layout.node_size, nx);
-        let y = AxisMap::new(region.first[1], region.posts[1], layout.samples[1], layout.node_size, ny);
+        let x =
+            AxisMap::new(region.first[0], region.posts[0], layout.samples[0], layout.node_size, nx);
+        let y =
+            AxisMap::new(region.first[1], region.posts[1], layout.samples[1], layout.node_size, ny);
         let width = x.nodes.len();
         let mut heights = vec![0.0f32; width * y.nodes.len()];
         let mut node = NodeData::with_capacity(layout);
@@ -173,7 +182,9 @@ impl MarginGrid {
         for (node_y, rows) in y.runs() {
             for (node_x, columns) in &x_runs {
                 let id = NodeId::new(0, *node_x, node_y);
-                source.read_node(id, &mut node).map_err(|source| TruthError::Node { id, source })?;
+                source
+                    .read_node(id, &mut node)
+                    .map_err(|source| TruthError::Node { id, source })?;
                 for row in rows.clone() {
                     for column in columns.clone() {
                         let (i, j) = (x.local[column], y.local[row]);
@@ -241,7 +252,10 @@ mod tests {
     /// Region post `k` of a chunk's vertex list, in region posts.
     fn post_of(chunk: &TruthChunk, k: usize) -> (i64, i64) {
         let row = CHUNK_CELLS as usize + 1;
-        ((chunk.first_post[0] as usize + k % row) as i64, (chunk.first_post[1] as usize + k / row) as i64)
+        (
+            (chunk.first_post[0] as usize + k % row) as i64,
+            (chunk.first_post[1] as usize + k / row) as i64,
+        )
     }
 
     #[test]
