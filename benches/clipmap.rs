@@ -237,7 +237,7 @@ fn main() {
     println!(
         "flight: {seconds} s at {SPEED_M_S} m/s, {FPS} fps; earth {} samples a side, node_size {}, {} levels; \
          {SLOTS} slots, budget {BUDGET}; PFD node_count {} load_distance {}, map node_count {} {} m above",
-        earth.layout().samples[0], earth.layout().node_size, earth.layout().levels,
+        earth.layout().posts[0], earth.layout().node_size, earth.layout().levels,
         PFD.node_count, PFD.load_distance, MAP.node_count, MAP_ABOVE_M
     );
     let thread = LoaderMode::Thread { queue: 16 };

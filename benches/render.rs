@@ -103,7 +103,7 @@ fn main() {
     let truth_build_ms = started.elapsed().as_secs_f64() * 1e3;
     println!(
         "render: {} on {} ({}); {}x{} posts, truth mesh {}x{} posts in {} chunks, built in {truth_build_ms:.0} ms",
-        info.renderer, info.backend.name(), info.version, layout.samples[0], layout.samples[1],
+        info.renderer, info.backend.name(), info.version, layout.posts[0], layout.posts[1],
         mesh.region.posts[0], mesh.region.posts[1], mesh.chunks.len()
     );
     let grid = config.scene.lod.grid_size as u64;

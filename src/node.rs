@@ -4,7 +4,7 @@
 //!
 //! Level 0 is the finest; a node of level `lod` spans `node_size << lod`
 //! level-0 sample spacings per side (Kühnert eq. 4.8). Node `(x, y)` of level
-//! `lod` covers level-0 samples `[x * span, (x + 1) * span]` east and
+//! `lod` covers level-0 posts `[x * span, (x + 1) * span]` east and
 //! `[y * span, (y + 1) * span]` north, `span = node_size << lod`, sampled every
 //! `1 << lod` samples: `node_size + 1` posts per side, so neighbours share their
 //! edge posts. A border of `border` posts on every side repeats the
@@ -14,19 +14,19 @@
 /// Names one node of the pyramid.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
 pub struct NodeId {
-    pub lod: u8,
+    pub level: u8,
     pub x: u32,
     pub y: u32,
 }
 
 impl NodeId {
-    pub fn new(lod: u8, x: u32, y: u32) -> Self {
-        NodeId { lod, x, y }
+    pub fn new(level: u8, x: u32, y: u32) -> Self {
+        NodeId { level, x, y }
     }
 
     /// The node one level coarser that contains this one.
     pub fn parent(self) -> Option<NodeId> {
-        (self.lod < u8::MAX).then(|| NodeId::new(self.lod + 1, self.x / 2, self.y / 2))
+        (self.level < u8::MAX).then(|| NodeId::new(self.level + 1, self.x / 2, self.y / 2))
     }
 }
 
@@ -39,9 +39,9 @@ pub struct NodeLayout {
     pub node_size: u32,
     /// Extra posts stored on each side of a node.
     pub border: u32,
-    /// Level-0 samples of the data, east and north.
-    pub samples: [u32; 2],
-    /// Metres between level-0 samples, east and north, in the local frame.
+    /// Level-0 posts of the data, east and north.
+    pub posts: [u32; 2],
+    /// Metres between level-0 posts, east and north, in the local frame.
     pub spacing_m: [f64; 2],
 }
 
@@ -55,7 +55,7 @@ impl NodeLayout {
     pub fn nodes_at(&self, lod: u8) -> [u32; 2] {
         let span = self.span(lod);
         let count = |samples: u32| (samples.saturating_sub(1) as u64).div_ceil(span).max(1) as u32;
-        [count(self.samples[0]), count(self.samples[1])]
+        [count(self.posts[0]), count(self.posts[1])]
     }
 
     /// Level-0 sample spacings spanned by one node of `lod` (Kühnert eq. 4.8).
@@ -96,16 +96,16 @@ impl NodeLayout {
 
     /// Distance in metres from the south-west sample to the north-east one.
     pub fn extent_m(&self) -> [f64; 2] {
-        let last = |axis: usize| self.samples[axis].saturating_sub(1) as f64 * self.spacing_m[axis];
+        let last = |axis: usize| self.posts[axis].saturating_sub(1) as f64 * self.spacing_m[axis];
         [last(0), last(1)]
     }
 
     /// Whether `id` names a node of this pyramid.
     pub fn contains(&self, id: NodeId) -> bool {
-        if id.lod >= self.levels {
+        if id.level >= self.levels {
             return false;
         }
-        let [x, y] = self.nodes_at(id.lod);
+        let [x, y] = self.nodes_at(id.level);
         id.x < x && id.y < y
     }
 
@@ -115,8 +115,8 @@ impl NodeLayout {
         if !self.contains(id) {
             return None;
         }
-        let before: u64 = (0..id.lod).map(|lod| self.nodes_at_count(lod)).sum();
-        let [x_count, _] = self.nodes_at(id.lod);
+        let before: u64 = (0..id.level).map(|lod| self.nodes_at_count(lod)).sum();
+        let [x_count, _] = self.nodes_at(id.level);
         Some(before + id.y as u64 * x_count as u64 + id.x as u64)
     }
 
@@ -181,7 +181,7 @@ pub struct NodeData {
     pub max: f32,
     /// Ulrich's delta: the largest vertical distance, in metres, between the
     /// node's surface (posts joined as triangles, each cell split from its
-    /// south-west to its north-east corner) and the level-0 samples it covers.
+    /// south-west to its north-east corner) and the level-0 posts it covers.
     pub delta: f32,
 }
 
@@ -222,7 +222,7 @@ pub trait NodeSource: Send + Sync {
     /// Writes node `id` into `out`, reusing its buffers.
     fn read_node(&self, id: NodeId, out: &mut NodeData) -> Result<(), NodeError>;
 
-    /// The height at `(x_m, y_m)` at full resolution: the level-0 samples
+    /// The height at `(x_m, y_m)` at full resolution: the level-0 posts
     /// joined as triangles (the surface every `delta` is measured against).
     /// The default reads the level-0 node holding the point, which allocates
     /// one node; sources with direct access to samples override it.

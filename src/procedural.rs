@@ -120,7 +120,7 @@ impl ProceduralEarth {
             levels,
             node_size,
             border,
-            samples: [samples; 2],
+            posts: [samples; 2],
             spacing_m: [spacing_m; 2],
         };
         let octaves = octaves_for(cells, seed);
@@ -141,7 +141,7 @@ impl ProceduralEarth {
 
     /// Level-0 sample `(i, j)`, clamped to the data (the edge extends).
     pub fn sample(&self, i: i64, j: i64) -> f32 {
-        let last = self.layout.samples[0] as i64 - 1;
+        let last = self.layout.posts[0] as i64 - 1;
         let (i, j) = (i.saturating_add(self.offset[0]), j.saturating_add(self.offset[1]));
         let (i, j) = (i.clamp(0, last) as u32, j.clamp(0, last) as u32);
         let mut height = self.base_m;
@@ -181,8 +181,8 @@ impl ProceduralEarth {
     fn fill_posts(&self, id: NodeId, out: &mut NodeData) {
         let layout = &self.layout;
         let side = layout.stored_side() as i64;
-        let stride = 1i64 << id.lod;
-        let span = layout.span(id.lod) as i64;
+        let stride = 1i64 << id.level;
+        let span = layout.span(id.level) as i64;
         let first = |node: u32| node as i64 * span - layout.border as i64 * stride;
         let (x0, y0) = (first(id.x), first(id.y));
         out.heights.clear();
@@ -214,14 +214,14 @@ impl NodeSource for ProceduralEarth {
         }
         out.min = min;
         out.max = max;
-        out.delta = self.delta_bound(id.lod);
+        out.delta = self.delta_bound(id.level);
         Ok(())
     }
 
     /// Three samples joined as the level-0 triangle holding the point.
     fn exact_height(&self, x_m: f64, y_m: f64) -> Result<f32, NodeError> {
         let spacing = self.layout.spacing_m[0];
-        let last = (self.layout.samples[0] - 1) as f64;
+        let last = (self.layout.posts[0] - 1) as f64;
         let (sx, sy) = (x_m / spacing, y_m / spacing);
         if !(sx >= 0.0 && sx <= last && sy >= 0.0 && sy <= last) {
             return Err(NodeError::OutsideData { x_m, y_m });

@@ -98,7 +98,7 @@ impl NodeSource for Flaky {
     }
 
     fn read_node(&self, id: NodeId, out: &mut NodeData) -> Result<(), NodeError> {
-        if id.lod < 2 && id.x % 3 == 0 {
+        if id.level < 2 && id.x % 3 == 0 {
             assert!(!self.panic, "the flaky source panics on {id:?}");
             return Err(NodeError::Corrupt { path: "flaky".into(), id, problem: "refused".into() });
         }
@@ -143,7 +143,7 @@ fn failed_loads_fall_back_and_are_not_retried() {
             let point = position.truncate() + DVec2::new(dx, 10.0);
             check_height(&clipmap, view, point).unwrap();
             let node = clipmap.height_at(view, point).unwrap().node;
-            assert!(node.lod >= 2 || node.x % 3 != 0, "{point}: answered from refused {node:?}");
+            assert!(node.level >= 2 || node.x % 3 != 0, "{point}: answered from refused {node:?}");
         }
     }
 }

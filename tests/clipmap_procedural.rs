@@ -19,8 +19,8 @@ fn read(earth: &ProceduralEarth, id: NodeId) -> NodeData {
 /// The largest |surface - sample| over the level-0 samples a node covers.
 fn brute_force_delta(earth: &ProceduralEarth, id: NodeId, data: &NodeData) -> f64 {
     let layout = earth.layout();
-    let span = layout.span(id.lod) as i64;
-    let stride = (1i64 << id.lod) as f64;
+    let span = layout.span(id.level) as i64;
+    let stride = (1i64 << id.level) as f64;
     let mut worst = 0.0f64;
     for j in 0..=span {
         for i in 0..=span {
@@ -36,7 +36,7 @@ fn brute_force_delta(earth: &ProceduralEarth, id: NodeId, data: &NodeData) -> f6
 fn covers_the_earth_with_a_single_root() {
     let earth = earth(16);
     let layout = earth.layout();
-    assert!(layout.samples[0] > 1 << 24 && layout.samples[1] > 1 << 24);
+    assert!(layout.posts[0] > 1 << 24 && layout.posts[1] > 1 << 24);
     assert_eq!(layout.nodes_at(layout.levels - 1), [1, 1]);
     assert_eq!(layout.nodes_at(0), [1 << 20, 1 << 20]);
     assert!(layout.extent_m()[0] > 40_000_000.0);
@@ -85,7 +85,7 @@ fn posts_are_level_zero_samples_at_the_level_stride() {
     let layout = *earth.layout();
     for id in [NodeId::new(0, 7, 9), NodeId::new(5, 1000, 3), NodeId::new(12, 17, 30)] {
         let data = read(&earth, id);
-        let (span, stride) = (layout.span(id.lod) as i64, 1i64 << id.lod);
+        let (span, stride) = (layout.span(id.level) as i64, 1i64 << id.level);
         for (i, j) in [(0, 0), (16, 16), (3, 11), (16, 0)] {
             let sample =
                 earth.sample(id.x as i64 * span + i * stride, id.y as i64 * span + j * stride);

@@ -175,7 +175,7 @@ fn unused_nodes_stay_cached_and_are_reused_oldest_first() {
         }
     }
     let home_nodes: Vec<_> =
-        (0..1500).filter_map(|s| clipmap.atlas().node_in(s)).filter(|&id| id.lod < 3).collect();
+        (0..1500).filter_map(|s| clipmap.atlas().node_in(s)).filter(|&id| id.level < 3).collect();
     assert!(!home_nodes.is_empty());
     // A short hop: home's finest nodes become unused but stay resident.
     clipmap.set_view_position(view, home + DVec3::new(3000.0, 0.0, 0.0)).unwrap();

@@ -51,7 +51,7 @@ proptest! {
         width in 1u32..3000, height in 1u32..3000, node_size in 1u32..200,
     ) {
         let levels = NodeLayout::levels_for([width, height], node_size);
-        let layout = NodeLayout { levels, node_size, border: 1, samples: [width, height], spacing_m: [1.0; 2] };
+        let layout = NodeLayout { levels, node_size, border: 1, posts: [width, height], spacing_m: [1.0; 2] };
         prop_assert_eq!(layout.nodes_at(levels - 1), [1, 1]);
         if levels > 1 {
             prop_assert_ne!(layout.nodes_at(levels - 2), [1, 1]);

@@ -31,7 +31,7 @@ fn brute_force_delta(
     node_size: u32,
     border: u32,
 ) -> f64 {
-    let step = 1u64 << id.lod;
+    let step = 1u64 << id.level;
     let span = node_size as u64 * step;
     let side = (node_size + 1 + 2 * border) as usize;
     let (x0, y0) = (id.x as u64 * span, id.y as u64 * span);

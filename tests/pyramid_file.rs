@@ -65,7 +65,7 @@ fn header_records_georeference_and_statistics() {
     build_and_write(&grid, BuildOptions::default(), &dir);
     let info = Pyramid::open(&dir).expect("open").info().clone();
     assert_eq!(info.georef, grid.georef);
-    assert_eq!(info.layout.samples, [70, 40]);
+    assert_eq!(info.layout.posts, [70, 40]);
     assert_eq!(info.layout.spacing_m, grid.georef.spacing_m([70, 40]));
     assert_eq!(info.stats.voids_filled, 3);
     let lo = grid.heights.iter().copied().fold(f32::INFINITY, f32::min);

@@ -70,5 +70,5 @@ fn killing_an_import_midway_keeps_the_previous_cache() {
     // The next import clears the dead import's temporary file.
     assert!(import(200, &cache).status().expect("rerun import").success());
     assert!(temporaries(&cache).is_empty(), "stale temporary left behind");
-    assert_eq!(Pyramid::open(&cache).expect("new cache").info().layout.samples, [200, 200]);
+    assert_eq!(Pyramid::open(&cache).expect("new cache").info().layout.posts, [200, 200]);
 }

@@ -68,8 +68,8 @@ pub fn run(args: &InfoArgs) -> Result<()> {
 fn summarise(pyramid: &Pyramid) -> Summary<'_> {
     let info = pyramid.info();
     let layout = &info.layout;
-    let bounds = info.georef.bounds_deg(layout.samples);
-    let extent = |axis: usize| (layout.samples[axis] - 1) as f64 * layout.spacing_m[axis];
+    let bounds = info.georef.bounds_deg(layout.posts);
+    let extent = |axis: usize| (layout.posts[axis] - 1) as f64 * layout.spacing_m[axis];
     Summary {
         path: pyramid.path(),
         format_version: VERSION,
@@ -78,7 +78,7 @@ fn summarise(pyramid: &Pyramid) -> Summary<'_> {
         node_size: layout.node_size,
         border: layout.border,
         node_count: layout.node_count(),
-        samples: layout.samples,
+        samples: layout.posts,
         spacing_m: layout.spacing_m,
         extent: Extent { east_m: extent(0), north_m: extent(1) },
         georef: Georef {

@@ -102,7 +102,7 @@ fn parse_size(text: &str) -> Result<UVec2, String> {
 fn flight_path(path: Option<&Path>, pyramid: &Pyramid) -> Result<FlightPath> {
     let layout = *pyramid.layout();
     match path {
-        Some(file) => Ok(FlightPath::read(file, &pyramid.info().georef, layout.samples)?),
+        Some(file) => Ok(FlightPath::read(file, &pyramid.info().georef, layout.posts)?),
         None => {
             let height = |x: f64, y: f64| pyramid.exact_height(x, y).unwrap_or(0.0);
             Ok(builtin_approach(layout.extent_m(), &height))

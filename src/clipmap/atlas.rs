@@ -169,7 +169,7 @@ impl NodeAtlas {
     /// Orders the changes coarsest first (so refreshing their footprints in
     /// this order reads fresh parents).
     pub(crate) fn sort_changes(&mut self) {
-        self.changes.sort_unstable_by(|a, b| b.lod.cmp(&a.lod).then(a.cmp(b)));
+        self.changes.sort_unstable_by(|a, b| b.level.cmp(&a.level).then(a.cmp(b)));
     }
 
     /// Nodes whose residency changed since the last clear.
@@ -230,7 +230,7 @@ mod tests {
     use super::*;
 
     fn layout() -> NodeLayout {
-        NodeLayout { levels: 4, node_size: 2, border: 0, samples: [17, 17], spacing_m: [1.0, 1.0] }
+        NodeLayout { levels: 4, node_size: 2, border: 0, posts: [17, 17], spacing_m: [1.0, 1.0] }
     }
 
     fn node(marker: f32) -> NodeData {

@@ -311,7 +311,7 @@ impl Clipmap {
         // Coarsest first (they are everyone's fallback), then nearest; the
         // id breaks ties so the order never depends on the hash map.
         self.candidates.sort_unstable_by(|a, b| {
-            (b.id.lod.cmp(&a.id.lod))
+            (b.id.level.cmp(&a.id.level))
                 .then(a.distance_m.total_cmp(&b.distance_m))
                 .then(a.id.cmp(&b.id))
         });

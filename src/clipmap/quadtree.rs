@@ -193,12 +193,12 @@ impl ClippedQuadtree {
             }
         }
         debug_assert!(
-            changes.windows(2).all(|w| w[0].lod >= w[1].lod),
+            changes.windows(2).all(|w| w[0].level >= w[1].level),
             "changes are coarsest first"
         );
         for id in changes {
-            for lod in (0..=id.lod).rev() {
-                let shift = id.lod - lod;
+            for lod in (0..=id.level).rev() {
+                let shift = id.level - lod;
                 let (x0, y0) = ((id.x as i64) << shift, (id.y as i64) << shift);
                 let [ox, oy] = self.origins[lod as usize];
                 let xs = x0.max(ox)..(x0 + (1 << shift)).min(ox + n);

@@ -21,7 +21,7 @@ pub struct SelectedTile {
 /// What the selector needs to know about the terrain.
 pub trait TileBounds {
     /// Level-0 posts east and north (the terrain's extent).
-    fn samples(&self) -> [u32; 2];
+    fn posts(&self) -> [u32; 2];
     /// Post spacing at level 0, metres east and north.
     fn spacing_m(&self) -> [f64; 2];
     /// Lowest and highest height any level-0 sample under `tile` may have.
@@ -72,7 +72,7 @@ impl TileSelector {
         self.stack.clear();
         self.culled = 0;
         let root = (view.ranges.levels() - 1) as u8;
-        let [nx, ny] = tiles_at(terrain.samples(), self.config.grid_size, root);
+        let [nx, ny] = tiles_at(terrain.posts(), self.config.grid_size, root);
         for y in (0..ny).rev() {
             for x in (0..nx).rev() {
                 self.stack.push(TileKey::new(root, x, y));
@@ -86,7 +86,7 @@ impl TileSelector {
             // Children replace this tile on the stack; keep room for the worst case.
             let room = self.selected.len() + self.stack.len() + 4 <= self.config.max_tiles;
             if key.level > 0 && distance < view.ranges.split_distance(key.level) && room {
-                let [nx, ny] = tiles_at(terrain.samples(), self.config.grid_size, key.level - 1);
+                let [nx, ny] = tiles_at(terrain.posts(), self.config.grid_size, key.level - 1);
                 for child in key.children().into_iter().rev() {
                     if child.x < nx && child.y < ny {
                         self.stack.push(child);

@@ -56,8 +56,8 @@ impl BuiltPyramid {
         if !self.info.layout.contains(id) {
             return None;
         }
-        let level = &self.levels[id.lod as usize];
-        let index = id.y as usize * self.info.layout.nodes_at(id.lod)[0] as usize + id.x as usize;
+        let level = &self.levels[id.level as usize];
+        let index = id.y as usize * self.info.layout.nodes_at(id.level)[0] as usize + id.x as usize;
         let posts = self.info.layout.stored_side() as usize;
         let posts = posts * posts;
         Some((&level.heights[index * posts..(index + 1) * posts], level.summaries[index]))
@@ -144,7 +144,7 @@ fn check_input(
         levels,
         node_size,
         border,
-        samples,
+        posts: samples,
         spacing_m: grid.georef.spacing_m(samples),
     };
     let (height_min, height_max) = min_max(&grid.heights);
@@ -158,14 +158,14 @@ fn min_max(heights: &[f32]) -> (f32, f32) {
         .reduce(|| (f32::INFINITY, f32::NEG_INFINITY), |a, b| (a.0.min(b.0), a.1.max(b.1)))
 }
 
-/// Cuts level `raster.lod` into its nodes, border included (Kühnert's split
+/// Cuts level `raster.level` into its nodes, border included (Kühnert's split
 /// and stitch), in parallel; summaries carry min and max, delta comes later.
 fn split_level(
     raster: &LevelRaster,
     layout: &NodeLayout,
     progress: &dyn Progress,
 ) -> (Vec<f32>, Vec<NodeSummary>) {
-    let [nodes_x, nodes_y] = layout.nodes_at(raster.lod);
+    let [nodes_x, nodes_y] = layout.nodes_at(raster.level);
     let side = layout.stored_side() as usize;
     let mut heights = vec![0.0f32; nodes_x as usize * nodes_y as usize * side * side];
     let summaries = heights

@@ -13,7 +13,7 @@ use super::progress::Progress;
 use super::raster::LevelRaster;
 use crate::dem::ElevationGrid;
 
-/// Delta of every node of level `raster.lod`, `nodes[0] * nodes[1]` values in
+/// Delta of every node of level `raster.level`, `nodes[0] * nodes[1]` values in
 /// node order (row by row, south first), each rounded up to `f32`.
 pub(crate) fn level_deltas(
     grid: &ElevationGrid,
@@ -23,7 +23,7 @@ pub(crate) fn level_deltas(
     progress: &dyn Progress,
 ) -> Vec<f32> {
     let node_count = nodes[0] as usize * nodes[1] as usize;
-    if raster.lod == 0 {
+    if raster.level == 0 {
         // The level-0 surface passes through every sample.
         return vec![0.0; node_count];
     }
@@ -53,7 +53,7 @@ pub(crate) fn level_deltas(
 /// the diagonal, so each cell is two branch-free runs: samples west of the
 /// diagonal (`a < b`, north-west triangle) and the rest (south-east).
 fn row_distances(grid: &ElevationGrid, raster: &LevelRaster, j: u32, out: &mut [f64]) {
-    let lod = raster.lod;
+    let lod = raster.level;
     let step = 1usize << lod;
     let inv_step = 1.0 / step as f64;
     let m = j >> lod;

@@ -123,13 +123,9 @@ pub(crate) fn encode_header(info: &PyramidInfo, nodes: &[NodeSummary]) -> Vec<u8
     e.u32(VERSION);
     e.u64(header_len);
     e.u64(header_len + nodes.len() as u64 * record_len);
-    for v in [
-        layout.node_size,
-        layout.border,
-        layout.levels as u32,
-        layout.samples[0],
-        layout.samples[1],
-    ] {
+    for v in
+        [layout.node_size, layout.border, layout.levels as u32, layout.posts[0], layout.posts[1]]
+    {
         e.u32(v);
     }
     layout.spacing_m.iter().for_each(|&v| e.f64(v));
@@ -257,8 +253,7 @@ fn read_fixed(d: &mut Decoder) -> Option<Fixed> {
     let node_count = d.u64()?;
     let record_len = d.u32()?;
     let levels = u8::try_from(levels).unwrap_or(u8::MAX);
-    let layout =
-        NodeLayout { levels, node_size, border, samples: [samples_x, samples_y], spacing_m };
+    let layout = NodeLayout { levels, node_size, border, posts: [samples_x, samples_y], spacing_m };
     Some(Fixed { header_len, file_len, layout, crs, georef, stats, node_count, record_len })
 }
 
@@ -271,13 +266,10 @@ pub(crate) fn check_layout(layout: &NodeLayout) -> Result<(), String> {
             layout.node_size, layout.border
         ));
     }
-    if layout.samples.contains(&0) || !(1..=MAX_LEVELS).contains(&layout.levels) {
-        return Err(format!(
-            "samples {:?} or levels {} out of range",
-            layout.samples, layout.levels
-        ));
+    if layout.posts.contains(&0) || !(1..=MAX_LEVELS).contains(&layout.levels) {
+        return Err(format!("samples {:?} or levels {} out of range", layout.posts, layout.levels));
     }
-    if layout.levels != NodeLayout::levels_for(layout.samples, layout.node_size) {
+    if layout.levels != NodeLayout::levels_for(layout.posts, layout.node_size) {
         return Err(format!("{} levels do not end in one root node", layout.levels));
     }
     if !layout.spacing_m.iter().all(|s| s.is_finite() && *s > 0.0) {
@@ -347,7 +339,7 @@ fn check_stats(info: &PyramidInfo) -> Result<(), String> {
     if !(s.height_min.is_finite() && s.height_max.is_finite() && s.height_min <= s.height_max) {
         return Err(format!("bad height range {}..{}", s.height_min, s.height_max));
     }
-    if let Some(problem) = info.georef.problem(info.layout.samples) {
+    if let Some(problem) = info.georef.problem(info.layout.posts) {
         return Err(problem);
     }
     Ok(())

@@ -83,9 +83,9 @@ impl Pyramid {
             return None;
         }
         let layout = &self.info.layout;
-        let (i, fu) = cell_of(x_m / layout.spacing_m[0], layout.samples[0]);
-        let (j, fv) = cell_of(y_m / layout.spacing_m[1], layout.samples[1]);
-        let (i1, j1) = ((i + 1).min(layout.samples[0] - 1), (j + 1).min(layout.samples[1] - 1));
+        let (i, fu) = cell_of(x_m / layout.spacing_m[0], layout.posts[0]);
+        let (j, fv) = cell_of(y_m / layout.spacing_m[1], layout.posts[1]);
+        let (i1, j1) = ((i + 1).min(layout.posts[0] - 1), (j + 1).min(layout.posts[1] - 1));
         let h = |i, j| self.sample(i, j) as f64;
         let surface = crate::node::cell_surface(h(i, j), h(i1, j), h(i, j1), h(i1, j1), fu, fv);
         Some(surface as f32)

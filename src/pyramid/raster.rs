@@ -14,7 +14,7 @@ use crate::dem::ElevationGrid;
 /// last post lies on or past the data's last sample and every node post past
 /// it clamps to it; `heights.len() == cols * rows`, row 0 southern.
 pub(crate) struct LevelRaster<'a> {
-    pub lod: u8,
+    pub level: u8,
     pub cols: u32,
     pub rows: u32,
     heights: Cow<'a, [f32]>,
@@ -25,7 +25,7 @@ impl<'a> LevelRaster<'a> {
     pub fn finest(grid: &'a ElevationGrid) -> Self {
         debug_assert_eq!(grid.heights.len(), grid.width as usize * grid.height as usize);
         LevelRaster {
-            lod: 0,
+            level: 0,
             cols: grid.width,
             rows: grid.height,
             heights: Cow::Borrowed(&grid.heights),
@@ -51,7 +51,7 @@ impl<'a> LevelRaster<'a> {
             }
         });
         debug_assert_eq!(heights.len(), cols as usize * rows as usize);
-        LevelRaster { lod: self.lod + 1, cols, rows, heights: Cow::Owned(heights) }
+        LevelRaster { level: self.level + 1, cols, rows, heights: Cow::Owned(heights) }
     }
 }
 

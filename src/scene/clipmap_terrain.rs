@@ -45,8 +45,8 @@ impl ResidentNodes for ClipmapTerrain<'_> {
 }
 
 impl TileBounds for ClipmapTerrain<'_> {
-    fn samples(&self) -> [u32; 2] {
-        self.clipmap.layout().samples
+    fn posts(&self) -> [u32; 2] {
+        self.clipmap.layout().posts
     }
 
     fn spacing_m(&self) -> [f64; 2] {

@@ -264,7 +264,7 @@ fn ms(from: Instant, to: Instant) -> f64 {
 
 fn root_tiles(terrain: &dyn TerrainData, grid_size: u32) -> u32 {
     let layout = terrain.layout();
-    let [nx, ny] = crate::lod::select::tiles_at(layout.samples, grid_size, layout.levels - 1);
+    let [nx, ny] = crate::lod::select::tiles_at(layout.posts, grid_size, layout.levels - 1);
     nx * ny
 }
 
@@ -278,8 +278,8 @@ pub fn clip_planes(camera: &Camera, terrain: &dyn TerrainData) -> (f32, f32) {
     let clearance = (camera.position.z - hi as f64).max(1.0);
     let near = (clearance * 0.25).clamp(0.5, 50.0);
     let extent = glam::DVec2::new(
-        layout.samples[0] as f64 * layout.spacing_m[0],
-        layout.samples[1] as f64 * layout.spacing_m[1],
+        layout.posts[0] as f64 * layout.spacing_m[0],
+        layout.posts[1] as f64 * layout.spacing_m[1],
     );
     let eye = camera.position.truncate();
     let corners = [

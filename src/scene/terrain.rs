@@ -79,8 +79,8 @@ impl ResidentNodes for PreloadedTerrain {
 }
 
 impl TileBounds for PreloadedTerrain {
-    fn samples(&self) -> [u32; 2] {
-        self.layout.samples
+    fn posts(&self) -> [u32; 2] {
+        self.layout.posts
     }
 
     fn spacing_m(&self) -> [f64; 2] {

@@ -206,7 +206,7 @@ impl TileCache {
     fn make_root_tiles(&mut self, nodes: &dyn ResidentNodes) -> Result<(), TileError> {
         let layout = *nodes.layout();
         let root = layout.levels - 1;
-        let [nx, ny] = tiles_at(layout.samples, self.config.grid_size, root);
+        let [nx, ny] = tiles_at(layout.posts, self.config.grid_size, root);
         let needed = (nx * ny) as usize;
         if needed > self.config.max_tiles as usize {
             return Err(TileError::RootTooLarge { needed, max: self.config.max_tiles });
@@ -245,11 +245,11 @@ impl TileCache {
             let (source, _) = best_resident(nodes, node).ok_or(TileError::NoData(tile.key))?;
             let (slot, new) = match self.by_key.get(&tile.key) {
                 Some(&slot) => (slot, false),
-                None => (self.reserve(tile.key, source.lod)?, true),
+                None => (self.reserve(tile.key, source.level)?, true),
             };
             let resident = self.slots[slot as usize].as_mut().expect("reserved");
             resident.last_frame = self.frame;
-            if new || source.lod < resident.source_level {
+            if new || source.level < resident.source_level {
                 self.requests.push(Request {
                     generator: GeneratorId(slot),
                     format: VertexFormat(0),
@@ -315,7 +315,7 @@ impl TileCache {
                 let spacing = [layout.spacing_m[0] * scale, layout.spacing_m[1] * scale];
                 fill_tile(&reader, grid_size, spacing, vertices);
                 bytes.copy_from_slice(bytemuck::cast_slice(vertices));
-                resident.source_level = source.lod;
+                resident.source_level = source.level;
                 bytes_uploaded += bytes.len() as u64;
             });
             dirty.extend(plan.dirty_ranges().iter().cloned());

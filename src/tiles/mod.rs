@@ -29,7 +29,7 @@ pub fn best_resident(nodes: &dyn ResidentNodes, id: NodeId) -> Option<(NodeId, &
         if let Some(data) = nodes.resident(node) {
             return Some((node, data));
         }
-        if node.lod + 1 >= levels {
+        if node.level + 1 >= levels {
             return None;
         }
         node = node.parent()?;

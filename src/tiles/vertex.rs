@@ -63,8 +63,8 @@ impl<'a> PostReader<'a> {
     pub fn post(&self, i: i64, j: i64) -> f32 {
         let x = self.origin[0] + i * self.stride;
         let y = self.origin[1] + j * self.stride;
-        let node_stride = 1i64 << self.node.lod;
-        let span = (self.layout.node_size as i64) << self.node.lod;
+        let node_stride = 1i64 << self.node.level;
+        let span = (self.layout.node_size as i64) << self.node.level;
         // Position in the node's posts (fractional when the node is coarser).
         let fx = (x - self.node.x as i64 * span) as f64 / node_stride as f64;
         let fy = (y - self.node.y as i64 * span) as f64 / node_stride as f64;

@@ -114,7 +114,7 @@ pub fn check_root(clipmap: &Clipmap) -> Result<(), String> {
 
 /// Whether `point` lies in the footprint of `id` (edges included).
 pub fn covers(clipmap: &Clipmap, id: NodeId, point: DVec2) -> bool {
-    let size = clipmap.layout().node_size_m(id.lod);
+    let size = clipmap.layout().node_size_m(id.level);
     let inside = |p: f64, k: u32, side: f64| {
         p >= k as f64 * side - 1e-6 && p <= (k + 1) as f64 * side + 1e-6
     };
@@ -141,7 +141,7 @@ pub fn check_height(clipmap: &Clipmap, view: ViewId, point: DVec2) -> Result<u8,
             quadtree.in_window(l, id.x as i64, id.y as i64)
         })
         .unwrap();
-    for lod in first_layer..node.lod {
+    for lod in first_layer..node.level {
         let id = layout.locate(lod, point.x, point.y).unwrap().id;
         if clipmap.atlas().slot_of(id).is_some() {
             return Err(format!("answered from {node:?} though {id:?} is resident"));
@@ -154,7 +154,7 @@ pub fn check_height(clipmap: &Clipmap, view: ViewId, point: DVec2) -> Result<u8,
             sample.height_m, sample.error_bound_m
         ));
     }
-    Ok(node.lod)
+    Ok(node.level)
 }
 
 /// The Kühnert lookup at the distance-dependent layer answers from a
@@ -163,7 +163,7 @@ pub fn check_lookup(clipmap: &Clipmap, view: ViewId, point: DVec2) -> Result<(),
     let lod = clipmap.quadtree_lod(view, point);
     let found =
         clipmap.lookup(view, point, lod).map_err(|e| format!("lookup {point} at {lod}: {e}"))?;
-    if clipmap.atlas().node_in(found.slot) != Some(found.node) || found.node.lod < lod {
+    if clipmap.atlas().node_in(found.slot) != Some(found.node) || found.node.level < lod {
         return Err(format!("lookup at {lod} gave {found:?}"));
     }
     if !covers(clipmap, found.node, point) || !(0.0..=1.0).contains(&found.atlas_coords.x) {
@@ -188,11 +188,11 @@ pub fn check_entries(clipmap: &Clipmap, view: ViewId) -> Result<(), String> {
                 let mut id = NodeId::new(lod, x as u32, y as u32);
                 loop {
                     if let Some(slot) = clipmap.atlas().slot_of(id) {
-                        break Entry { slot, atlas_lod: id.lod };
+                        break Entry { slot, atlas_lod: id.level };
                     }
                     id = id
                         .parent()
-                        .filter(|p| p.lod < layout.levels)
+                        .filter(|p| p.level < layout.levels)
                         .ok_or("no resident ancestor")?;
                 }
             } else {

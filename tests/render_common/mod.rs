@@ -162,8 +162,7 @@ pub fn terrain_bounds(margin_m: f64) -> coverage::TerrainBounds {
     let pyramid = pyramid();
     let layout = *ridgeline::node::NodeSource::layout(&*pyramid);
     let [sx, sy] = layout.spacing_m;
-    let extent =
-        DVec2::new((layout.samples[0] - 1) as f64 * sx, (layout.samples[1] - 1) as f64 * sy);
+    let extent = DVec2::new((layout.posts[0] - 1) as f64 * sx, (layout.posts[1] - 1) as f64 * sy);
     // A triangle of the coarsest level may reach this far beyond a point on it.
     let coarsest_post = (1u64 << (layout.levels - 1)) as f64 * sx.max(sy);
     coverage::TerrainBounds {

@@ -32,13 +32,13 @@ pub struct TruthRegion {
 impl TruthRegion {
     /// Every sample of the data.
     pub fn whole(layout: &NodeLayout) -> Self {
-        TruthRegion { first: [0, 0], posts: layout.samples }
+        TruthRegion { first: [0, 0], posts: layout.posts }
     }
 
     /// What the level-0 tiles of `grid_size` cover: the data, extended to a
     /// whole number of tiles as the LOD display draws it.
     pub fn covering_tiles(layout: &NodeLayout, grid_size: u32) -> Self {
-        let tiles = tiles_at(layout.samples, grid_size, 0);
+        let tiles = tiles_at(layout.posts, grid_size, 0);
         TruthRegion {
             first: [0, 0],
             posts: tiles.map(|t| t.saturating_mul(grid_size).saturating_add(1)),
@@ -172,9 +172,9 @@ impl MarginGrid {
     ) -> Result<MarginGrid, TruthError> {
         let [nx, ny] = layout.nodes_at(0);
         let x =
-            AxisMap::new(region.first[0], region.posts[0], layout.samples[0], layout.node_size, nx);
+            AxisMap::new(region.first[0], region.posts[0], layout.posts[0], layout.node_size, nx);
         let y =
-            AxisMap::new(region.first[1], region.posts[1], layout.samples[1], layout.node_size, ny);
+            AxisMap::new(region.first[1], region.posts[1], layout.posts[1], layout.node_size, ny);
         let width = x.nodes.len();
         let mut heights = vec![0.0f32; width * y.nodes.len()];
         let mut node = NodeData::with_capacity(layout);
