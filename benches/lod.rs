@@ -24,19 +24,20 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use glam::UVec2;
-use ridgeline::accuracy::{measure_flight, AccuracyRun};
 use ridgeline::camera::Camera;
 use ridgeline::clipmap::LoaderMode;
 use ridgeline::dataset;
-use ridgeline::display::{Display, DisplayConfig, FrameStats};
+use ridgeline::display::measure::{measure_flight, AccuracyRun};
+use ridgeline::display::{DisplayConfig, DisplayParts};
 use ridgeline::flight::{builtin_approach, FlightPath};
 use ridgeline::gl::{
     BaselineFrameStats, ChunkedBaseline, GlBackend, TruthMesh, TruthPass, TruthRegion,
 };
 use ridgeline::lod::LodConfig;
 use ridgeline::node::NodeSource;
+use ridgeline::pipeline::FrameStats;
 use ridgeline::pyramid::{Pyramid, Silent};
-use ridgeline::render::{DrawList, RenderBackend};
+use ridgeline::render::RenderBackend;
 use ridgeline::scene::TerrainSummary;
 use serde_json::json;
 use support::{print_table, write_json, write_svg, BenchArgs, Panel, Series};
@@ -206,14 +207,14 @@ fn camera_at(path: &FlightPath, t: f64) -> Camera {
     path.sample(t).camera(FOV_X_DEG, [SIZE.x, SIZE.y])
 }
 
-fn display_for(point: &Point, pyramid: &Arc<Pyramid>) -> Display {
+fn display_for(point: &Point, pyramid: &Arc<Pyramid>) -> DisplayParts {
     let mut config = DisplayConfig::new(GlBackend::Egl, SIZE);
     point.apply(&mut config.scene.lod);
     config.fov_x_deg = FOV_X_DEG;
     config.loader = LoaderMode::Inline;
     config.load_budget = 64;
     let source: Arc<dyn NodeSource> = pyramid.clone();
-    Display::new(&config, source, TerrainSummary::from_pyramid(pyramid.info()))
+    DisplayParts::open(&config, source, TerrainSummary::from_pyramid(pyramid.info()))
         .expect("headless EGL display")
 }
 
@@ -226,7 +227,7 @@ fn measure_point(
     flight_frames: u32,
 ) -> PointResult {
     let mut display = display_for(point, pyramid);
-    let truth = TruthPass::new(display.context().gl(), mesh).expect("truth pass");
+    let truth = TruthPass::new(display.context.gl(), mesh).expect("truth pass");
     let exact = |x: f64, y: f64| pyramid.exact_height(x, y);
     let run = measure_flight(&mut display, &truth, &exact, pyramid.layout().spacing_m, views)
         .expect("accuracy views");
@@ -237,7 +238,7 @@ fn measure_point(
     let (chunked, chunked_uploads_per_frame) = if point.baseline {
         let mut display = display_for(point, pyramid);
         let mut baseline =
-            ChunkedBaseline::new(display.context().gl(), point.lod.grid_size).expect("baseline");
+            ChunkedBaseline::new(display.context.gl(), point.lod.grid_size).expect("baseline");
         let (frames, transfers) = fly(&mut display, Some(&mut baseline), path, flight_frames);
         let n = transfers.len().max(1) as f64;
         let uploads = transfers.iter().map(|t| t.uploads as f64).sum::<f64>() / n;
@@ -256,16 +257,15 @@ fn measure_point(
     result
 }
 
-/// Mean of 5 frames of clear and sky only, to glFinish.
-fn sky_only(display: &mut Display, camera: &Camera) -> f64 {
-    let frame = display.frame_uniforms(camera);
-    display.context_mut().make_current().expect("current");
-    display.context_mut().bind_target();
-    let renderer = display.renderer_mut();
+/// Mean of 5 frames of clear and sky only, to glFinish, with the uniforms
+/// of a frame drawn at `camera`.
+fn sky_only(display: &mut DisplayParts, camera: &Camera) -> f64 {
+    display.frame(camera).expect("frame");
+    let frame = display.pipeline.draw_list().frame.expect("frame uniforms");
     let start = Instant::now();
     for _ in 0..5 {
-        renderer.draw(&DrawList { frame: Some(frame), ..DrawList::default() }).expect("sky");
-        renderer.finish();
+        display.renderer.draw_background(&frame).expect("sky");
+        display.renderer.finish();
     }
     start.elapsed().as_secs_f64() * 1e3 / 5.0
 }
@@ -274,19 +274,23 @@ fn sky_only(display: &mut Display, camera: &Camera) -> f64 {
 /// display or (given `baseline`) by plain Chunked LOD, after paging in and
 /// drawing the first pose unrecorded, so both start from the same state.
 fn fly(
-    display: &mut Display,
+    display: &mut DisplayParts,
     mut baseline: Option<&mut ChunkedBaseline>,
     path: &FlightPath,
     frames: u32,
 ) -> (Vec<FrameStats>, Vec<BaselineFrameStats>) {
     let start = path.start_time() + path.duration() / 2.0;
     let camera = |k: u32| camera_at(path, start + k as f64 / FLIGHT_RATE_HZ);
-    display.settle(&camera(0), 10_000).expect("settle");
+    display.pipeline.settle(&camera(0), 10_000).expect("settle");
     let mut stats = Vec::with_capacity(frames as usize);
     let mut transfers = Vec::with_capacity(frames as usize);
     for k in 0..=frames {
         let (frame, base) = match baseline.as_deref_mut() {
-            Some(baseline) => display.frame_baseline(&camera(k), baseline).expect("baseline frame"),
+            Some(baseline) => {
+                display.context.bind_target();
+                let frame = display.pipeline.frame(&camera(k), baseline).expect("baseline frame");
+                (frame, baseline.last_frame())
+            }
             None => (display.frame(&camera(k)).expect("LOD frame"), BaselineFrameStats::default()),
         };
         if k > 0 {
@@ -305,8 +309,9 @@ fn summarise(
     uploads: Option<f64>,
 ) -> PointResult {
     let n = run.views.len().max(1) as f64;
-    let mean =
-        |f: &dyn Fn(&ridgeline::accuracy::ViewRow) -> f64| run.views.iter().map(f).sum::<f64>() / n;
+    let mean = |f: &dyn Fn(&ridgeline::display::measure::ViewRow) -> f64| {
+        run.views.iter().map(f).sum::<f64>() / n
+    };
     PointResult {
         point: *point,
         p99_px: run.summary.p99_px,

@@ -28,10 +28,12 @@ use glam::UVec2;
 use image::RgbaImage;
 use ridgeline::camera::Camera;
 use ridgeline::dataset;
-use ridgeline::display::{Display, DisplayConfig, FrameStats};
+use ridgeline::display::measure::draw_truth;
+use ridgeline::display::{DisplayConfig, DisplayParts};
 use ridgeline::flight::{builtin_approach, FlightPath};
 use ridgeline::gl::{GlBackend, TruthFrameStats, TruthMesh, TruthPass, TruthRegion};
 use ridgeline::node::NodeSource;
+use ridgeline::pipeline::FrameStats;
 use ridgeline::pyramid::Silent;
 use ridgeline::scene::TerrainSummary;
 use serde_json::json;
@@ -95,11 +97,11 @@ fn main() {
     config.scene.lod.tau_px = tau_px;
     config.fov_x_deg = FOV_X_DEG;
     let mut display =
-        Display::new(&config, Arc::clone(&source), summary).expect("headless EGL display");
-    let info = display.info().clone();
+        DisplayParts::open(&config, Arc::clone(&source), summary).expect("headless EGL display");
+    let info = display.context.info().clone();
     let started = Instant::now();
     let mesh = TruthMesh::load(source.as_ref(), TruthRegion::whole(&layout)).expect("truth mesh");
-    let truth = TruthPass::new(display.context().gl(), &mesh).expect("truth pass");
+    let truth = TruthPass::new(display.context.gl(), &mesh).expect("truth pass");
     let truth_build_ms = started.elapsed().as_secs_f64() * 1e3;
     println!(
         "render: {} on {} ({}); {}x{} posts, truth mesh {}x{} posts in {} chunks, built in {truth_build_ms:.0} ms",
@@ -129,7 +131,7 @@ fn camera_at(path: &FlightPath, t: f64) -> Camera {
 }
 
 fn draw_views(
-    display: &mut Display,
+    display: &mut DisplayParts,
     truth: &TruthPass,
     path: &FlightPath,
     source: &dyn NodeSource,
@@ -138,22 +140,25 @@ fn draw_views(
 ) -> Vec<ViewRow> {
     // Warm-up: the first draws compile shaders and fault in buffers.
     let first = camera_at(path, path.start_time());
-    display.settle(&first, 10_000).expect("settle");
+    display.pipeline.settle(&first, 10_000).expect("settle");
     display.frame(&first).expect("warm-up LOD frame");
-    display.render_truth(&first, truth).expect("warm-up truth frame");
+    draw_truth(display, truth).expect("warm-up truth frame");
     let mut rows = Vec::with_capacity(count as usize);
     for (k, t) in path.frame_times(count).enumerate() {
         let camera = camera_at(path, t);
         let settle = Instant::now();
-        display.settle(&camera, 10_000).expect("settle");
+        display.pipeline.settle(&camera, 10_000).expect("settle");
         let settle_ms = settle.elapsed().as_secs_f64() * 1e3;
-        let draw_lod = |display: &mut Display| {
+        // The truth draws with the uniforms (near plane) of a LOD frame at
+        // this pose: one untimed frame makes its tiles and uniforms.
+        display.frame(&camera).expect("LOD frame");
+        let draw_lod = |display: &mut DisplayParts| {
             let stats = display.frame(&camera).expect("LOD frame");
-            (stats, display.read_pixels().expect("read LOD"))
+            (stats, display.context.read_pixels().expect("read LOD"))
         };
-        let draw_truth = |display: &mut Display| {
-            let stats = display.render_truth(&camera, truth).expect("truth frame");
-            (stats, display.read_pixels().expect("read truth"))
+        let draw_truth = |display: &mut DisplayParts| {
+            let stats = draw_truth(display, truth).expect("truth frame");
+            (stats, display.context.read_pixels().expect("read truth"))
         };
         let ((lod, lod_image), (truth_stats, truth_image)) = if k % 2 == 0 {
             let lod = draw_lod(display);
@@ -163,7 +168,7 @@ fn draw_views(
             (draw_lod(display), truth)
         };
         let mut lod_tiles_per_level = vec![0; source.layout().levels as usize];
-        for tile in &display.scene().draw_list().tiles {
+        for tile in &display.pipeline.draw_list().tiles {
             lod_tiles_per_level[tile.key.level as usize] += 1;
         }
         let ground =
@@ -192,10 +197,14 @@ fn differing_share(a: &RgbaImage, b: &RgbaImage) -> f64 {
 
 /// Consecutive frames 1/60 s apart from the middle of the approach, LOD
 /// only, after one unrecorded frame there (the jump from the last view).
-fn fly_at_display_rate(display: &mut Display, path: &FlightPath, frames: u32) -> Vec<FrameStats> {
+fn fly_at_display_rate(
+    display: &mut DisplayParts,
+    path: &FlightPath,
+    frames: u32,
+) -> Vec<FrameStats> {
     let start = path.start_time() + path.duration() / 2.0;
     let camera = |k: u32| camera_at(path, start + k as f64 / DISPLAY_RATE_HZ);
-    display.settle(&camera(0), 10_000).expect("settle");
+    display.pipeline.settle(&camera(0), 10_000).expect("settle");
     display.frame(&camera(0)).expect("warm-up LOD frame");
     (1..=frames).map(|k| display.frame(&camera(k)).expect("LOD frame")).collect()
 }
@@ -286,9 +295,12 @@ impl Summary {
     }
 }
 
+/// A CPU stage's name and its time in a frame.
+type Stage = (&'static str, fn(&FrameStats) -> f64);
+
 /// CPU stages of the LOD frames: at the views and at display rate.
 fn print_cpu_table(views: &[ViewRow], live: &[FrameStats]) {
-    let stages: [(&str, fn(&FrameStats) -> f64); 5] = [
+    let stages: [Stage; 5] = [
         ("clipmap update", |s| s.clipmap_ms),
         ("tile selection", |s| s.scene.cpu_ms.select_ms),
         ("tile generation", |s| s.scene.cpu_ms.tiles_ms),

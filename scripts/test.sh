@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Runs every Ridgeline test. On a fresh Debian machine (as root) it first
+# Checks formatting and lints, then runs every Ridgeline test. On a fresh Debian machine (as root) it first
 # installs the Mesa packages the headless GL tests need (scripts/mesa.sh).
 # `.ci/run` calls exactly this, as the README says. The last line totals the
 # tests of every test binary.
@@ -11,6 +11,10 @@ sh scripts/mesa.sh
 if [ "${CI:-}" = true ]; then
     export RIDGELINE_REQUIRE_OSMESA=1 RIDGELINE_REQUIRE_WINDOW=1
 fi
+
+# Style first: formatting and lints are part of the suite.
+cargo fmt --check
+cargo clippy --locked --all-targets -- -D warnings
 
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT

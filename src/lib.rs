@@ -37,6 +37,7 @@ pub mod geo;
 pub mod gl;
 pub mod lod;
 pub mod node;
+pub mod pipeline;
 pub mod procedural;
 pub mod pyramid;
 pub mod render;

@@ -2,12 +2,10 @@
 //! prints the JSON report with every field the issue names, writes the heat
 //! map, confirms the bound, and refuses impossible options by name.
 
-mod pyramid_common;
-
 use std::path::Path;
 use std::process::{Command, Output};
 
-use pyramid_common::scratch_dir;
+use testkit::fresh_dir;
 
 fn ridgeline(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_ridgeline")).args(args).output().expect("run ridgeline")
@@ -20,7 +18,7 @@ fn import(cache: &Path) {
 
 #[test]
 fn accuracy_json_reports_the_measured_error_and_writes_the_heat_map() {
-    let dir = scratch_dir("cli-accuracy");
+    let dir = fresh_dir("cli-accuracy");
     let cache = dir.join("terrain");
     import(&cache);
     let out_dir = dir.join("out");

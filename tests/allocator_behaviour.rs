@@ -25,7 +25,7 @@ fn run_is_contiguous_and_sorted_by_format() {
     assert_eq!(plan.range(3), 8..20);
     assert_eq!(plan.range(0), 20..36);
     assert_eq!(plan.range(2), 36..40);
-    assert_eq!(plan.dirty_ranges(), &[0..40]);
+    assert_eq!(plan.dirty_ranges(), std::slice::from_ref(&(0..40)));
 }
 
 #[test]

@@ -3,15 +3,12 @@
 //! a global allocator wrapper; this file holds one test so no other test's
 //! allocations are counted.
 
-mod alloc_counter;
-mod clipmap_common;
-
 use std::time::{Duration, Instant};
 
-use clipmap_common::*;
 use glam::DVec3;
 use ridgeline::clipmap::{Clipmap, LoaderMode, ViewConfig};
 use ridgeline::procedural::ProceduralEarth;
+use testkit::clipmap::*;
 
 /// A flight: east at 250 m/s for `frames` frames of 1/60 s, with a map
 /// view 6 km above; returns allocations counted after the first `warm`.
@@ -23,12 +20,12 @@ fn fly(earth: &ProceduralEarth, clipmap: &mut Clipmap, frames: u32, warm: u32, p
     let mut counted = 0;
     for frame in 0..frames {
         let at = start + DVec3::new(250.0 / 60.0 * frame as f64, 0.0, 0.0);
-        let before = alloc_counter::allocations();
+        let before = testkit::alloc::allocations();
         clipmap.set_view_position(pfd, at).unwrap();
         clipmap.set_view_position(map, at + DVec3::Z * 6000.0).unwrap();
         clipmap.update().unwrap();
         clipmap.height_at(pfd, at.truncate()).unwrap();
-        let after = alloc_counter::allocations();
+        let after = testkit::alloc::allocations();
         if frame >= warm {
             counted += after - before;
         }

@@ -2,16 +2,14 @@
 //! resident set as inline loading, a moving one keeps every invariant, and
 //! failing or panicking sources degrade to fallbacks and errors, not hangs.
 
-mod clipmap_common;
-
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use clipmap_common::*;
 use glam::{DVec2, DVec3};
 use ridgeline::clipmap::{Clipmap, ClipmapError, LoaderMode, ViewId};
 use ridgeline::node::{NodeData, NodeError, NodeId, NodeLayout, NodeSource};
 use ridgeline::procedural::ProceduralEarth;
+use testkit::clipmap::*;
 
 const THREAD: LoaderMode = LoaderMode::Thread { queue: 4 };
 

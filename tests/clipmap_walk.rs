@@ -3,13 +3,11 @@
 //! and pinning rules, and every lookup inside the view distance answers from
 //! a resident node that covers the point, within its error bound.
 
-mod clipmap_common;
-
-use clipmap_common::*;
 use glam::{DVec2, DVec3};
 use proptest::prelude::*;
 use ridgeline::clipmap::{Clipmap, LoaderMode, ViewId};
 use ridgeline::node::NodeSource;
+use testkit::clipmap::*;
 
 /// One view's move in one frame: a hop (metres east, north, up) or a jump
 /// to a fresh place (fractions of the earth, height above ground).

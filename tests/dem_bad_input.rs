@@ -3,12 +3,10 @@
 //! declarations are refused before anything is allocated (a test that tried
 //! to allocate 100000 x 100000 heights would abort, not pass).
 
-mod dem_support;
-
 use std::path::PathBuf;
 
-use dem_support::*;
 use ridgeline::dem::{import_files, Problem};
+use testkit::dem::*;
 use tiff::encoder::{colortype, Compression, Predictor};
 use tiff::tags::Tag;
 

@@ -2,12 +2,10 @@
 //! grid): synthesise a file, import it, compare heights, georeference, and
 //! the filling of voids. GeoTIFF is in `dem_geotiff.rs`.
 
-mod dem_support;
-
-use dem_support::*;
 use proptest::prelude::*;
 use ridgeline::dem::{dted, import_file, Format};
 use ridgeline::geo::Crs;
+use testkit::dem::*;
 
 /// Heights before import in grid order, `None` for a void.
 fn before_fill<T: Copy + PartialEq + Into<f64>>(heights: &[T], void: T) -> Vec<Option<f64>> {

@@ -5,13 +5,11 @@
 //! from a transformation matrix, PixelIsArea and PixelIsPoint, GDAL nodata;
 //! and the shared SRTM tile in `assets/dem`.
 
-mod dem_support;
-
 use std::path::Path;
 
-use dem_support::*;
 use ridgeline::dem::{import_file, ElevationGrid};
 use ridgeline::geo::Crs;
+use testkit::dem::*;
 use tiff::encoder::{colortype, Compression, DeflateLevel, Predictor};
 use tiff::tags::Tag;
 

@@ -3,13 +3,11 @@
 //! join into one 2401 x 2401 grid; with a tile missing, the gap is filled
 //! by the documented method and counted.
 
-mod dem_support;
-
 use std::path::PathBuf;
 
-use dem_support::*;
 use ridgeline::dem::import_files;
 use ridgeline::geo::Crs;
+use testkit::dem::*;
 
 const SIDE: u32 = 1201;
 const MOSAIC: u32 = 2 * SIDE - 1;

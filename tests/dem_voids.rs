@@ -3,14 +3,12 @@
 //! range of the nearest valid heights along its row and column, planes are
 //! restored exactly where voids are enclosed, and an all-void grid is refused.
 
-mod dem_support;
-
 use std::path::Path;
 
-use dem_support::check_filled;
 use proptest::prelude::*;
 use ridgeline::dem::{voids, Problem, RawGrid};
 use ridgeline::geo::GeoRef;
+use testkit::dem::check_filled;
 
 fn raw(width: u32, height: u32, heights: &[Option<f64>]) -> RawGrid {
     let mut grid =

@@ -7,15 +7,13 @@
 //! RIDGELINE_REQUIRE_WINDOW=1. Window and auto run in child processes: winit
 //! gives a process one event loop, and auto must be seen without a display.
 
-mod gl_common;
-
 use std::time::Instant;
 
 use clap::ValueEnum;
-use gl_common::{child_test, run_child, skip_for_missing_osmesa, take_turn, window_display};
 use glam::{UVec2, Vec4};
 use image::{Rgba, RgbaImage};
 use ridgeline::gl::{ContextRequest, GlBackend, GlContext, GlesVersion, OpenedBackend, SmokePass};
+use testkit::gl::{child_test, run_child, skip_for_missing_osmesa, take_turn, window_display};
 
 const SIZE: UVec2 = UVec2::new(96, 64);
 const CLEAR: [u8; 4] = [0, 64, 128, 255];
@@ -42,7 +40,7 @@ fn draw_check_and_report(context: &GlContext, started: Instant) {
     context.present().expect("present");
     if let Err(problem) = check_smoke_image(&image) {
         let info = context.info();
-        let path = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!(
+        let path = testkit::target_tmp().join(format!(
             "smoke-{}-{:?}.png",
             info.backend.name(),
             info.requested

@@ -1,12 +1,10 @@
 //! Building refuses bad input with a reason, and the layout arithmetic the
 //! file relies on (levels, node order) holds.
 
-mod pyramid_common;
-
 use proptest::prelude::*;
-use pyramid_common::random_grid;
 use ridgeline::node::{NodeId, NodeLayout};
 use ridgeline::pyramid::{build, BuildError, BuildOptions, Silent};
+use testkit::pyramid::random_grid;
 
 #[test]
 fn bad_grids_and_options_are_refused_with_a_reason() {

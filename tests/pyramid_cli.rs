@@ -1,12 +1,10 @@
 //! `ridgeline import` and `ridgeline info` as a user runs them.
 
-mod pyramid_common;
-
 use std::path::Path;
 use std::process::{Command, Output};
 
-use pyramid_common::scratch_dir;
 use ridgeline::pyramid::FILE_NAME;
+use testkit::fresh_dir;
 
 fn ridgeline(args: &[&str], cache: &Path) -> Output {
     Command::new(env!("CARGO_BIN_EXE_ridgeline"))
@@ -18,7 +16,7 @@ fn ridgeline(args: &[&str], cache: &Path) -> Output {
 
 #[test]
 fn info_json_describes_an_imported_cache() {
-    let cache = scratch_dir("cli-info");
+    let cache = fresh_dir("cli-info");
     let imported = ridgeline(
         &["import", "--synthetic", "257", "--node-size", "32", "--border", "1", "--out"],
         &cache,
@@ -52,7 +50,7 @@ fn info_json_describes_an_imported_cache() {
 
 #[test]
 fn info_refuses_a_damaged_cache_naming_the_file() {
-    let cache = scratch_dir("cli-damaged");
+    let cache = fresh_dir("cli-damaged");
     assert!(ridgeline(&["import", "--synthetic", "100", "--out"], &cache).status.success());
     let path = cache.join(FILE_NAME);
     let mut bytes = std::fs::read(&path).expect("read");
@@ -67,7 +65,7 @@ fn info_refuses_a_damaged_cache_naming_the_file() {
 
 #[test]
 fn import_refuses_absurd_sizes_before_allocating() {
-    let cache = scratch_dir("cli-absurd");
+    let cache = fresh_dir("cli-absurd");
     let out = ridgeline(&["import", "--synthetic", "4000000000", "--out"], &cache);
     assert!(!out.status.success());
     let out = ridgeline(&["import", "--synthetic", "100", "--node-size", "0", "--out"], &cache);
@@ -76,7 +74,7 @@ fn import_refuses_absurd_sizes_before_allocating() {
 
 #[test]
 fn importing_the_shipped_srtm_tile_records_where_it_is() {
-    let cache = scratch_dir("cli-srtm");
+    let cache = fresh_dir("cli-srtm");
     let tile = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/dem/srtm3_n39e040_1000.tif");
     let imported = ridgeline(&["import", tile, "--out"], &cache);
     assert!(imported.status.success(), "{}", String::from_utf8_lossy(&imported.stderr));
@@ -104,7 +102,7 @@ fn importing_the_shipped_srtm_tile_records_where_it_is() {
 
 #[test]
 fn importing_a_missing_file_names_it() {
-    let cache = scratch_dir("cli-missing");
+    let cache = fresh_dir("cli-missing");
     let out = ridgeline(&["import", "no/such/tile.hgt", "--out"], &cache);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("no/such/tile.hgt"));

@@ -1,14 +1,13 @@
 //! The stored delta of a node equals a brute-force recomputation from the
 //! full-resolution grid and the node's posts as read back from the file.
 
-mod pyramid_common;
-
 use glam::DVec3;
-use pyramid_common::{build_and_write, random_grid, scratch_dir};
 use rand::{Rng, SeedableRng};
 use ridgeline::dem::ElevationGrid;
 use ridgeline::node::{NodeData, NodeId, NodeSource};
 use ridgeline::pyramid::{BuildOptions, Pyramid};
+use testkit::fresh_dir;
+use testkit::pyramid::{build_and_write, random_grid};
 
 /// Height of the plane through triangle `(a, b, c)` at `(x, y)` if the point
 /// lies in the triangle (barycentric weights, with a little slack for points
@@ -69,7 +68,7 @@ fn check_random_nodes(
     seed: u64,
     case: &str,
 ) {
-    let dir = scratch_dir(&format!("delta-{case}"));
+    let dir = fresh_dir(&format!("delta-{case}"));
     let (_, path) = build_and_write(grid, options, &dir);
     let pyramid = Pyramid::open(&path).expect("open");
     let layout = *pyramid.layout();
@@ -133,7 +132,7 @@ fn stored_delta_equals_brute_force_on_random_nodes() {
 fn delta_is_measured_not_halved() {
     // A single spike: every level whose posts skip it must report its full
     // height, not a halving sequence.
-    let dir = scratch_dir("delta-spike");
+    let dir = fresh_dir("delta-spike");
     let mut grid = random_grid(129, 129, 9);
     grid.heights.iter_mut().for_each(|h| *h = 100.0);
     grid.heights[65 * 129 + 65] = 600.0;

@@ -2,18 +2,17 @@
 //! the clamped level-0 sample (split, downsample, stitch), and damage of any
 //! kind is refused with an error naming the file.
 
-mod pyramid_common;
-
 use std::io::{Seek, SeekFrom, Write};
 
 use proptest::prelude::*;
-use pyramid_common::{build_and_write, random_grid, scratch_dir};
 use ridgeline::node::{NodeData, NodeError, NodeId, NodeSource};
 use ridgeline::pyramid::{BuildOptions, Pyramid, PyramidError};
+use testkit::fresh_dir;
+use testkit::pyramid::{build_and_write, random_grid};
 
 #[test]
 fn every_node_reads_back_as_built_and_is_the_clamped_grid() {
-    let dir = scratch_dir("file-roundtrip");
+    let dir = fresh_dir("file-roundtrip");
     let grid = random_grid(150, 97, 1);
     let (built, path) = build_and_write(&grid, BuildOptions { node_size: 16, border: 2 }, &dir);
     let pyramid = Pyramid::open(&dir).expect("open the cache directory");
@@ -60,7 +59,7 @@ fn every_node_reads_back_as_built_and_is_the_clamped_grid() {
 
 #[test]
 fn header_records_georeference_and_statistics() {
-    let dir = scratch_dir("file-header");
+    let dir = fresh_dir("file-header");
     let grid = random_grid(70, 40, 2);
     build_and_write(&grid, BuildOptions::default(), &dir);
     let info = Pyramid::open(&dir).expect("open").info().clone();
@@ -75,7 +74,7 @@ fn header_records_georeference_and_statistics() {
 
 #[test]
 fn exact_height_interpolates_level0_on_its_triangles() {
-    let dir = scratch_dir("file-exact-height");
+    let dir = fresh_dir("file-exact-height");
     let grid = random_grid(90, 75, 3);
     build_and_write(&grid, BuildOptions { node_size: 16, border: 1 }, &dir);
     let pyramid = Pyramid::open(&dir).expect("open");
@@ -109,7 +108,7 @@ fn assert_refused(dir: &std::path::Path, bytes: &[u8], what: &str) -> PyramidErr
 
 #[test]
 fn truncated_empty_foreign_and_newer_files_are_refused() {
-    let dir = scratch_dir("file-refused");
+    let dir = fresh_dir("file-refused");
     let (_, path) =
         build_and_write(&random_grid(40, 40, 4), BuildOptions { node_size: 8, border: 1 }, &dir);
     let good = std::fs::read(&path).expect("read");
@@ -141,7 +140,7 @@ fn truncated_empty_foreign_and_newer_files_are_refused() {
 
 #[test]
 fn a_node_damaged_after_opening_is_refused_when_read() {
-    let dir = scratch_dir("file-damaged-later");
+    let dir = fresh_dir("file-damaged-later");
     let (_, path) =
         build_and_write(&random_grid(40, 40, 5), BuildOptions { node_size: 8, border: 1 }, &dir);
     let pyramid = Pyramid::open(&path).expect("open");
@@ -166,7 +165,7 @@ proptest! {
     /// CRC-32 catches every single-byte change, and every byte is covered.
     #[test]
     fn any_flipped_byte_is_refused_on_open(position in 0.0f64..1.0, flip in 1u8..=255) {
-        let dir = scratch_dir("file-flip");
+        let dir = fresh_dir("file-flip");
         let (_, path) = build_and_write(&random_grid(30, 20, 6), BuildOptions { node_size: 8, border: 2 }, &dir);
         let mut bytes = std::fs::read(&path).expect("read");
         let at = ((bytes.len() as f64 * position) as usize).min(bytes.len() - 1);
@@ -177,7 +176,7 @@ proptest! {
 
 #[test]
 fn every_header_byte_is_covered() {
-    let dir = scratch_dir("file-header-bytes");
+    let dir = fresh_dir("file-header-bytes");
     let (_, path) =
         build_and_write(&random_grid(30, 20, 7), BuildOptions { node_size: 8, border: 2 }, &dir);
     let good = std::fs::read(&path).expect("read");

@@ -2,14 +2,12 @@
 //! import` binary is killed while it writes its new file, and the old cache
 //! must still open, verify and hold exactly its old bytes.
 
-mod pyramid_common;
-
 use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use pyramid_common::scratch_dir;
 use ridgeline::pyramid::{Pyramid, FILE_NAME};
+use testkit::fresh_dir;
 
 fn import(size: u32, out: &Path) -> Command {
     let mut command = Command::new(env!("CARGO_BIN_EXE_ridgeline"));
@@ -41,7 +39,7 @@ impl Drop for KillOnDrop {
 
 #[test]
 fn killing_an_import_midway_keeps_the_previous_cache() {
-    let cache = scratch_dir("kill-import");
+    let cache = fresh_dir("kill-import");
     assert!(import(300, &cache).status().expect("run import").success());
     let old_bytes = std::fs::read(cache.join(FILE_NAME)).expect("old cache");
     let old_info = Pyramid::open(&cache).expect("old cache opens").info().clone();

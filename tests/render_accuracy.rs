@@ -5,15 +5,14 @@
 //! included), the measurement sees the error of coarse tiles, and the LOD
 //! and full-resolution images cover the same pixels.
 
-mod render_common;
-
 use std::sync::Arc;
 
-use render_common::{config, open, pyramid, VIEWS};
-use ridgeline::accuracy::{measure_flight, AccuracyRun};
 use ridgeline::camera::Camera;
+use ridgeline::display::measure::{measure_flight, AccuracyRun};
 use ridgeline::gl::{GlBackend, GlesVersion, TruthMesh, TruthPass, TruthRegion};
 use ridgeline::node::NodeSource;
+use testkit::builtin_pyramid;
+use testkit::render::{config, open, VIEWS};
 
 fn measure(tau_px: f64) -> AccuracyRun {
     let mut config = config(GlBackend::Egl, GlesVersion::Es3);
@@ -22,11 +21,11 @@ fn measure(tau_px: f64) -> AccuracyRun {
     // with 1 tile size, Ulrich's bound sets the rings.
     config.scene.lod.view_distance = 1.0;
     let mut display = open(&config).expect("headless EGL display");
-    let pyramid = pyramid();
+    let pyramid = builtin_pyramid();
     let layout = *pyramid.layout();
     let region = TruthRegion::covering_tiles(&layout, config.scene.lod.grid_size);
     let mesh = TruthMesh::load(pyramid.as_ref(), region).expect("truth mesh");
-    let truth = TruthPass::new(display.context().gl(), &mesh).expect("truth pass");
+    let truth = TruthPass::new(display.context.gl(), &mesh).expect("truth pass");
     let views: Vec<(f64, Camera)> =
         VIEWS.iter().enumerate().map(|(k, v)| (k as f64, v.camera())).collect();
     let source = Arc::clone(&pyramid);
@@ -67,7 +66,7 @@ fn measured_error_confirms_tau_and_grows_with_it() {
             );
         }
         assert!(run.worst.as_ref().is_some_and(
-            |w| w.heat_map.dimensions() == (render_common::SIZE.x, render_common::SIZE.y)
+            |w| w.heat_map.dimensions() == (testkit::render::SIZE.x, testkit::render::SIZE.y)
         ));
     }
     let [fine, medium, coarse] = [&runs[0], &runs[1], &runs[2]];

@@ -9,19 +9,17 @@
 //! (or uses a display that answers) and skips loudly without one unless
 //! RIDGELINE_REQUIRE_WINDOW=1.
 
-mod gl_common;
-mod render_common;
-
 use clap::ValueEnum;
-use gl_common::{child_test, run_child, take_turn, window_display};
 use image::RgbaImage;
-use render_common::compare::assert_similar;
-use render_common::{config, open, render, scratch_dir, View, SIZE, TOLERANCE, VIEWS};
 use ridgeline::gl::{GlBackend, GlesVersion, OpenedBackend};
 use std::path::PathBuf;
+use testkit::compare::assert_similar;
+use testkit::gl::{child_test, run_child, take_turn, window_display};
+use testkit::render::{config, open, render, View, SIZE, TOLERANCE, VIEWS};
+use testkit::target_tmp;
 
 fn child_png(tag: &str, view: &View) -> PathBuf {
-    scratch_dir().join(format!("render-{tag}-{}.png", view.name))
+    target_tmp().join(format!("render-{tag}-{}.png", view.name))
 }
 
 /// One run of [`child_render`].
@@ -58,7 +56,11 @@ impl ChildRender<'_> {
         };
         run_child(&mut command, self.tag);
         let mut egl = open(&config(GlBackend::Egl, GlesVersion::Es3)).expect("EGL display");
-        assert!(egl.info().version.starts_with("OpenGL ES 3"), "{}", egl.info().version);
+        assert!(
+            egl.context.info().version.starts_with("OpenGL ES 3"),
+            "{}",
+            egl.context.info().version
+        );
         for view in &VIEWS {
             let path = child_png(self.tag, view);
             let from_child: RgbaImage =
@@ -118,7 +120,7 @@ fn child_render() {
         .expect("a GLES version");
     let mut display = open(&config(backend, version))
         .unwrap_or_else(|e| panic!("{backend:?} {version:?} display: {e}"));
-    let info = display.info().clone();
+    let info = display.context.info().clone();
     println!("{tag}: {} on {} ({})", info.version, info.renderer, info.platform);
     assert_eq!(info.backend.name(), child_env("RIDGELINE_RENDER_EXPECT_BACKEND"));
     assert!(
@@ -127,13 +129,13 @@ fn child_render() {
         info.version
     );
     assert_eq!(info.caps.level, version);
-    assert_eq!(display.context_mut().size(), SIZE, "Xvfb has no window manager to change the size");
+    assert_eq!(display.context.size(), SIZE, "Xvfb has no window manager to change the size");
     for view in &VIEWS {
         let (image, _) = render(&mut display, &view.camera());
-        display.present().expect("present");
+        display.context.present().expect("present");
         let path = child_png(&tag, view);
         image.save(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     }
-    let events = display.context_mut().pump_events(Some(std::time::Duration::ZERO));
+    let events = display.context.pump_events(Some(std::time::Duration::ZERO));
     assert!(!events.close_requested);
 }

@@ -19,24 +19,21 @@
 //! metres: there a missing skirt or morph shows, at tau 1 px it stays under
 //! a pixel (see the negative tests).
 
-mod gl_common;
-mod render_common;
-
-use gl_common::take_turn;
 use image::{Rgba, RgbaImage};
-use render_common::compare::{difference_image, save_evidence, Difference};
-use render_common::coverage::terrain_guaranteed;
-use render_common::{
-    camera, config, drawn_tiles, ground, lod_changed, open, redraw, render, terrain_bounds,
-    SENTINEL, SENTINEL_RGBA, TOLERANCE,
-};
 use ridgeline::camera::Camera;
-use ridgeline::display::{Display, DisplayConfig};
+use ridgeline::display::{DisplayConfig, DisplayParts};
 use ridgeline::gl::{GlBackend, GlesVersion};
 use ridgeline::lod::TileKey;
 use ridgeline::render::DrawList;
 use ridgeline::scene::{ClipmapTerrain, Scene, TerrainSummary};
 use std::collections::BTreeSet;
+use testkit::compare::{difference_image, save_evidence, Difference};
+use testkit::coverage::terrain_guaranteed;
+use testkit::gl::take_turn;
+use testkit::render::{
+    camera, config, drawn_tiles, ground, lod_changed, open, redraw, render, terrain_bounds,
+    SENTINEL, SENTINEL_RGBA, TOLERANCE,
+};
 
 fn flying() -> DisplayConfig {
     config(GlBackend::Egl, GlesVersion::Es3)
@@ -98,7 +95,7 @@ struct Holes {
 /// with `alter` when given, and counts holes. Saves a frame with holes,
 /// marked in green, and returns its path with the counts.
 fn fly_counting_holes(
-    display: &mut Display,
+    display: &mut DisplayParts,
     name: &str,
     alter: Option<fn(&mut DrawList)>,
 ) -> (Vec<Holes>, BTreeSet<u8>, Option<String>) {
@@ -193,15 +190,16 @@ struct Selection {
 }
 
 impl Selection {
-    fn new(display: &Display, config: &DisplayConfig) -> Selection {
-        let summary = TerrainSummary::from_pyramid(render_common::pyramid().info());
-        let terrain = ClipmapTerrain { clipmap: display.clipmap(), summary: &summary };
+    fn new(display: &DisplayParts, config: &DisplayConfig) -> Selection {
+        let summary = TerrainSummary::from_pyramid(testkit::builtin_pyramid().info());
+        let terrain = ClipmapTerrain { clipmap: display.pipeline.clipmap(), summary: &summary };
         Selection { scene: Scene::new(config.scene, &terrain).expect("scene"), summary }
     }
 
-    fn tiles(&mut self, display: &mut Display, camera: &Camera) -> BTreeSet<TileKey> {
-        display.settle(camera, 1000).expect("settle");
-        let terrain = ClipmapTerrain { clipmap: display.clipmap(), summary: &self.summary };
+    fn tiles(&mut self, display: &mut DisplayParts, camera: &Camera) -> BTreeSet<TileKey> {
+        display.pipeline.settle(camera, 1000).expect("settle");
+        let terrain =
+            ClipmapTerrain { clipmap: display.pipeline.clipmap(), summary: &self.summary };
         self.scene.frame(camera, &terrain).expect("select");
         self.scene.draw_list().tiles.iter().map(|tile| tile.key).collect()
     }
@@ -222,7 +220,7 @@ const PIN_M: f64 = 0.01;
 /// where a tile splits or merges, each as two positions `PIN_M` apart with
 /// the switch between them.
 fn switches(
-    display: &mut Display,
+    display: &mut DisplayParts,
     selection: &mut Selection,
     length: f64,
     step: f64,
@@ -276,7 +274,7 @@ fn pops(config: &DisplayConfig, alter: Option<fn(&mut DrawList)>) -> Vec<Pop> {
     let mut display = open(config).expect("EGL display");
     let mut selection = Selection::new(&display, config);
     let found = switches(&mut display, &mut selection, SLOW_FLIGHT_M, SEARCH_STEP_M);
-    let picture = |display: &mut Display, s: f64| {
+    let picture = |display: &mut DisplayParts, s: f64| {
         let (image, _) = render(display, &slow_flight(s));
         let tiles = drawn_tiles(display);
         (alter.map_or(image, |alter| redraw(display, alter)), tiles)

@@ -11,17 +11,14 @@
 //! OSMesa skips loudly where libOSMesa is missing unless
 //! RIDGELINE_REQUIRE_OSMESA=1 (CI sets it).
 
-mod gl_common;
-mod render_common;
-
-use gl_common::{skip_for_missing_osmesa, take_turn};
 use image::RgbaImage;
-use render_common::compare::{assert_similar, check_similar, Difference};
-use render_common::{config, open, redraw, render, View, TOLERANCE, VIEWS};
 use ridgeline::display::DisplayError;
 use ridgeline::gl::{GlBackend, GlesVersion, OpenedBackend};
 use std::path::PathBuf;
 use std::sync::OnceLock;
+use testkit::compare::{assert_similar, check_similar, Difference};
+use testkit::gl::{skip_for_missing_osmesa, take_turn};
+use testkit::render::{config, open, redraw, render, View, TOLERANCE, VIEWS};
 
 fn golden_path(view: &View) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -30,7 +27,7 @@ fn golden_path(view: &View) -> PathBuf {
 }
 
 fn updating() -> bool {
-    gl_common::required("RIDGELINE_UPDATE_GOLDEN")
+    testkit::gl::required("RIDGELINE_UPDATE_GOLDEN")
 }
 
 /// The golden images in [`VIEWS`] order: read from tests/golden/, or, with
@@ -79,7 +76,7 @@ fn egl_renders_the_golden_views() {
     let _turn = take_turn();
     let goldens = goldens();
     let mut display = open(&config(GlBackend::Egl, GlesVersion::Es3)).expect("EGL display");
-    assert_eq!(display.info().backend, OpenedBackend::Egl);
+    assert_eq!(display.context.info().backend, OpenedBackend::Egl);
     for (view, golden) in VIEWS.iter().zip(goldens) {
         let (image, stats) = render(&mut display, &view.camera());
         assert!(stats.scene.tiles > 50, "{}: only {} tiles drawn", view.name, stats.scene.tiles);
@@ -104,11 +101,11 @@ fn osmesa_renders_the_golden_views_and_matches_egl() {
         }
         other => other.expect("OSMesa display"),
     };
-    assert_eq!(osmesa.info().backend, OpenedBackend::OsMesa);
+    assert_eq!(osmesa.context.info().backend, OpenedBackend::OsMesa);
     assert!(
-        !osmesa.info().is_es(),
+        !osmesa.context.info().is_es(),
         "OSMesa runs the ES shaders on desktop GL: {}",
-        osmesa.info().version
+        osmesa.context.info().version
     );
     let mut egl = open(&config(GlBackend::Egl, GlesVersion::Es3)).expect("EGL display");
     for (view, golden) in VIEWS.iter().zip(goldens) {
@@ -146,7 +143,7 @@ fn the_tolerance_rejects_a_moved_camera_a_coarser_tau_a_missing_tile_and_wrong_c
     let mut banded = config(GlBackend::Egl, GlesVersion::Es3);
     let banded_caution_m = 1000.0;
     banded.scene.caution_below_m = banded_caution_m as f32;
-    let highest_m = render_common::pyramid().info().stats.height_max as f64;
+    let highest_m = testkit::builtin_pyramid().info().stats.height_max as f64;
     let mut banded = open(&banded).expect("EGL display, caution band 1000 m");
     for (view, golden) in VIEWS.iter().zip(goldens) {
         let mut moved = view.camera();
@@ -194,15 +191,13 @@ fn a_mismatch_names_and_keeps_the_images() {
     let problem = check_similar("self-test-spot", &grey, &spotted, &TOLERANCE)
         .expect_err("a spot on 1 of 32 pixels passed");
     for kind in ["expected", "actual", "diff"] {
-        let path =
-            render_common::scratch_dir().join(format!("render-failures/self-test-spot-{kind}.png"));
+        let path = testkit::target_tmp().join(format!("render-failures/self-test-spot-{kind}.png"));
         assert!(problem.contains(&path.display().to_string()), "{problem}");
         assert_eq!(image::open(&path).expect("evidence saved").to_rgba8().dimensions(), (8, 4));
     }
-    let diff =
-        image::open(render_common::scratch_dir().join("render-failures/self-test-spot-diff.png"))
-            .unwrap()
-            .to_rgba8();
+    let diff = image::open(testkit::target_tmp().join("render-failures/self-test-spot-diff.png"))
+        .unwrap()
+        .to_rgba8();
     assert_eq!(diff.get_pixel(3, 2).0, [255, 0, 0, 255], "the differing pixel is marked red");
     assert_eq!(check_similar("self-test-same", &grey, &grey, &TOLERANCE).map(|d| d.largest), Ok(0));
 }
@@ -210,15 +205,18 @@ fn a_mismatch_names_and_keeps_the_images() {
 /// Index in the last draw list of the tile under the middle of the picture:
 /// the one holding the first point where the camera's forward ray meets the
 /// terrain (marched in 10 m steps over the exact heights).
-fn centre_tile(display: &ridgeline::display::Display, camera: &ridgeline::camera::Camera) -> usize {
+fn centre_tile(
+    display: &ridgeline::display::DisplayParts,
+    camera: &ridgeline::camera::Camera,
+) -> usize {
     let forward = camera.forward();
     let hit = (1..20_000)
         .map(|step| camera.position + forward * (10.0 * step as f64))
-        .find(|p| p.z <= render_common::ground(p.x, p.y))
+        .find(|p| p.z <= testkit::render::ground(p.x, p.y))
         .expect("the forward ray meets the terrain");
     let relative = (hit - camera.position).truncate().as_vec2();
-    let side = display.scene().config().lod.grid_size as f32;
-    let list = display.scene().draw_list();
+    let side = display.pipeline.scene().config().lod.grid_size as f32;
+    let list = display.pipeline.scene().draw_list();
     // Tile corners are relative to the camera.
     let posts = list.frame.expect("a drawn frame").posts;
     list.tiles

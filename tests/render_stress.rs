@@ -21,17 +21,11 @@
 //!
 //! EGL is mandatory, as for the other render tests: a missing context fails.
 
-mod gl_common;
-mod render_common;
-
-use gl_common::{child_test, run_child, take_turn};
 use glam::{DVec3, UVec2};
 use image::RgbaImage;
-use render_common::compare::{difference_image, save_evidence};
-use render_common::{redraw, render};
 use ridgeline::camera::Camera;
 use ridgeline::clipmap::LoaderMode;
-use ridgeline::display::{Display, DisplayConfig};
+use ridgeline::display::{DisplayConfig, DisplayParts};
 use ridgeline::gl::GlBackend;
 use ridgeline::lod::TileKey;
 use ridgeline::node::NodeSource;
@@ -43,6 +37,9 @@ use ridgeline::tiles::TileVertex;
 use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;
 use std::time::Instant;
+use testkit::compare::{difference_image, save_evidence};
+use testkit::gl::{child_test, run_child, take_turn};
+use testkit::render::{redraw, render};
 
 /// The earth of [`EarthParams::earth`] (2^24 posts of 2.4 m, 40 000 km a
 /// side, nodes of 64 cells) with posts `2^thin` times as far apart, and two
@@ -69,9 +66,9 @@ fn summary(earth: &ProceduralEarth) -> TerrainSummary {
     }
 }
 
-fn open(config: &DisplayConfig, earth: Arc<ProceduralEarth>) -> Display {
+fn open(config: &DisplayConfig, earth: Arc<ProceduralEarth>) -> DisplayParts {
     let summary = summary(&earth);
-    Display::new(config, earth, summary).expect("EGL display")
+    DisplayParts::open(config, earth, summary).expect("EGL display")
 }
 
 // ---------------------------------------------------------------- earth scale
@@ -148,9 +145,9 @@ struct Drawn {
 }
 
 /// The draws of the display's last frame, keyed by tile.
-fn drawn(display: &Display, list: &DrawList) -> BTreeMap<TileKey, Drawn> {
-    let (staging, _) = display.scene().uploads();
-    let count = vertex_count(display.scene().config().lod.grid_size);
+fn drawn(display: &DisplayParts, list: &DrawList) -> BTreeMap<TileKey, Drawn> {
+    let (staging, _) = display.pipeline.scene().uploads();
+    let count = vertex_count(display.pipeline.scene().config().lod.grid_size);
     let size = std::mem::size_of::<TileVertex>();
     list.tiles
         .iter()
@@ -316,7 +313,11 @@ struct BothPlaces {
     fault_image: RgbaImage,
 }
 
-fn draw_at_both_places(far: &mut Display, near: &mut Display, near_camera: &Camera) -> BothPlaces {
+fn draw_at_both_places(
+    far: &mut DisplayParts,
+    near: &mut DisplayParts,
+    near_camera: &Camera,
+) -> BothPlaces {
     let grid = earth_config().scene.lod.grid_size;
     let shift_m = SHIFT_POSTS as f64 * earth_params(EARTH_THIN).spacing_m;
     let far_camera = Camera {
@@ -330,8 +331,8 @@ fn draw_at_both_places(far: &mut Display, near: &mut Display, near_camera: &Came
         0,
         "the GPU buffer was full"
     );
-    let far_list = far.scene().draw_list().clone();
-    let near_tiles = drawn(near, near.scene().draw_list());
+    let far_list = far.pipeline.scene().draw_list().clone();
+    let near_tiles = drawn(near, near.pipeline.scene().draw_list());
     let positions = agreement(
         &drawn(far, &far_list),
         far_camera.position,
@@ -488,12 +489,13 @@ impl Lap {
     }
 
     /// Settles at the start pose, draws it and records the end of the lap.
-    fn end(&mut self, display: &mut Display, start: &Camera, started: Instant) {
+    fn end(&mut self, display: &mut DisplayParts, start: &Camera, started: Instant) {
         let (image, stats) = render(display, start);
-        let atlas = display.clipmap().atlas();
+        let atlas = display.pipeline.clipmap().atlas();
         self.used_bytes = stats.scene.allocator_used_bytes;
         self.workspace_bytes = stats.scene.allocator_workspace_bytes;
-        self.tiles = display.scene().draw_list().tiles.iter().map(|tile| tile.key).collect();
+        self.tiles =
+            display.pipeline.scene().draw_list().tiles.iter().map(|tile| tile.key).collect();
         self.image = image;
         self.resident_bytes = resident_bytes();
         self.atlas_full = atlas.resident_count() == atlas.slot_count();
@@ -501,7 +503,7 @@ impl Lap {
     }
 }
 
-fn fly_the_circuit(display: &mut Display, earth: &ProceduralEarth) -> Vec<Lap> {
+fn fly_the_circuit(display: &mut DisplayParts, earth: &ProceduralEarth) -> Vec<Lap> {
     let mut laps = Vec::with_capacity(LAPS);
     for _ in 0..LAPS {
         let (started, mut lap) = (Instant::now(), Lap::default());

@@ -3,11 +3,8 @@
 //! draw list all reuse buffers sized at start. One test in this binary, since
 //! the counter sees the whole process.
 
-mod alloc_counter;
-mod scene_common;
-
 use ridgeline::scene::{Scene, SceneConfig};
-use scene_common::{camera, terrain};
+use testkit::scene::{camera, terrain};
 
 #[test]
 fn steady_state_frames_allocate_nothing() {
@@ -20,19 +17,19 @@ fn steady_state_frames_allocate_nothing() {
     for k in 0..40 {
         scene.frame(&path(k), terrain).unwrap();
     }
-    let before = alloc_counter::allocations();
+    let before = testkit::alloc::allocations();
     let mut generated = 0;
     for k in 40..120 {
         generated += scene.frame(&path(k), terrain).unwrap().generated;
     }
-    let moving = alloc_counter::allocations() - before;
+    let moving = testkit::alloc::allocations() - before;
     let still = path(120);
     scene.frame(&still, terrain).unwrap();
-    let before = alloc_counter::allocations();
+    let before = testkit::alloc::allocations();
     for _ in 0..20 {
         scene.frame(&still, terrain).unwrap();
     }
-    let resting = alloc_counter::allocations() - before;
+    let resting = testkit::alloc::allocations() - before;
     assert!(generated > 0, "the flight made new tiles");
     assert_eq!((moving, resting), (0, 0), "allocations in 80 moving and 20 still frames");
 }

@@ -2,10 +2,8 @@
 //! wherever two selected tiles share an edge, the heights the shader will draw
 //! there (vertex data plus the per-vertex morph of src/lod/morph.rs) agree.
 
-mod scene_common;
-
 use ridgeline::scene::{Scene, SceneConfig};
-use scene_common::{camera, edge_heights, terrain};
+use testkit::scene::{camera, edge_heights, terrain};
 
 #[test]
 fn shared_edges_agree_along_a_low_flight() {

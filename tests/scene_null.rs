@@ -3,54 +3,65 @@
 //! is one draw call, and a buffer too small for the view coarsens the tiles
 //! instead of failing or leaving holes.
 
-mod scene_common;
-
-use ridgeline::render::{NullBackend, RenderBackend};
+use ridgeline::render::{
+    CostModel, DrawList, FrameOutput, NullBackend, RenderBackend, RenderError, Slice,
+};
 use ridgeline::scene::{Scene, SceneConfig};
-use scene_common::{camera, terrain};
+use testkit::scene::{camera, fly, null_backend, pipeline, terrain};
 
-fn run_frame(
-    scene: &mut Scene,
-    backend: &mut NullBackend,
-    cam: &ridgeline::camera::Camera,
-) -> ridgeline::scene::FrameReport {
-    let report = scene.frame(cam, terrain()).unwrap();
-    let (staging, ranges) = scene.uploads();
-    backend.upload(staging, ranges).unwrap();
-    backend.draw(scene.draw_list()).unwrap();
-    report
-}
-
+/// A scripted flight through the whole pipeline (clipmap paging included)
+/// on the null backend.
 #[test]
 fn scripted_flight_counts_and_a_still_camera_uploads_nothing() {
     let config = SceneConfig { transfer_cap: None, ..SceneConfig::default() };
-    let mut scene = Scene::new(config, terrain()).unwrap();
-    let mut backend = NullBackend::new(config.buffer_bytes);
+    let mut pipeline = pipeline(config);
+    let mut backend = null_backend(&config);
     let mut uploaded = 0;
     for k in 0..20 {
         let cam = camera(10_000.0 + 1_500.0 * k as f64, 20_000.0, 3_500.0, 60.0, -6.0);
-        let report = run_frame(&mut scene, &mut backend, &cam);
-        let counts = backend.take();
-        assert_eq!(counts.draw_calls as usize, report.tiles, "one draw call per tile");
-        assert_eq!(counts.bytes_uploaded, report.bytes_uploaded);
-        assert!(counts.upload_calls as usize <= 1, "one transfer per frame without a cap");
-        assert_eq!(counts.triangles, report.triangles);
-        uploaded += counts.bytes_uploaded;
+        let stats = fly(&mut pipeline, &mut backend, &cam).unwrap();
+        let (calls, scene) = (stats.calls, stats.scene);
+        let slices = if pipeline.draw_list().frame.unwrap().slices.far.is_some() { 2 } else { 1 };
+        let tiles: usize = [Slice::Near, Slice::Far]
+            .iter()
+            .map(|&slice| pipeline.draw_list().tiles_in(slice).count())
+            .sum();
+        assert!(tiles >= scene.tiles && tiles <= slices * scene.tiles);
+        assert_eq!(calls.draw_calls as usize, tiles + 1, "a draw per tile and slice, and the sky");
+        assert_eq!(calls.bytes_uploaded, scene.bytes_uploaded);
+        assert!(calls.upload_calls as usize <= 1, "one transfer per frame without a cap");
+        assert_eq!(calls.frames, 1);
+        uploaded += calls.bytes_uploaded;
     }
     assert!(uploaded > 0, "moving uploads new tiles");
     let still = camera(40_000.0, 20_000.0, 3_500.0, 60.0, -6.0);
-    run_frame(&mut scene, &mut backend, &still);
-    backend.take();
+    fly(&mut pipeline, &mut backend, &still).unwrap();
     for _ in 0..5 {
-        let report = run_frame(&mut scene, &mut backend, &still);
-        let counts = backend.take();
+        let stats = fly(&mut pipeline, &mut backend, &still).unwrap();
+        let calls = stats.calls;
         assert_eq!(
-            (counts.bytes_uploaded, counts.upload_calls, report.generated),
-            (0, 0, 0),
-            "a still camera uploads nothing"
+            (calls.bytes_uploaded, calls.upload_calls, stats.scene.generated, stats.nodes_loaded),
+            (0, 0, 0, 0),
+            "a still camera pages and uploads nothing"
         );
-        assert!(counts.draw_calls > 0);
+        assert!(calls.draw_calls > 1);
     }
+}
+
+/// The null backend refuses an upload past its buffer with the error the
+/// GL backend gives.
+#[test]
+fn an_upload_past_the_buffer_is_refused() {
+    let mut backend = NullBackend::new(64, CostModel { vertex_arrays: true, sky: true });
+    let staging = [0u8; 128];
+    let list = DrawList::default();
+    let dirty = std::slice::from_ref(&(32..96));
+    let frame = FrameOutput { list: &list, staging: &staging, dirty };
+    let error = backend.render(&frame).unwrap_err();
+    assert_eq!(
+        error,
+        RenderError::UploadPastBuffer { start: 32, end: 96, capacity: 64, staging: 128 }
+    );
 }
 
 #[test]
@@ -95,14 +106,16 @@ fn a_small_buffer_coarsens_instead_of_failing() {
 fn the_near_plane_follows_the_nearest_tile() {
     let terrain = terrain();
     let mut scene = Scene::new(SceneConfig::default(), terrain).expect("scene");
-    let near = |scene: &Scene, cam: &ridgeline::camera::Camera| {
-        let m = scene.frame_uniforms(cam, terrain).view_projection.to_cols_array();
+    let near = |scene: &mut Scene, cam: &ridgeline::camera::Camera| {
+        scene.frame(cam, terrain).expect("frame");
+        let frame = scene.draw_list().frame.expect("frame uniforms");
+        let m = frame.view_projection.to_cols_array();
         // Perspective: near = m[14] / (m[10] - 1) for glam's right-handed GL projection.
         let (c, d) = (m[10] as f64, m[14] as f64);
         d / (c - 1.0)
     };
     // The lowest ground on a 5 km lattice, away from the data's edges.
-    let pyramid = scene_common::pyramid();
+    let pyramid = testkit::builtin_pyramid();
     let lattice =
         (2..14).flat_map(|i| (2..18).map(move |j| (i as f64 * 5000.0, j as f64 * 5000.0)));
     let height = |&(x, y): &(f64, f64)| pyramid.exact_height(x, y).expect("inside the data") as f64;
@@ -111,11 +124,9 @@ fn the_near_plane_follows_the_nearest_tile() {
     let summit = pyramid.info().stats.height_max as f64;
     let high = camera(x, y, ground + 1000.0, 0.0, -5.0);
     assert!(high.position.z < summit, "the view is below the highest summit ({summit} m)");
-    scene.frame(&high, terrain).expect("frame");
-    let high_near = near(&scene, &high);
+    let high_near = near(&mut scene, &high);
     let low = camera(x, y, ground + 20.0, 0.0, -5.0);
-    scene.frame(&low, terrain).expect("frame");
-    let low_near = near(&scene, &low);
+    let low_near = near(&mut scene, &low);
     println!(
         "near plane {high_near:.1} m at {:.0} m above the ground, {low_near:.2} m at 20 m",
         high.position.z - ground

@@ -4,15 +4,20 @@
 //! refused with a clear error or produce a valid draw list (tiles inside the
 //! data, finite uniforms, nothing allocated past the buffer).
 
-mod scene_common;
-
 use ridgeline::camera::CameraError;
-use ridgeline::scene::{Scene, SceneConfig, SceneError};
-use scene_common::{camera, terrain};
+use ridgeline::pipeline::{FrameError, FramePipeline, PipelineError};
+use ridgeline::render::{NullBackend, RenderError};
+use ridgeline::scene::{SceneConfig, SceneError};
+use testkit::scene::{camera, fly, null_backend, pipeline};
 
-fn check_frame(scene: &mut Scene, cam: &ridgeline::camera::Camera) -> usize {
-    let report = scene.frame(cam, terrain()).unwrap_or_else(|e| panic!("{cam:?}: {e}"));
-    let list = scene.draw_list();
+/// Runs one frame of the whole pipeline, clipmap included.
+fn check_frame(
+    (pipeline, backend): &mut (FramePipeline, NullBackend),
+    cam: &ridgeline::camera::Camera,
+) -> usize {
+    let stats = fly(pipeline, backend, cam).unwrap_or_else(|e| panic!("{cam:?}: {e}"));
+    let report = stats.scene;
+    let list = pipeline.draw_list();
     let frame = list.frame.expect("frame uniforms");
     assert!(frame.view_projection.is_finite(), "{cam:?}: projection not finite");
     for tile in &list.tiles {
@@ -30,13 +35,13 @@ fn check_frame(scene: &mut Scene, cam: &ridgeline::camera::Camera) -> usize {
             tile.key
         );
     }
-    assert!(report.allocator_used_bytes <= scene.config().buffer_bytes as u64);
+    assert!(report.allocator_used_bytes <= pipeline.scene().config().buffer_bytes as u64);
     report.tiles
 }
 
 #[test]
 fn extreme_attitudes_and_positions_draw_or_refuse_cleanly() {
-    let mut scene = Scene::new(SceneConfig::default(), terrain()).unwrap();
+    let mut scene = display_pipeline();
     let centre = (35_000.0, 45_000.0);
     let cases = [
         ("looking straight down", camera(centre.0, centre.1, 5_000.0, 0.0, -90.0)),
@@ -67,7 +72,7 @@ fn extreme_attitudes_and_positions_draw_or_refuse_cleanly() {
 
 #[test]
 fn numbers_that_are_not_numbers_are_refused() {
-    let mut scene = Scene::new(SceneConfig::default(), terrain()).unwrap();
+    let mut scene = display_pipeline();
     for (field, value) in [
         ("x", f64::NAN),
         ("altitude", f64::INFINITY),
@@ -81,7 +86,7 @@ fn numbers_that_are_not_numbers_are_refused() {
             "heading" => cam.heading_deg = value,
             _ => cam.pitch_deg = value,
         }
-        match scene.frame(&cam, terrain()) {
+        match frame(&mut scene, &cam) {
             Err(SceneError::Camera(CameraError::NotFinite { field: named, .. })) => {
                 assert_eq!(named, field)
             }
@@ -91,13 +96,32 @@ fn numbers_that_are_not_numbers_are_refused() {
     let mut cam = camera(30_000.0, 30_000.0, 3_000.0, 0.0, 0.0);
     cam.fov_x_deg = 0.0;
     assert!(matches!(
-        scene.frame(&cam, terrain()),
+        frame(&mut scene, &cam),
         Err(SceneError::Camera(CameraError::FieldOfView(_)))
     ));
     cam.fov_x_deg = 60.0;
     cam.viewport = [0, 100];
     assert!(matches!(
-        scene.frame(&cam, terrain()),
+        frame(&mut scene, &cam),
         Err(SceneError::Camera(CameraError::EmptyViewport(0, 100)))
     ));
+}
+
+/// The pipeline over the built-in terrain and its null backend.
+fn display_pipeline() -> (FramePipeline, NullBackend) {
+    let config = SceneConfig::default();
+    (pipeline(config), null_backend(&config))
+}
+
+/// A frame that must be refused by the scene (the camera), not elsewhere.
+fn frame(
+    (pipeline, backend): &mut (FramePipeline, NullBackend),
+    cam: &ridgeline::camera::Camera,
+) -> Result<(), SceneError> {
+    match fly(pipeline, backend, cam) {
+        Ok(_) => Ok(()),
+        Err(FrameError::Pipeline(PipelineError::Scene(error))) => Err(error),
+        Err(FrameError::Pipeline(other)) => panic!("{cam:?}: refused by paging: {other}"),
+        Err(FrameError::Backend(error)) => panic!("{cam:?}: backend: {}", error as RenderError),
+    }
 }

@@ -26,18 +26,15 @@
 //! | `pixel_error` | [`measure_view`]: per-pixel error and coverage of one view |
 //! | `summary` | [`ErrorSummary`]: percentiles over all views |
 //! | `heat_map` | the error image of a view as colours |
-//! | `run` | [`measure_flight`]: drives a [`crate::display::Display`] and a truth pass over views |
 
 mod heat_map;
 mod lod_surface;
 mod pixel_error;
 mod positions;
-mod run;
 mod summary;
 
 pub use heat_map::{heat_map, HEAT_MISMATCH, HEAT_SKY};
 pub use lod_surface::LodSurface;
-pub use pixel_error::{measure_view, ViewErrors, ViewGeometry};
+pub use pixel_error::{measure_view, ExactHeight, ViewErrors, ViewGeometry};
 pub use positions::PositionImage;
-pub use run::{measure_flight, AccuracyRun, ViewRow, WorstView};
 pub use summary::{percentile, ErrorSummary};

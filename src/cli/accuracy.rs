@@ -9,10 +9,10 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use anyhow::{bail, Context, Result};
-use ridgeline::accuracy::{measure_flight, AccuracyRun};
 use ridgeline::camera::Camera;
 use ridgeline::dataset;
-use ridgeline::display::{Display, DisplayConfig};
+use ridgeline::display::measure::{measure_flight, AccuracyRun};
+use ridgeline::display::{DisplayConfig, DisplayParts};
 use ridgeline::gl::{GlBackend, TruthMesh, TruthPass, TruthRegion};
 use ridgeline::node::NodeSource;
 use ridgeline::scene::TerrainSummary;
@@ -53,12 +53,12 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
     config.scene.lod.tau_px = args.view.tau;
     config.fov_x_deg = args.view.fov;
     let grid_size = config.scene.lod.grid_size;
-    let mut display = Display::new(&config, Arc::clone(&source), summary)
+    let mut display = DisplayParts::open(&config, Arc::clone(&source), summary)
         .context("opening a headless display")?;
     let region = TruthRegion::covering_tiles(&layout, grid_size);
     let mesh = TruthMesh::load(source.as_ref(), region)
         .with_context(|| format!("{dataset_name}: the full-resolution mesh"))?;
-    let truth = TruthPass::new(display.context().gl(), &mesh)
+    let truth = TruthPass::new(display.context.gl(), &mesh)
         .context("uploading the full-resolution mesh")?;
     let views: Vec<(f64, Camera)> = path
         .frame_times(args.views.max(1))
@@ -67,7 +67,7 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
     let exact = |x: f64, y: f64| pyramid.exact_height(x, y);
     let run = measure_flight(&mut display, &truth, &exact, layout.spacing_m, &views)
         .context("measuring the views")?;
-    let info = display.info();
+    let info = display.context.info();
     let report = json!({
         "dataset": dataset_name,
         "backend": info.backend.name(),
@@ -122,7 +122,7 @@ fn headless(backend: GlBackend) -> GlBackend {
     }
 }
 
-fn mean(run: &AccuracyRun, f: impl Fn(&ridgeline::accuracy::ViewRow) -> f64) -> f64 {
+fn mean(run: &AccuracyRun, f: impl Fn(&ridgeline::display::measure::ViewRow) -> f64) -> f64 {
     run.views.iter().map(f).sum::<f64>() / run.views.len().max(1) as f64
 }
 

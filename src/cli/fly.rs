@@ -9,10 +9,11 @@ use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
 use ridgeline::dataset;
-use ridgeline::display::{Display, DisplayConfig, FrameStats};
+use ridgeline::display::{Display, DisplayConfig};
 use ridgeline::flight::FlightPath;
 use ridgeline::gl::{GlBackend, GlesVersion, OpenedBackend};
 use ridgeline::node::NodeSource;
+use ridgeline::pipeline::FrameStats;
 use ridgeline::scene::TerrainSummary;
 use serde_json::json;
 
@@ -145,7 +146,7 @@ fn fly_window(args: &FlyArgs, display: &mut Display, path: &FlightPath) -> Resul
         let stats = display.frame(&camera)?;
         display.present()?;
         rows.push(Row { frame: rows.len() as u32, t, stats });
-        if display.context_mut().pump_events(Some(Duration::ZERO)).close_requested {
+        if display.pump_events(Some(Duration::ZERO)).close_requested {
             break;
         }
     }
@@ -168,6 +169,8 @@ fn write_stats(
                 "tiles": s.scene.tiles,
                 "triangles": s.scene.triangles,
                 "draw_calls": s.draw_calls,
+                "attribute_pointer_changes": s.calls.attribute_pointer_changes,
+                "calls": s.calls,
                 "bytes_uploaded": s.scene.bytes_uploaded,
                 "transfers": s.scene.transfers,
                 "tiles_generated": s.scene.generated,
@@ -242,6 +245,13 @@ fn print_summary(rows: &[Row]) -> Result<()> {
         mean(&|s| s.scene.tiles as f64),
         mean(&|s| s.scene.triangles as f64),
         mean(&|s| s.draw_calls as f64)
+    )?;
+    writeln!(
+        out,
+        "  GL calls          mean {:.0} a frame ({:.0} attribute pointer changes, {:.0} uniform writes)",
+        mean(&|s| s.calls.calls() as f64),
+        mean(&|s| s.calls.attribute_pointer_changes as f64),
+        mean(&|s| s.calls.uniform_writes as f64)
     )?;
     writeln!(
         out,

@@ -13,9 +13,10 @@ use std::rc::Rc;
 use super::error::GlError;
 use super::handle::Gl;
 use super::objects::{Buffer, BufferTarget, BufferUsage};
+use super::renderer::GlRenderer;
 use super::terrain_pass::{TerrainOutput, TerrainPass, TileVertices};
 use crate::lod::TileKey;
-use crate::render::DrawList;
+use crate::render::{check_uploads, CallStats, DrawList, FrameOutput, RenderBackend};
 use crate::tiles::vertex::tile_bytes;
 
 /// What one baseline frame transferred.
@@ -33,10 +34,14 @@ pub struct BaselineFrameStats {
 /// renderer would upload) tell which existing buffers to rewrite.
 pub struct ChunkedBaseline {
     gl: Rc<Gl>,
+    /// Clear and sky, as the display draws them.
+    background: GlRenderer,
     pass: TerrainPass,
     buffers: HashMap<(TileKey, u32), Buffer>,
     wanted: HashSet<(TileKey, u32)>,
     tile_bytes: usize,
+    /// What the last frame transferred.
+    last: BaselineFrameStats,
 }
 
 impl ChunkedBaseline {
@@ -44,19 +49,26 @@ impl ChunkedBaseline {
         let tile_bytes = tile_bytes(grid_size);
         Ok(ChunkedBaseline {
             gl: Rc::clone(gl),
+            background: GlRenderer::new(gl, grid_size, tile_bytes)?,
             // The pass's own height buffer is unused: one tile's worth.
             pass: TerrainPass::new(gl, grid_size, tile_bytes)?,
             buffers: HashMap::new(),
             wanted: HashSet::new(),
             tile_bytes: tile_bytes as usize,
+            last: BaselineFrameStats::default(),
         })
+    }
+
+    /// What the last frame transferred.
+    pub fn last_frame(&self) -> BaselineFrameStats {
+        self.last
     }
 
     /// Uploads, each by itself, the tiles of `list` that have no buffer yet
     /// or whose bytes lie in the frame's `dirty` ranges of `staging` (the
     /// scene's staging copy); frees the buffers of tiles no longer drawn; and
     /// draws the tiles into the bound target (not cleared).
-    pub fn frame(
+    fn tiles(
         &mut self,
         list: &DrawList,
         staging: &[u8],
@@ -75,7 +87,7 @@ impl ChunkedBaseline {
             }
             let bytes = &staging[start as usize..end as usize];
             match self.buffers.get(&key) {
-                Some(buffer) => buffer.upload_range(0, bytes)?,
+                Some(buffer) => self.upload(buffer, bytes)?,
                 None => {
                     let buffer = Buffer::new(
                         &self.gl,
@@ -83,7 +95,7 @@ impl ChunkedBaseline {
                         self.tile_bytes,
                         BufferUsage::Static,
                     )?;
-                    buffer.upload_range(0, bytes)?;
+                    self.upload(&buffer, bytes)?;
                     self.buffers.insert(key, buffer);
                 }
             }
@@ -96,5 +108,42 @@ impl ChunkedBaseline {
         self.pass.draw_from(list, TerrainOutput::Colour, TileVertices::PerTile(&buffer_of))?;
         stats.buffers = self.buffers.len();
         Ok(stats)
+    }
+}
+
+impl ChunkedBaseline {
+    /// One tile's bytes into its own buffer (counted as the GL calls it
+    /// makes: an unbound vertex array, a bind, a glBufferSubData).
+    fn upload(&self, buffer: &Buffer, bytes: &[u8]) -> Result<(), GlError> {
+        buffer.upload_range(0, bytes)?;
+        let vertex_arrays = self.gl.caps().vertex_array_objects as u64;
+        self.gl.tally(|c| {
+            c.vertex_array_binds += vertex_arrays;
+            c.buffer_binds += 1;
+            c.upload_calls += 1;
+            c.bytes_uploaded += bytes.len() as u64;
+        });
+        Ok(())
+    }
+}
+
+impl RenderBackend for ChunkedBaseline {
+    type Error = GlError;
+
+    fn render(&mut self, frame: &FrameOutput<'_>) -> Result<(), GlError> {
+        check_uploads(frame.staging, frame.staging.len() as u32, frame.dirty)?;
+        let Some(uniforms) = frame.list.frame else { return Ok(()) };
+        self.gl.tally(|c| c.frames += 1);
+        self.background.draw_background(&uniforms)?;
+        self.last = self.tiles(frame.list, frame.staging, frame.dirty)?;
+        Ok(())
+    }
+
+    fn finish(&mut self) {
+        self.background.finish();
+    }
+
+    fn take_calls(&mut self) -> CallStats {
+        self.gl.take_calls()
     }
 }

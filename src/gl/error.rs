@@ -57,4 +57,8 @@ pub enum GlError {
     /// (zero or oversized dimensions, a range past a buffer's end).
     #[error("invalid request: {0}")]
     InvalidRequest(String),
+
+    /// A request every backend refuses alike (an upload past the buffer).
+    #[error(transparent)]
+    Render(#[from] crate::render::RenderError),
 }

@@ -12,6 +12,7 @@
 //! | `handle` | [`Gl`]: the shared function table and the context's liveness |
 //! | `objects` | owner types: [`Buffer`], [`Shader`], [`Program`], [`Renderbuffer`], [`Framebuffer`], [`VertexArray`] |
 //! | `offscreen` | [`OffscreenTarget`] and pixel read-back |
+//! | `calls` | `Calls`: every call of the display's passes, counted by kind as it is made |
 //! | `check` | [`gl_check!`](crate::gl_check) |
 //! | `smoke` | [`SmokePass`]: clear and one triangle, proving a context draws |
 //! | `terrain_pass`, `sky_pass` | the terrain tiles (heights as attributes, transforms as uniforms) and the sky |
@@ -21,6 +22,7 @@
 //!
 //! unsafe here is allowed per item, each block with a `// SAFETY:` comment.
 
+mod calls;
 mod caps;
 pub mod check;
 mod chunked_baseline;
@@ -47,7 +49,6 @@ pub use handle::Gl;
 pub use objects::{
     Buffer, BufferTarget, BufferUsage, Framebuffer, Program, Renderbuffer, Shader, VertexArray,
 };
-pub(crate) use offscreen::read_positions;
 pub use offscreen::OffscreenTarget;
 pub use renderer::GlRenderer;
 pub use smoke::{SmokePass, SMOKE_TRIANGLE};

@@ -11,6 +11,7 @@ use image::RgbaImage;
 use super::error::GlError;
 use super::handle::Gl;
 use super::objects::{Framebuffer, Renderbuffer};
+use crate::accuracy::PositionImage;
 use crate::gl_check;
 
 /// Colour and depth storage of one size, drawn to by headless contexts.
@@ -72,6 +73,16 @@ impl OffscreenTarget {
     /// The colour and depth formats actually allocated.
     pub fn formats(&self) -> (u32, u32) {
         (self.colour.internal_format(), self.depth.internal_format())
+    }
+}
+
+impl OffscreenTarget {
+    /// Reads this RGBA32F target (see [`Self::positions`]) into `out`, then
+    /// leaves it bound.
+    pub fn read_positions(&self, out: &mut PositionImage) -> Result<(), GlError> {
+        self.bind();
+        out.size = self.size();
+        read_positions(self.framebuffer.gl(), out.size, &mut out.texels)
     }
 }
 

@@ -1,18 +1,37 @@
-//! [`GlRenderer`]: the GL implementation of [`RenderBackend`]: clears, draws
-//! the sky, then the terrain tiles, and uploads the frame's dirty ranges;
-//! and, for the accuracy tool, draws the same tiles as positions.
+//! [`GlRenderer`]: the GL implementation of [`RenderBackend`]: uploads the
+//! frame's dirty ranges, clears, draws the sky, then the terrain tiles. The
+//! accuracy tool's passes reuse its parts: the same tiles drawn as
+//! positions, and the clear and sky under the truth.
+//!
+//! Every call goes through [`Calls`], so [`RenderBackend::take_calls`]
+//! reports what the driver was asked to do.
+//!
+//! **Embedding.** A frame draws into whatever framebuffer is bound, over the
+//! viewport of the frame's camera, and sets every piece of state it relies
+//! on. It leaves behind (`examples/embed.rs` checks each):
+//! - the viewport of the frame; depth test on with `GL_LESS`, depth and
+//!   colour writes on; back faces culled, counter-clockwise front faces;
+//!   blending and the scissor test off; all other state (stencil, dithering,
+//!   polygon offset, pixel storage) as the caller left it;
+//! - the terrain program in use, `GL_ARRAY_BUFFER` bound to the height
+//!   buffer, every vertex attribute array disabled;
+//! - no vertex array object bound where the context has them (where it has
+//!   none, `GL_ELEMENT_ARRAY_BUFFER` of the default one is the tile indices);
+//! - clear colour the sky's horizon colour, clear depth 1.
 
 use std::rc::Rc;
 
-use glow::HasContext;
-
+use super::calls::Calls;
 use super::error::GlError;
 use super::handle::Gl;
 use super::sky_pass::SkyPass;
 use super::terrain_pass::{TerrainOutput, TerrainPass};
 use crate::gl_check;
-use crate::render::{palette, DrawList, RenderBackend};
+use crate::render::{
+    palette, CallStats, CostModel, DrawList, FrameOutput, FrameUniforms, RenderBackend,
+};
 
+/// The display's passes on one context.
 pub struct GlRenderer {
     gl: Rc<Gl>,
     terrain: TerrainPass,
@@ -22,6 +41,8 @@ pub struct GlRenderer {
 }
 
 impl GlRenderer {
+    /// The passes for tiles of `grid_size` cells over a height buffer of
+    /// `buffer_bytes` (the tile allocator's capacity).
     pub fn new(gl: &Rc<Gl>, grid_size: u32, buffer_bytes: u32) -> Result<GlRenderer, GlError> {
         Ok(GlRenderer {
             gl: Rc::clone(gl),
@@ -37,56 +58,91 @@ impl GlRenderer {
         self.sentinel = colour;
     }
 
+    /// What the null backend must model to count this renderer's calls.
+    pub fn cost_model(&self) -> CostModel {
+        CostModel {
+            vertex_arrays: self.gl.caps().vertex_array_objects,
+            sky: self.sentinel.is_none(),
+        }
+    }
+
     /// Clears the bound RGBA32F target to 0 (alpha 0: no terrain) and draws
-    /// `list`'s tiles as camera-relative positions.
+    /// `list`'s tiles as camera-relative positions (the accuracy tool's
+    /// position pass over the tiles this renderer holds).
     pub fn draw_positions(&mut self, list: &DrawList) -> Result<(), GlError> {
         let Some(frame) = list.frame else { return Ok(()) };
         self.clear(frame.viewport, [0.0; 4])?;
         self.terrain.draw(list, TerrainOutput::Position)
     }
 
+    /// Clears the bound target and draws the sky of `frame` (or clears to the
+    /// sentinel): what a frame shows before its terrain, for passes that
+    /// draw other terrain (the truth) under the display's sky.
+    pub fn draw_background(&mut self, frame: &FrameUniforms) -> Result<(), GlError> {
+        let horizon = palette::SKY_HORIZON;
+        let sky = [horizon[0], horizon[1], horizon[2], 1.0];
+        self.clear(frame.viewport, self.sentinel.unwrap_or(sky))?;
+        if self.sentinel.is_none() {
+            self.sky.draw(frame)?;
+        }
+        Ok(())
+    }
+
     /// Clears colour (to `colour`) and depth of the bound target, every
     /// write mask open and no scissor.
     #[allow(unsafe_code)]
     fn clear(&self, viewport: [u32; 2], colour: [f32; 4]) -> Result<(), GlError> {
+        let calls = Calls::new(&self.gl);
         // SAFETY: clearing the bound target with every write mask open.
         unsafe {
-            self.gl.viewport(0, 0, viewport[0] as i32, viewport[1] as i32);
-            self.gl.disable(glow::SCISSOR_TEST);
-            self.gl.color_mask(true, true, true, true);
-            self.gl.depth_mask(true);
-            self.gl.clear_color(colour[0], colour[1], colour[2], colour[3]);
-            self.gl.clear_depth_f32(1.0);
-            self.gl.clear(glow::COLOR_BUFFER_BIT | glow::DEPTH_BUFFER_BIT);
+            calls.viewport(viewport[0], viewport[1]);
+            calls.disable(glow::SCISSOR_TEST);
+            calls.color_mask(true);
+            calls.depth_mask(true);
+            calls.clear_color(colour);
+            calls.clear_depth(1.0);
+            calls.clear(glow::COLOR_BUFFER_BIT | glow::DEPTH_BUFFER_BIT);
         }
         gl_check!(self.gl)
     }
+}
 
-    /// Waits until the GPU has finished every command (for frame timing).
-    #[allow(unsafe_code)]
-    pub fn finish(&self) {
-        // SAFETY: glFinish needs only a current context.
-        unsafe { self.gl.finish() };
+impl GlRenderer {
+    /// Copies `ranges` of `staging` into the height buffer at the same
+    /// offsets, one glBufferSubData each.
+    pub fn upload(
+        &mut self,
+        staging: &[u8],
+        ranges: &[std::ops::Range<u32>],
+    ) -> Result<(), GlError> {
+        self.terrain.upload(staging, ranges)
+    }
+
+    /// Clears, draws the sky and the tiles of `list` from the height buffer.
+    pub fn draw(&mut self, list: &DrawList) -> Result<(), GlError> {
+        let Some(frame) = list.frame else { return Ok(()) };
+        self.gl.tally(|c| c.frames += 1);
+        self.draw_background(&frame)?;
+        self.terrain.draw(list, TerrainOutput::Colour)
     }
 }
 
 impl RenderBackend for GlRenderer {
     type Error = GlError;
 
-    fn upload(&mut self, staging: &[u8], ranges: &[std::ops::Range<u32>]) -> Result<(), GlError> {
-        self.terrain.upload(staging, ranges)
+    fn render(&mut self, frame: &FrameOutput<'_>) -> Result<(), GlError> {
+        self.upload(frame.staging, frame.dirty)?;
+        self.draw(frame.list)
     }
 
-    fn draw(&mut self, list: &DrawList) -> Result<(), GlError> {
-        let Some(frame) = list.frame else { return Ok(()) };
-        let horizon = palette::SKY_HORIZON;
-        self.clear(
-            frame.viewport,
-            self.sentinel.unwrap_or([horizon[0], horizon[1], horizon[2], 1.0]),
-        )?;
-        if self.sentinel.is_none() {
-            self.sky.draw(&frame)?;
-        }
-        self.terrain.draw(list, TerrainOutput::Colour)
+    #[allow(unsafe_code)]
+    fn finish(&mut self) {
+        // SAFETY: glFinish needs only a current context. Not counted: it
+        // waits, it draws nothing, and the null backend has nothing to wait for.
+        unsafe { glow::HasContext::finish(&**self.gl) };
+    }
+
+    fn take_calls(&mut self) -> CallStats {
+        self.gl.take_calls()
     }
 }

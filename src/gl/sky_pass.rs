@@ -3,8 +3,7 @@
 
 use std::rc::Rc;
 
-use glow::HasContext;
-
+use super::calls::Calls;
 use super::error::GlError;
 use super::handle::Gl;
 use super::objects::{Buffer, BufferTarget, BufferUsage, Program, VertexArray};
@@ -58,34 +57,34 @@ impl SkyPass {
     #[allow(unsafe_code)]
     pub fn draw(&self, frame: &FrameUniforms) -> Result<(), GlError> {
         let gl = &self.gl;
-        let inverse = frame.view_projection.inverse().to_cols_array();
+        let inverse = frame.view_projection.inverse();
         // Sine of the dip of the horizon seen from the aircraft's altitude.
         let r = crate::camera::EARTH_RADIUS_M;
         let altitude = frame.camera_altitude.max(0.0);
         let dip = if frame.curvature { (1.0 - (r / (r + altitude)).powi(2)).sqrt() } else { 0.0 };
+        let calls = Calls::new(gl);
         // SAFETY: all objects are live in this context; three vertices are read.
         unsafe {
-            gl.viewport(0, 0, frame.viewport[0] as i32, frame.viewport[1] as i32);
-            gl.disable(glow::DEPTH_TEST);
-            gl.depth_mask(false);
-            gl.disable(glow::CULL_FACE);
-            gl.disable(glow::BLEND);
-            self.program.bind();
-            gl.uniform_matrix_4_f32_slice(self.inverse_view_projection.as_ref(), false, &inverse);
-            gl.uniform_4_f32(self.horizon.as_ref(), dip as f32, 0.0, 0.0, 0.0);
-            let [z, h, g] = [palette::SKY_ZENITH, palette::SKY_HORIZON, GROUND];
-            gl.uniform_3_f32(self.zenith.as_ref(), z[0], z[1], z[2]);
-            gl.uniform_3_f32(self.haze.as_ref(), h[0], h[1], h[2]);
-            gl.uniform_3_f32(self.ground.as_ref(), g[0], g[1], g[2]);
+            calls.viewport(frame.viewport[0], frame.viewport[1]);
+            calls.disable(glow::DEPTH_TEST);
+            calls.depth_mask(false);
+            calls.disable(glow::CULL_FACE);
+            calls.disable(glow::BLEND);
+            calls.use_program(&self.program);
+            calls.uniform_matrix(self.inverse_view_projection.as_ref(), &inverse);
+            calls.uniform_4(self.horizon.as_ref(), [dip as f32, 0.0, 0.0, 0.0]);
+            calls.uniform_3(self.zenith.as_ref(), palette::SKY_ZENITH);
+            calls.uniform_3(self.haze.as_ref(), palette::SKY_HORIZON);
+            calls.uniform_3(self.ground.as_ref(), GROUND);
             if let Some(vertex_array) = &self.vertex_array {
-                vertex_array.bind();
+                calls.bind_vertex_array(Some(vertex_array));
             }
-            self.corners.bind();
-            gl.enable_vertex_attrib_array(CORNER);
-            gl.vertex_attrib_pointer_f32(CORNER, 2, glow::FLOAT, false, 0, 0);
-            gl.draw_arrays(glow::TRIANGLES, 0, 3);
-            gl.disable_vertex_attrib_array(CORNER);
-            gl.depth_mask(true);
+            calls.bind_buffer(&self.corners);
+            calls.enable_attribute(CORNER);
+            calls.attribute_pointer(CORNER, 2, glow::FLOAT, false, 0, 0);
+            calls.draw_array_triangles(3);
+            calls.disable_attribute(CORNER);
+            calls.depth_mask(true);
         }
         gl_check!(gl)
     }

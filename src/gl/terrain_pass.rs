@@ -8,13 +8,12 @@
 
 use std::rc::Rc;
 
-use glow::HasContext;
-
+use super::calls::Calls;
 use super::error::GlError;
 use super::handle::Gl;
 use super::objects::{Buffer, BufferTarget, BufferUsage, Program, VertexArray};
 use crate::gl_check;
-use crate::render::{palette, DrawList, FrameUniforms, TileUniforms};
+use crate::render::{check_uploads, palette, DrawList, FrameUniforms, Slice, TileUniforms};
 use crate::tiles::{TileGrid, TileVertex};
 
 const VERTEX_SOURCE: &str = include_str!("../../shaders/gles/terrain.vert");
@@ -92,7 +91,6 @@ pub struct TerrainPass {
     heights: Buffer,
     vertex_array: Option<VertexArray>,
     index_count: i32,
-    grid_size: u32,
 }
 
 impl TerrainPass {
@@ -123,24 +121,35 @@ impl TerrainPass {
             heights,
             vertex_array,
             index_count: grid.indices.len() as i32,
-            grid_size,
         })
     }
 
     /// Copies the dirty ranges of the staging copy into the height buffer at
     /// the same offsets: one glBufferSubData per range (per run piece).
+    /// Refuses a range past the buffer, as the null backend does.
+    #[allow(unsafe_code)]
     pub fn upload(&self, staging: &[u8], ranges: &[std::ops::Range<u32>]) -> Result<(), GlError> {
+        check_uploads(staging, self.heights.size() as u32, ranges)?;
+        let calls = Calls::new(&self.gl);
         for range in ranges {
             let bytes = &staging[range.start as usize..range.end as usize];
-            self.heights.upload_range(range.start as usize, bytes)?;
+            // SAFETY: the range lies inside the buffer (checked above); the
+            // vertex array is unbound first so the bind changes none.
+            unsafe {
+                if self.vertex_array.is_some() {
+                    calls.bind_vertex_array(None);
+                }
+                calls.bind_buffer(&self.heights);
+                calls.buffer_sub_data(&self.heights, range.start as usize, bytes);
+            }
         }
-        Ok(())
+        gl_check!(self.gl)
     }
 
     /// Draws every tile of `list`, writing `output`, in the frame's depth
     /// slices (far first, depth cleared between). Sets all the state it
     /// relies on: depth test and writes on, back faces culled, no blending,
-    /// no scissor.
+    /// no scissor. Mirrored call for call by [`crate::render::cost::terrain`].
     pub fn draw(&self, list: &DrawList, output: TerrainOutput) -> Result<(), GlError> {
         self.draw_from(list, output, TileVertices::Shared)
     }
@@ -154,7 +163,7 @@ impl TerrainPass {
         vertices: TileVertices<'_>,
     ) -> Result<(), GlError> {
         let Some(frame) = list.frame else { return Ok(()) };
-        let gl = &self.gl;
+        let calls = Calls::new(&self.gl);
         let program = match output {
             TerrainOutput::Colour => &self.colour,
             TerrainOutput::Position => &self.position,
@@ -164,143 +173,110 @@ impl TerrainPass {
         // shared indices, each tile's offset leaves room for a whole tile, as
         // the allocator placed it).
         unsafe {
-            gl.viewport(0, 0, frame.viewport[0] as i32, frame.viewport[1] as i32);
-            gl.enable(glow::DEPTH_TEST);
-            gl.depth_func(glow::LESS);
-            gl.depth_mask(true);
-            gl.enable(glow::CULL_FACE);
-            gl.cull_face(glow::BACK);
-            gl.front_face(glow::CCW);
-            gl.disable(glow::BLEND);
+            calls.viewport(frame.viewport[0], frame.viewport[1]);
+            calls.enable(glow::DEPTH_TEST);
+            calls.depth_func(glow::LESS);
+            calls.depth_mask(true);
+            calls.enable(glow::CULL_FACE);
+            calls.cull_face(glow::BACK);
+            calls.front_face(glow::CCW);
+            calls.disable(glow::BLEND);
             // The depth clear between slices must reach the whole target.
-            gl.disable(glow::SCISSOR_TEST);
-            program.program.bind();
-            set_frame_uniforms(gl, &program.at, &frame);
+            calls.disable(glow::SCISSOR_TEST);
+            calls.use_program(&program.program);
+            set_frame_uniforms(calls, &program.at, &frame);
             if let Some(vertex_array) = &self.vertex_array {
-                vertex_array.bind();
+                calls.bind_vertex_array(Some(vertex_array));
             }
-            self.grid_indices.bind();
-            self.grid_vertices.bind();
-            gl.enable_vertex_attrib_array(GRID);
-            gl.vertex_attrib_pointer_f32(GRID, 3, glow::UNSIGNED_SHORT, false, 8, 0);
-            self.heights.bind();
-            gl.enable_vertex_attrib_array(HEIGHT);
-            gl.enable_vertex_attrib_array(NORMAL);
+            calls.bind_buffer(&self.grid_indices);
+            calls.bind_buffer(&self.grid_vertices);
+            calls.enable_attribute(GRID);
+            calls.attribute_pointer(GRID, 3, glow::UNSIGNED_SHORT, false, 8, 0);
+            calls.bind_buffer(&self.heights);
+            calls.enable_attribute(HEIGHT);
+            calls.enable_attribute(NORMAL);
             // Far slice first; then a clear depth for the near slice.
-            let slices = &frame.slices;
-            if let Some(far) = slices.far {
-                self.draw_slice(&program.at, list, &frame, far, false, vertices);
-                gl.clear(glow::DEPTH_BUFFER_BIT);
+            if let Some(far) = frame.slices.far {
+                self.draw_slice(calls, &program.at, list, far, Slice::Far, vertices);
+                calls.clear(glow::DEPTH_BUFFER_BIT);
             }
-            self.draw_slice(&program.at, list, &frame, slices.near, true, vertices);
-            gl.disable_vertex_attrib_array(GRID);
-            gl.disable_vertex_attrib_array(HEIGHT);
-            gl.disable_vertex_attrib_array(NORMAL);
+            self.draw_slice(calls, &program.at, list, frame.slices.near, Slice::Near, vertices);
+            calls.disable_attribute(GRID);
+            calls.disable_attribute(HEIGHT);
+            calls.disable_attribute(NORMAL);
+            // Unbound, so a caller's buffer binds cannot change it.
+            if self.vertex_array.is_some() {
+                calls.bind_vertex_array(None);
+            }
         }
-        gl_check!(gl)
+        gl_check!(self.gl)
     }
 
-    /// Draws the tiles of `list` that reach into one depth slice
-    /// (`near_slice` or the far one) with its `view_projection`.
+    /// Draws the tiles of `list` that reach into depth slice `slice` with its
+    /// `view_projection`.
     #[allow(unsafe_code)]
     fn draw_slice(
         &self,
+        calls: Calls<'_>,
         at: &Locations,
         list: &DrawList,
-        frame: &FrameUniforms,
         view_projection: glam::Mat4,
-        near_slice: bool,
+        slice: Slice,
         vertices: TileVertices<'_>,
     ) {
         // SAFETY: the terrain program is bound and its location comes from it.
-        unsafe {
-            self.gl.uniform_matrix_4_f32_slice(
-                at.view_projection.as_ref(),
-                false,
-                &view_projection.to_cols_array(),
-            )
-        };
-        for tile in &list.tiles {
-            let (in_near, in_far) =
-                frame.slices.tile_slices(tile, &frame.posts, self.grid_size as f32);
-            if !(if near_slice { in_near } else { in_far }) {
-                continue;
-            }
+        unsafe { calls.uniform_matrix(at.view_projection.as_ref(), &view_projection) };
+        for tile in list.tiles_in(slice) {
             let offset = match vertices {
                 TileVertices::Shared => tile.byte_offset,
                 TileVertices::PerTile(buffer_of) => match buffer_of(tile) {
                     Some(buffer) => {
-                        buffer.bind();
+                        // SAFETY: the tile's own live buffer.
+                        unsafe { calls.bind_buffer(buffer) };
                         0
                     }
                     None => continue,
                 },
             };
-            self.draw_tile(at, tile, offset);
+            self.draw_tile(calls, at, tile, offset);
         }
     }
 
     #[allow(unsafe_code)]
-    fn draw_tile(&self, at: &Locations, tile: &TileUniforms, byte_offset: u32) {
-        let gl = &self.gl;
+    fn draw_tile(&self, calls: Calls<'_>, at: &Locations, tile: &TileUniforms, byte_offset: u32) {
         let offset = byte_offset as i32;
         // SAFETY: the tile's vertex buffer is bound and holds a whole tile's
         // vertices from `offset`.
         unsafe {
-            gl.uniform_4_f32(
-                at.tile.as_ref(),
-                tile.first_post[0],
-                tile.first_post[1],
-                tile.post_step,
-                0.0,
-            );
-            gl.uniform_4_f32(
-                at.morph.as_ref(),
-                tile.morph[0],
-                tile.morph[1],
-                tile.skirt_depth,
-                0.0,
-            );
-            gl.vertex_attrib_pointer_f32(HEIGHT, 2, glow::FLOAT, false, VERTEX_STRIDE, offset);
-            gl.vertex_attrib_pointer_f32(
-                NORMAL,
-                4,
-                glow::BYTE,
-                true,
-                VERTEX_STRIDE,
-                offset + NORMAL_OFFSET,
-            );
-            gl.draw_elements(glow::TRIANGLES, self.index_count, glow::UNSIGNED_SHORT, 0);
+            let [x, y] = tile.first_post;
+            calls.uniform_4(at.tile.as_ref(), [x, y, tile.post_step, 0.0]);
+            let [start, end] = tile.morph;
+            calls.uniform_4(at.morph.as_ref(), [start, end, tile.skirt_depth, 0.0]);
+            calls.attribute_pointer(HEIGHT, 2, glow::FLOAT, false, VERTEX_STRIDE, offset);
+            let normals = offset + NORMAL_OFFSET;
+            calls.attribute_pointer(NORMAL, 4, glow::BYTE, true, VERTEX_STRIDE, normals);
+            calls.draw_triangles(self.index_count);
         }
     }
 }
 
 /// Sets the per-frame uniforms of the bound program `at` belongs to.
 #[allow(unsafe_code)]
-fn set_frame_uniforms(gl: &Gl, at: &Locations, frame: &FrameUniforms) {
+fn set_frame_uniforms(calls: Calls<'_>, at: &Locations, frame: &FrameUniforms) {
     let curvature = if frame.curvature { 1.0 / (2.0 * crate::camera::EARTH_RADIUS_M) } else { 0.0 };
     let sun = frame.sun_direction;
-    let haze = palette::SKY_HORIZON;
+    let posts = &frame.posts;
+    let awareness = [frame.warning_above_m, frame.caution_below_m, frame.fog_distance_m, 0.0];
     // SAFETY: the program is bound; locations come from it.
     unsafe {
-        gl.uniform_4_f32(
+        calls.uniform_4(
             at.frame.as_ref(),
-            frame.camera_altitude as f32,
-            curvature as f32,
-            0.0,
-            0.0,
+            [frame.camera_altitude as f32, curvature as f32, 0.0, 0.0],
         );
-        let posts = &frame.posts;
-        gl.uniform_4_f32(
-            at.posts.as_ref(),
-            posts.spacing[0],
-            posts.spacing[1],
-            posts.offset[0],
-            posts.offset[1],
-        );
-        gl.uniform_3_f32(at.sun.as_ref(), sun.x, sun.y, sun.z);
-        let awareness = (frame.warning_above_m, frame.caution_below_m, frame.fog_distance_m);
-        gl.uniform_4_f32(at.awareness.as_ref(), awareness.0, awareness.1, awareness.2, 0.0);
-        gl.uniform_3_f32(at.haze.as_ref(), haze[0], haze[1], haze[2]);
+        let [sx, sy] = posts.spacing;
+        calls.uniform_4(at.posts.as_ref(), [sx, sy, posts.offset[0], posts.offset[1]]);
+        calls.uniform_3(at.sun.as_ref(), sun.to_array());
+        calls.uniform_4(at.awareness.as_ref(), awareness);
+        calls.uniform_3(at.haze.as_ref(), palette::SKY_HORIZON);
     }
 }

@@ -189,6 +189,17 @@ pub struct DrawList {
     pub tiles: Vec<TileUniforms>,
     /// Indices per tile in the shared index buffer.
     pub indices_per_tile: u32,
+    /// Cells per tile side.
+    pub grid_size: u32,
+}
+
+/// One of a frame's depth ranges ([`DepthSlices`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Slice {
+    /// `[near, split]`, or the whole range when it is not cut.
+    Near,
+    /// `[split, far]`, drawn first, when the range is cut.
+    Far,
 }
 
 /// How tiles map to metres and how deep their skirts hang.
@@ -203,7 +214,28 @@ pub struct TileGeometry<'a> {
 
 impl DrawList {
     pub fn with_capacity(tiles: usize) -> Self {
-        DrawList { frame: None, tiles: Vec::with_capacity(tiles), indices_per_tile: 0 }
+        DrawList {
+            frame: None,
+            tiles: Vec::with_capacity(tiles),
+            indices_per_tile: 0,
+            grid_size: 0,
+        }
+    }
+
+    /// The tiles drawn in depth slice `slice`, in draw order (every tile in
+    /// the near slice when the range is not cut, none in the far one). The
+    /// GL terrain pass and the cost model both walk this.
+    pub fn tiles_in(&self, slice: Slice) -> impl Iterator<Item = &TileUniforms> + '_ {
+        let frame = self.frame;
+        let cells = self.grid_size as f32;
+        self.tiles.iter().filter(move |tile| {
+            let Some(frame) = frame else { return false };
+            let (near, far) = frame.slices.tile_slices(tile, &frame.posts, cells);
+            match slice {
+                Slice::Near => near,
+                Slice::Far => far,
+            }
+        })
     }
 
     /// Rebuilds the list for `frame` (its camera) from the tile cache's draws.
@@ -215,6 +247,7 @@ impl DrawList {
         geometry: TileGeometry<'_>,
     ) {
         self.frame = Some(frame);
+        self.grid_size = geometry.grid_size;
         self.tiles.clear();
         for draw in draws {
             self.tiles.push(tile_uniforms(draw, &frame.posts, ranges, &geometry));

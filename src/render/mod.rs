@@ -3,22 +3,81 @@
 //! the [`null::NullBackend`] only counts them, so tests can check what would
 //! be drawn without any context.
 
+pub mod cost;
 pub mod draw_list;
 pub mod null;
 pub mod palette;
 
-pub use draw_list::{DepthSlices, DrawList, FrameUniforms, PostFrame, TileUniforms};
+pub use cost::{CallStats, CostModel};
+pub use draw_list::{DepthSlices, DrawList, FrameUniforms, PostFrame, Slice, TileUniforms};
 pub use null::NullBackend;
 
 use std::ops::Range;
 
-/// What a renderer does with a frame's data. Implemented by the GL layer and
-/// by the counting null backend.
+/// What a frame hands its backend: the draw list, the staging copy the GPU
+/// buffer mirrors, and the ranges of it this frame changed.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameOutput<'a> {
+    /// What to draw.
+    pub list: &'a DrawList,
+    /// The tile allocator's staging copy.
+    pub staging: &'a [u8],
+    /// The byte ranges of `staging` written since the last frame: one
+    /// transfer each.
+    pub dirty: &'a [Range<u32>],
+}
+
+/// What a renderer does with a frame. Implemented by the GL renderer, the
+/// plain Chunked LOD baseline and the counting null backend; the frame
+/// pipeline drives any of them.
 pub trait RenderBackend {
-    type Error: std::error::Error;
-    /// Copies `ranges` of `staging` into the GPU vertex buffer at the same
-    /// offsets: one transfer per range.
-    fn upload(&mut self, staging: &[u8], ranges: &[Range<u32>]) -> Result<(), Self::Error>;
-    /// Clears, draws the sky and the terrain tiles of `list`.
-    fn draw(&mut self, list: &DrawList) -> Result<(), Self::Error>;
+    /// What can go wrong; an upload past the buffer is [`RenderError`] in
+    /// every backend.
+    type Error: std::error::Error + From<RenderError>;
+    /// Uploads the frame's dirty ranges, clears, draws the sky and the
+    /// terrain tiles.
+    fn render(&mut self, frame: &FrameOutput<'_>) -> Result<(), Self::Error>;
+    /// Waits until the frame is drawn (glFinish), so frame times are whole.
+    fn finish(&mut self) {}
+    /// The calls issued since the last take, and a new count from zero.
+    fn take_calls(&mut self) -> CallStats;
+}
+
+/// Errors every backend reports the same way.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum RenderError {
+    /// An upload range reaches past the GPU buffer or the staging copy.
+    #[error(
+        "upload of bytes {start}..{end} past the buffer ({capacity} bytes, staging {staging})"
+    )]
+    UploadPastBuffer {
+        /// First byte of the range.
+        start: u32,
+        /// One past its last byte.
+        end: u32,
+        /// Bytes of the GPU buffer.
+        capacity: u32,
+        /// Bytes of the staging copy.
+        staging: usize,
+    },
+}
+
+/// Refuses `ranges` that reach past a GPU buffer of `capacity` bytes or
+/// past `staging`. Both backends check their uploads with this.
+pub fn check_uploads(
+    staging: &[u8],
+    capacity: u32,
+    ranges: &[Range<u32>],
+) -> Result<(), RenderError> {
+    for range in ranges {
+        if range.end > capacity || range.end as usize > staging.len() || range.start > range.end {
+            return Err(RenderError::UploadPastBuffer {
+                start: range.start,
+                end: range.end,
+                capacity,
+                staging: staging.len(),
+            });
+        }
+    }
+    Ok(())
 }

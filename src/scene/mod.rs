@@ -16,6 +16,7 @@ use crate::camera::{Camera, CameraError, Frustum, EARTH_RADIUS_M};
 use crate::lod::ranges::RingInputs;
 use crate::lod::select::View;
 use crate::lod::{LevelRanges, LodConfig, LodError, TileSelector};
+use crate::node::NodeLayout;
 use crate::render::draw_list::TileGeometry;
 use crate::render::draw_list::{DepthSlices, PostFrame};
 use crate::render::{palette, DrawList, FrameUniforms};
@@ -80,7 +81,7 @@ pub struct StageTimes {
 
 /// What a frame drew and what it cost.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
-pub struct FrameReport {
+pub struct SceneStats {
     pub tiles: usize,
     pub culled: usize,
     pub triangles: u64,
@@ -103,8 +104,6 @@ pub struct Scene {
     draw_list: DrawList,
     deltas: Vec<f64>,
     height_range_m: f64,
-    /// The near plane the last frame drew with, metres (see [`Scene::frame`]).
-    near_m: f32,
 }
 
 /// The near plane sits this share of the way to the nearest drawn tile's
@@ -142,7 +141,6 @@ impl Scene {
             draw_list,
             height_range_m: (hi - lo) as f64,
             deltas,
-            near_m: 0.0,
         })
     }
 
@@ -169,26 +167,20 @@ impl Scene {
         &mut self,
         camera: &Camera,
         terrain: &dyn TerrainData,
-    ) -> Result<FrameReport, SceneError> {
+    ) -> Result<SceneStats, SceneError> {
         camera.validate()?;
         let layout = *terrain.layout();
         let grid_size = self.config.lod.grid_size;
-        let tile_size_m = grid_size as f64 * layout.spacing_m[0].max(layout.spacing_m[1]);
         // Culling uses the widest frustum (the conservative near plane);
         // drawing uses one pushed out to the nearest selected tile.
         let (near, far) = clip_planes(camera, terrain);
         let frustum = Frustum::from_view_projection(camera.projection(near, far) * camera.view());
-        let mut report = FrameReport::default();
+        let mut report = SceneStats::default();
         let mut lod = self.config.lod;
         let mut nearest_m: f64;
         loop {
             let start = Instant::now();
-            let inputs = RingInputs {
-                tile_size_m,
-                delta_per_level: &self.deltas,
-                height_range_m: self.height_range_m,
-                perspective_scale: camera.perspective_scale(),
-            };
+            let inputs = ring_inputs(&layout, grid_size, &self.deltas, self.height_range_m, camera);
             self.ranges.update(&lod, inputs);
             let view = View {
                 eye: camera.position,
@@ -213,8 +205,8 @@ impl Scene {
                 Err(error) => return Err(error.into()),
             }
         }
-        self.near_m = (nearest_m * NEAR_SHARE).min(f32::MAX as f64) as f32;
-        let uniforms = self.frame_uniforms(camera, terrain);
+        let near_m = (nearest_m * NEAR_SHARE).min(f32::MAX as f64) as f32;
+        let uniforms = frame_uniforms(&self.config, camera, terrain, near_m);
         let start = Instant::now();
         let geometry =
             TileGeometry { grid_size, spacing_m: layout.spacing_m, delta_per_level: &self.deltas };
@@ -232,29 +224,52 @@ impl Scene {
         report.allocator_workspace_bytes = stats.allocator_workspace_bytes;
         Ok(report)
     }
+}
 
-    /// The uniforms every pass of a frame for `camera` shares: projection,
-    /// bands, sun, curvature. The far plane comes from [`clip_planes`]; the
-    /// near plane is the one the last [`Scene::frame`] chose (at least
-    /// [`clip_planes`]' near): 80 % of the way to the nearest tile drawn,
-    /// since a 24-bit depth buffer resolves `d^2 / (near 2^24)` metres at
-    /// distance `d` (560 m at 68 km with a 0.5 m near plane: far ridges
-    /// then fought over pixels; 1.5 m with the near plane at 180 m).
-    pub fn frame_uniforms(&self, camera: &Camera, terrain: &dyn TerrainData) -> FrameUniforms {
-        let (near, far) = clip_planes(camera, terrain);
-        let near = near.max(self.near_m.min(far / 10.0));
-        FrameUniforms {
-            view_projection: camera.projection(near, far) * camera.view(),
-            camera_altitude: camera.position.z,
-            sun_direction: palette::sun_direction(),
-            curvature: self.config.curvature,
-            warning_above_m: self.config.warning_above_m,
-            caution_below_m: self.config.caution_below_m,
-            viewport: camera.viewport,
-            fog_distance_m: far,
-            posts: PostFrame::new(camera.position.truncate(), terrain.layout().spacing_m),
-            slices: DepthSlices::new(camera, near, far, terrain.height_range()),
-        }
+/// The uniforms every pass of a frame for `camera` shares: projection,
+/// bands, sun, curvature. The far plane comes from [`clip_planes`]; the
+/// near plane is `near_m` (at least [`clip_planes`]' near): [`Scene::frame`]
+/// puts it 80 % of the way to the nearest tile it selected, since a 24-bit
+/// depth buffer resolves `d^2 / (near 2^24)` metres at distance `d` (560 m
+/// at 68 km with a 0.5 m near plane: far ridges then fought over pixels;
+/// 1.5 m with the near plane at 180 m).
+pub fn frame_uniforms(
+    config: &SceneConfig,
+    camera: &Camera,
+    terrain: &dyn TerrainData,
+    near_m: f32,
+) -> FrameUniforms {
+    let (near, far) = clip_planes(camera, terrain);
+    let near = near.max(near_m.min(far / 10.0));
+    FrameUniforms {
+        view_projection: camera.projection(near, far) * camera.view(),
+        camera_altitude: camera.position.z,
+        sun_direction: palette::sun_direction(),
+        curvature: config.curvature,
+        warning_above_m: config.warning_above_m,
+        caution_below_m: config.caution_below_m,
+        viewport: camera.viewport,
+        fog_distance_m: far,
+        posts: PostFrame::new(camera.position.truncate(), terrain.layout().spacing_m),
+        slices: DepthSlices::new(camera, near, far, terrain.height_range()),
+    }
+}
+
+/// What the rings of a frame for `camera` depend on: tiles of `grid_size`
+/// cells over `layout`, the per-level `deltas` and the data's height span.
+/// The scene's rings and the clipmap's load radius both come from this.
+pub fn ring_inputs<'a>(
+    layout: &NodeLayout,
+    grid_size: u32,
+    deltas: &'a [f64],
+    height_range_m: f64,
+    camera: &Camera,
+) -> RingInputs<'a> {
+    RingInputs {
+        tile_size_m: grid_size as f64 * layout.spacing_m[0].max(layout.spacing_m[1]),
+        delta_per_level: deltas,
+        height_range_m,
+        perspective_scale: camera.perspective_scale(),
     }
 }
 

@@ -18,7 +18,7 @@ pub enum BufferTarget {
 }
 
 impl BufferTarget {
-    fn gl_enum(self) -> u32 {
+    pub(crate) fn gl_enum(self) -> u32 {
         match self {
             BufferTarget::Vertices => glow::ARRAY_BUFFER,
             BufferTarget::Indices => glow::ELEMENT_ARRAY_BUFFER,
@@ -38,7 +38,7 @@ pub enum BufferUsage {
 }
 
 impl BufferUsage {
-    fn gl_enum(self) -> u32 {
+    pub(crate) fn gl_enum(self) -> u32 {
         match self {
             BufferUsage::Static => glow::STATIC_DRAW,
             BufferUsage::Dynamic => glow::DYNAMIC_DRAW,

@@ -74,6 +74,11 @@ pub struct Framebuffer {
 }
 
 impl Framebuffer {
+    /// The context this framebuffer belongs to.
+    pub fn gl(&self) -> &Gl {
+        &self.gl
+    }
+
     #[allow(unsafe_code)]
     pub fn new(gl: &Rc<Gl>) -> Result<Framebuffer, GlError> {
         // SAFETY: creating a name needs only a current context.

@@ -1,48 +1,73 @@
 //! The built-in terrain, built once into a cache under the target folder,
 //! and cameras over it.
-#![allow(dead_code)] // each test file uses part of this
 
-use glam::DVec3;
+use crate::builtin_pyramid;
 use ridgeline::camera::Camera;
+use ridgeline::clipmap::LoaderMode;
 use ridgeline::lod::morph::{morph_factor, morphed_height};
-use ridgeline::pyramid::{Pyramid, Silent};
+use ridgeline::node::NodeSource;
+use ridgeline::pipeline::{FrameError, FramePipeline, FrameStats, PipelineConfig};
 use ridgeline::render::DrawList;
+use ridgeline::render::{CostModel, NullBackend, RenderBackend};
 use ridgeline::scene::PreloadedTerrain;
+use ridgeline::scene::{SceneConfig, TerrainSummary};
 use ridgeline::tiles::grid::{edge_posts, vertex_count};
 use ridgeline::tiles::TileVertex;
 use std::collections::HashMap;
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
-/// A cache under the target folder, shared by the test binaries (they run
-/// one after another, and pyramids are written atomically) and removed with
-/// `cargo clean`.
-pub fn cache_dir() -> &'static std::path::Path {
-    static DIR: OnceLock<std::path::PathBuf> = OnceLock::new();
-    DIR.get_or_init(|| {
-        let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("scene-cache");
-        std::fs::create_dir_all(&dir).expect("test cache");
-        dir
-    })
+/// The viewport of the scene tests' cameras.
+pub const VIEWPORT: [u32; 2] = [320, 180];
+
+/// The frame pipeline, clipmap included, over `source` at `config`, with
+/// nodes loaded inline so that every frame is complete and repeatable.
+pub fn pipeline_over(
+    source: Arc<dyn NodeSource>,
+    summary: TerrainSummary,
+    config: SceneConfig,
+) -> FramePipeline {
+    let pipeline = PipelineConfig {
+        scene: config,
+        loader: LoaderMode::Inline,
+        load_budget: 4096,
+        ..PipelineConfig::new(VIEWPORT)
+    };
+    FramePipeline::new(&pipeline, source, summary).expect("pipeline")
 }
 
-pub fn pyramid() -> Pyramid {
-    ridgeline::dataset::open(None, cache_dir(), &Silent).expect("built-in terrain")
+/// [`pipeline_over`] the built-in terrain.
+pub fn pipeline(config: SceneConfig) -> FramePipeline {
+    let pyramid = builtin_pyramid();
+    let summary = TerrainSummary::from_pyramid(pyramid.info());
+    pipeline_over(pyramid, summary, config)
 }
 
+/// A null backend standing for an ES 3 context with the sky on.
+pub fn null_backend(config: &SceneConfig) -> NullBackend {
+    NullBackend::new(config.buffer_bytes, CostModel { vertex_arrays: true, sky: true })
+}
+
+/// Pages in everything `camera` wants, then draws one frame on `backend`.
+pub fn fly<B: RenderBackend>(
+    pipeline: &mut FramePipeline,
+    backend: &mut B,
+    camera: &Camera,
+) -> Result<FrameStats, FrameError<B::Error>> {
+    pipeline.settle(camera, 1000)?;
+    pipeline.frame(camera, backend)
+}
+
+/// Every node of the built-in terrain, read once (the scene tests that need
+/// no paging).
 pub fn terrain() -> &'static PreloadedTerrain {
     static TERRAIN: OnceLock<PreloadedTerrain> = OnceLock::new();
-    TERRAIN.get_or_init(|| PreloadedTerrain::load(&pyramid()).expect("all nodes read"))
+    TERRAIN
+        .get_or_init(|| PreloadedTerrain::load(builtin_pyramid().as_ref()).expect("all nodes read"))
 }
 
+/// A camera over the scene tests' viewport ([`VIEWPORT`]).
 pub fn camera(x: f64, y: f64, altitude: f64, heading: f64, pitch: f64) -> Camera {
-    Camera {
-        position: DVec3::new(x, y, altitude),
-        heading_deg: heading,
-        pitch_deg: pitch,
-        roll_deg: 0.0,
-        fov_x_deg: 60.0,
-        viewport: [320, 180],
-    }
+    crate::camera(VIEWPORT, x, y, altitude, heading, pitch)
 }
 
 /// Drawn height at every edge post and edge-segment midpoint of every tile,

@@ -1,19 +1,22 @@
-//! [`measure_flight`]: the accuracy tool's loop. For each view it settles the
-//! clipmap (the error of the LOD, not of paging, is measured), draws the LOD
-//! frame (once to make its tiles, then timed) and the full-resolution truth
-//! in colour (timed) and as positions,
-//! and measures the per-pixel error; it keeps the heat map of the worst view.
+//! [`measure_flight`]: the accuracy tool's loop over a display's parts. For
+//! each view it settles the clipmap (the error of the LOD, not of paging, is
+//! measured), draws the LOD frame (once to make its tiles, then timed), then
+//! three passes over that frame's output with its uniforms: the LOD tiles as
+//! positions, the full-resolution truth in colour (timed) and as positions;
+//! and measures the per-pixel error. It keeps the heat map of the worst view.
 
 use glam::DVec2;
 use image::RgbaImage;
 
-use super::pixel_error::ExactHeight;
-use super::{
-    heat_map, measure_view, ErrorSummary, LodSurface, PositionImage, ViewErrors, ViewGeometry,
+use super::{DisplayError, DisplayParts};
+use crate::accuracy::{
+    heat_map, measure_view, percentile, ErrorSummary, ExactHeight, LodSurface, PositionImage,
+    ViewErrors, ViewGeometry,
 };
 use crate::camera::Camera;
-use crate::display::{Display, DisplayError};
-use crate::gl::TruthPass;
+use crate::gl::{GlError, OffscreenTarget, TruthFrameStats, TruthPass};
+use crate::render::{DrawList, FrameUniforms, RenderBackend};
+use std::time::Instant;
 
 /// Clipmap updates allowed per view to page in everything it wants.
 const SETTLE_UPDATES: u32 = 10_000;
@@ -76,13 +79,15 @@ pub struct AccuracyRun {
 /// against `truth` drawn in the same context and `exact`, the
 /// full-resolution surface over level-0 posts `spacing_m` apart.
 pub fn measure_flight(
-    display: &mut Display,
+    display: &mut DisplayParts,
     truth: &TruthPass,
     exact: ExactHeight<'_>,
     spacing_m: [f64; 2],
     views: &[(f64, Camera)],
 ) -> Result<AccuracyRun, DisplayError> {
-    let tau_px = display.scene().config().lod.tau_px;
+    let tau_px = display.pipeline.scene().config().lod.tau_px;
+    let size = display.context.size();
+    let positions = OffscreenTarget::positions(display.context.gl(), size)?;
     let mut images = [PositionImage::default(), PositionImage::default()];
     let mut errors = ViewErrors::default();
     let mut all_errors: Vec<f32> = Vec::new();
@@ -91,13 +96,14 @@ pub fn measure_flight(
     let mut worst: Option<WorstView> = None;
     if let Some((_, first)) = views.first() {
         // Warm-up, untimed: shaders compile and buffers fault in on first use.
-        display.settle(first, SETTLE_UPDATES)?;
+        display.pipeline.settle(first, SETTLE_UPDATES)?;
         display.frame(first)?;
-        display.render_truth(first, truth)?;
+        draw_truth(display, truth)?;
     }
     for (t, camera) in views {
+        let passes = Passes { truth, positions: &positions };
         let row =
-            measure_one(display, truth, exact, spacing_m, *t, camera, &mut images, &mut errors)?;
+            measure_one(display, passes, exact, spacing_m, *t, camera, &mut images, &mut errors)?;
         all_errors.extend(errors.errors_px.iter().copied().filter(|e| !e.is_nan()));
         mismatched += errors.lod_only + errors.truth_only;
         pixels += errors.errors_px.len();
@@ -110,8 +116,8 @@ pub fn measure_flight(
             let [lod, truth_positions] = &images;
             let heat_map = heat_map(&errors.errors_px, lod, truth_positions, tau_px);
             display.frame(camera)?;
-            worst =
-                Some(WorstView { index: rows.len(), heat_map, picture: display.read_pixels()? });
+            let picture = display.context.read_pixels()?;
+            worst = Some(WorstView { index: rows.len(), heat_map, picture });
         }
         rows.push(row);
     }
@@ -131,10 +137,17 @@ pub fn measure_flight(
     })
 }
 
+/// The passes drawn beside each LOD frame.
+#[derive(Clone, Copy)]
+struct Passes<'a> {
+    truth: &'a TruthPass,
+    positions: &'a OffscreenTarget,
+}
+
 #[allow(clippy::too_many_arguments)]
 fn measure_one(
-    display: &mut Display,
-    truth: &TruthPass,
+    display: &mut DisplayParts,
+    passes: Passes<'_>,
     exact: ExactHeight<'_>,
     spacing_m: [f64; 2],
     t: f64,
@@ -142,17 +155,24 @@ fn measure_one(
     images: &mut [PositionImage; 2],
     errors: &mut ViewErrors,
 ) -> Result<ViewRow, DisplayError> {
-    display.settle(camera, SETTLE_UPDATES)?;
+    display.pipeline.settle(camera, SETTLE_UPDATES)?;
     // The first frame at a new pose makes and uploads its tiles; the timed
     // one is the steady frame a display shows there.
     display.frame(camera)?;
     let lod_stats = display.frame(camera)?;
     let [lod, truth_positions] = images;
-    display.render_positions(camera, lod)?;
-    let truth_stats = display.render_truth(camera, truth)?;
-    display.render_truth_positions(camera, truth, truth_positions)?;
-    let geometry = ViewGeometry::new(camera, &display.frame_uniforms(camera));
-    let scene = display.scene();
+    let frame = frame_of(display.pipeline.draw_list())?;
+    passes.positions.bind();
+    display.renderer.draw_positions(display.pipeline.draw_list())?;
+    passes.positions.read_positions(lod)?;
+    let truth_stats = draw_truth(display, passes.truth)?;
+    passes.positions.bind();
+    display.renderer.draw_positions(&DrawList { frame: Some(frame), ..DrawList::default() })?;
+    passes.truth.draw(&frame, crate::gl::TerrainOutput::Position)?;
+    passes.positions.read_positions(truth_positions)?;
+    display.context.bind_target();
+    let geometry = ViewGeometry::new(camera, &frame);
+    let scene = display.pipeline.scene();
     let list = scene.draw_list();
     let grid_size = scene.config().lod.grid_size;
     let surface = LodSurface::new(
@@ -180,13 +200,39 @@ fn measure_one(
         holes: errors.holes,
         skirt_pixels: errors.skirt_pixels,
         max_surface_px: errors.max_surface_px,
-        mirror_p99_m: if mirror.is_empty() { 0.0 } else { super::percentile(&mirror, 0.99) },
+        mirror_p99_m: if mirror.is_empty() { 0.0 } else { percentile(&mirror, 0.99) },
         triangles_lod: list.tiles.len() as u64 * 2 * grid_size as u64 * grid_size as u64,
         triangles_truth: truth_stats.triangles,
-        draw_calls_lod: lod_stats.draw_calls,
+        draw_calls_lod: lod_stats.draw_calls as usize,
         draw_calls_truth: truth_stats.draw_calls,
         tiles_per_level,
         lod_frame_ms: lod_stats.frame_ms,
         truth_frame_ms: truth_stats.frame_ms,
     })
+}
+
+/// The uniforms of the frame the pipeline drew last.
+fn frame_of(list: &DrawList) -> Result<FrameUniforms, DisplayError> {
+    let why = "the accuracy passes need a frame drawn first";
+    list.frame.ok_or_else(|| GlError::InvalidRequest(why.to_owned()).into())
+}
+
+/// Draws the truth into the display's target with the last LOD frame's
+/// uniforms: the same clear and sky, then every chunk, waiting for the GPU.
+/// Touches neither the clipmap nor the tile cache.
+pub fn draw_truth(
+    display: &mut DisplayParts,
+    truth: &TruthPass,
+) -> Result<TruthFrameStats, DisplayError> {
+    let frame = frame_of(display.pipeline.draw_list())?;
+    let start = Instant::now();
+    display.context.make_current()?;
+    display.context.bind_target();
+    display.renderer.draw_background(&frame)?;
+    truth.draw(&frame, crate::gl::TerrainOutput::Colour)?;
+    display.renderer.finish();
+    // The truth's calls are not the display's: leave them out of its counts.
+    display.renderer.take_calls();
+    let frame_ms = start.elapsed().as_secs_f64() * 1e3;
+    Ok(TruthFrameStats { triangles: truth.triangles(), draw_calls: truth.draw_calls(), frame_ms })
 }

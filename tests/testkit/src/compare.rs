@@ -9,7 +9,7 @@
 //! a missing tile or a wrong colour in one region; the mean catches a small
 //! shift or a changed shade spread over the whole picture.
 
-use super::scratch_dir;
+use crate::target_tmp;
 use image::{Rgba, RgbaImage};
 use std::path::PathBuf;
 
@@ -83,7 +83,7 @@ pub fn difference_image(a: &RgbaImage, b: &RgbaImage, channel_threshold: u8) -> 
 /// Saves `image` as `CARGO_TARGET_TMPDIR/render-failures/NAME.png` and
 /// returns the path (or why it could not be saved) for a panic message.
 pub fn save_evidence(image: &RgbaImage, name: &str) -> String {
-    let dir = scratch_dir().join("render-failures");
+    let dir = target_tmp().join("render-failures");
     let path: PathBuf = dir.join(format!("{name}.png"));
     let saved = std::fs::create_dir_all(&dir)
         .map_err(|e| e.to_string())

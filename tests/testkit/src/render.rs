@@ -2,24 +2,20 @@
 //! into the target's temporary directory, so child processes and later runs
 //! reuse it), displays over it that draw complete, repeatable frames, the
 //! fixed views, and the image comparison ([`compare`]).
-#![allow(dead_code)] // each test binary uses part of this
 
-pub mod compare;
-pub mod coverage;
+use crate::{builtin_pyramid, compare, coverage};
 
-use glam::{DVec2, DVec3, UVec2};
+use glam::{DVec2, UVec2};
 use image::RgbaImage;
 use ridgeline::camera::Camera;
 use ridgeline::clipmap::LoaderMode;
-use ridgeline::display::{Display, DisplayConfig, DisplayError, FrameStats};
+use ridgeline::display::{DisplayConfig, DisplayError, DisplayParts};
 use ridgeline::gl::{GlBackend, GlesVersion};
 use ridgeline::lod::TileKey;
-use ridgeline::pyramid::{Pyramid, Silent};
+use ridgeline::pipeline::FrameStats;
 use ridgeline::render::{DrawList, RenderBackend};
 use ridgeline::scene::TerrainSummary;
 use std::collections::BTreeSet;
-use std::path::{Path, PathBuf};
-use std::sync::{Arc, OnceLock};
 
 /// Small enough that llvmpipe draws a frame in milliseconds, large enough to
 /// see every level of detail (Ulrich's bound is in pixels of this viewport).
@@ -44,27 +40,11 @@ pub const SENTINEL_RGBA: [u8; 4] = [255, 0, 255, 255];
 pub const TOLERANCE: compare::Tolerance =
     compare::Tolerance { channel_threshold: 16, max_share_over: 0.0002, max_mean: 0.1 };
 
-/// Where failing images, child renders and the terrain cache go.
-pub fn scratch_dir() -> &'static Path {
-    Path::new(env!("CARGO_TARGET_TMPDIR"))
-}
-
-/// The built-in terrain, built on first use into the target's temporary
-/// directory (beside-and-rename writes make a reader never see half a file).
-pub fn pyramid() -> Arc<Pyramid> {
-    static PYRAMID: OnceLock<Arc<Pyramid>> = OnceLock::new();
-    let pyramid = PYRAMID.get_or_init(|| {
-        let cache: PathBuf = scratch_dir().join("render-terrain");
-        std::fs::create_dir_all(&cache).expect("terrain cache directory");
-        Arc::new(ridgeline::dataset::open(None, &cache, &Silent).expect("built-in terrain"))
-    });
-    Arc::clone(pyramid)
-}
-
 /// Terrain height under `(x, y)`; the views stay inside the data.
 pub fn ground(x: f64, y: f64) -> f64 {
-    pyramid().exact_height(x, y).unwrap_or_else(|| panic!("({x}, {y}) is outside the terrain"))
-        as f64
+    builtin_pyramid()
+        .exact_height(x, y)
+        .unwrap_or_else(|| panic!("({x}, {y}) is outside the terrain")) as f64
 }
 
 /// A display whose frames are complete and repeatable: nodes load inline with
@@ -78,21 +58,15 @@ pub fn config(backend: GlBackend, version: GlesVersion) -> DisplayConfig {
     }
 }
 
-pub fn open(config: &DisplayConfig) -> Result<Display, DisplayError> {
-    let pyramid = pyramid();
+pub fn open(config: &DisplayConfig) -> Result<DisplayParts, DisplayError> {
+    let pyramid = builtin_pyramid();
     let summary = TerrainSummary::from_pyramid(pyramid.info());
-    Display::new(config, pyramid, summary)
+    DisplayParts::open(config, pyramid, summary)
 }
 
+/// A camera over the render tests' viewport ([`SIZE`]).
 pub fn camera(x: f64, y: f64, altitude: f64, heading_deg: f64, pitch_deg: f64) -> Camera {
-    Camera {
-        position: DVec3::new(x, y, altitude),
-        heading_deg,
-        pitch_deg,
-        roll_deg: 0.0,
-        fov_x_deg: 60.0,
-        viewport: [SIZE.x, SIZE.y],
-    }
+    crate::camera([SIZE.x, SIZE.y], x, y, altitude, heading_deg, pitch_deg)
 }
 
 /// A named fixed view over the built-in terrain (local metres, degrees).
@@ -132,34 +106,31 @@ pub const VIEWS: [View; 3] = [
     View { name: "high", x: 35_000.0, y: 45_000.0, altitude: 9_000.0, heading: 0.0, pitch: -30.0 },
 ];
 
-/// Pages in everything `camera` wants, draws it and reads it back. Makes
-/// the display's context current first: `Display::frame` does not, and a
-/// test may hold two displays on one thread.
-pub fn render(display: &mut Display, camera: &Camera) -> (RgbaImage, FrameStats) {
-    display.context_mut().make_current().expect("make the display's context current");
-    display.settle(camera, 1000).expect("settle");
+/// Pages in everything `camera` wants, draws it and reads it back (a test
+/// may hold two displays on one thread: the frame makes its context current).
+pub fn render(display: &mut DisplayParts, camera: &Camera) -> (RgbaImage, FrameStats) {
+    display.pipeline.settle(camera, 1000).expect("settle");
     let stats = display.frame(camera).expect("frame");
-    (display.read_pixels().expect("read back"), stats)
+    (display.context.read_pixels().expect("read back"), stats)
 }
 
 /// Draws the last frame's draw list again, changed by `alter`, and reads it
 /// back: the same uploads, so only what `alter` changed differs. Tests use it
 /// to break the picture on purpose and show their checks notice.
-pub fn redraw(display: &mut Display, alter: impl FnOnce(&mut DrawList)) -> RgbaImage {
-    let mut list = display.scene().draw_list().clone();
+pub fn redraw(display: &mut DisplayParts, alter: impl FnOnce(&mut DrawList)) -> RgbaImage {
+    let mut list = display.pipeline.draw_list().clone();
     alter(&mut list);
-    display.context_mut().make_current().expect("make the display's context current");
-    display.context_mut().bind_target();
-    let renderer = display.renderer_mut();
-    renderer.draw(&list).expect("redraw");
-    renderer.finish();
-    display.read_pixels().expect("read back")
+    display.context.make_current().expect("make the display's context current");
+    display.context.bind_target();
+    display.renderer.draw(&list).expect("redraw");
+    display.renderer.finish();
+    display.context.read_pixels().expect("read back")
 }
 
 /// The data rectangle less `margin_m` on every side, and the lowest height,
 /// for [`coverage::terrain_guaranteed`].
 pub fn terrain_bounds(margin_m: f64) -> coverage::TerrainBounds {
-    let pyramid = pyramid();
+    let pyramid = builtin_pyramid();
     let layout = *ridgeline::node::NodeSource::layout(&*pyramid);
     let [sx, sy] = layout.spacing_m;
     let extent = DVec2::new((layout.posts[0] - 1) as f64 * sx, (layout.posts[1] - 1) as f64 * sy);
@@ -174,8 +145,8 @@ pub fn terrain_bounds(margin_m: f64) -> coverage::TerrainBounds {
 }
 
 /// The tiles of the display's last frame.
-pub fn drawn_tiles(display: &Display) -> BTreeSet<TileKey> {
-    display.scene().draw_list().tiles.iter().map(|tile| tile.key).collect()
+pub fn drawn_tiles(display: &DisplayParts) -> BTreeSet<TileKey> {
+    display.pipeline.draw_list().tiles.iter().map(|tile| tile.key).collect()
 }
 
 /// Whether going from `before` to `after` split or merged a tile (tiles that

@@ -3,7 +3,6 @@
 //! switches, an Xvfb server of our own, and child processes of the running
 //! test binary (winit allows one event loop per process; Mesa's overrides
 //! must be set before the driver loads).
-#![allow(dead_code)] // each test binary uses part of this
 
 use std::io::{BufRead, BufReader};
 use std::process::{Child, Command, Output, Stdio};

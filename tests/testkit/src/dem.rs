@@ -3,7 +3,6 @@
 //! (stripped through the `tiff` crate's encoder; tiled by hand, because the
 //! encoder writes strips only, with the crate's own DEFLATE and LZW
 //! compressors and its directory encoder).
-#![allow(dead_code)] // each test file uses a different part
 
 use std::fs::File;
 use std::io::{BufWriter, Write};

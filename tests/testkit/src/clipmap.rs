@@ -1,7 +1,6 @@
 //! Helpers shared by the clipmap tests: a small-node procedural earth and
 //! checks of a frame's effect on the atlas and of lookups, each returning
 //! what went wrong.
-#![allow(dead_code)] // each test file uses its own subset
 
 use std::sync::Arc;
 

@@ -1,5 +1,4 @@
-//! Helpers shared by the pyramid tests: random grids and scratch directories.
-#![allow(dead_code)]
+//! Helpers shared by the pyramid tests: random grids, pyramids built and written.
 
 use std::path::PathBuf;
 
@@ -7,15 +6,6 @@ use rand::{Rng, SeedableRng};
 use ridgeline::dem::ElevationGrid;
 use ridgeline::geo::{Crs, GeoRef};
 use ridgeline::pyramid::{self, BuildOptions, BuiltPyramid, Silent};
-
-/// A fresh, empty scratch directory for one test.
-pub fn scratch_dir(name: &str) -> PathBuf {
-    let dir =
-        PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("create scratch dir");
-    dir
-}
 
 /// A rough random terrain: a random walk in both directions plus noise, so
 /// coarse levels have real errors, with a geographic georeference.

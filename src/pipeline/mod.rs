@@ -1,0 +1,220 @@
+//! The frame pipeline, GL-free: it owns the chunked clipmap and the scene,
+//! sizes the clipmap from the scene's own rings, and makes one frame per
+//! call on any [`RenderBackend`]: page nodes in, select and make tiles,
+//! upload what changed, draw. The GL renderer, the null backend and the
+//! accuracy tool's passes all consume what it produces: the draw list and
+//! the staging copy the GPU buffer mirrors.
+//!
+//! Nothing is carried from one frame to the next but named state: the
+//! clipmap's atlas, the tile cache and the last frame's draw list (whose
+//! uniforms passes drawn beside the frame reuse).
+
+mod sizing;
+
+pub use sizing::clipmap_view;
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use glam::DVec3;
+
+use crate::camera::Camera;
+use crate::clipmap::{Clipmap, ClipmapConfig, ClipmapError, LoaderMode, UpdateStats, ViewId};
+use crate::node::NodeSource;
+use crate::render::{CallStats, DrawList, FrameOutput, RenderBackend};
+use crate::scene::{ClipmapTerrain, Scene, SceneConfig, SceneError, SceneStats, TerrainSummary};
+
+/// Everything fixed for one pipeline.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PipelineConfig {
+    /// Tiling, buffer and palette settings.
+    pub scene: SceneConfig,
+    /// Horizontal field of view the clipmap's load radius is sized for, degrees.
+    pub fov_x_deg: f64,
+    /// Viewport the load radius is sized for, pixels (its width sets K).
+    pub viewport: [u32; 2],
+    /// Loads copied into the node atlas per frame.
+    pub load_budget: u32,
+    /// Load nodes on a thread (flying) or inline up to the budget (tests that
+    /// want every frame complete and repeatable).
+    pub loader: LoaderMode,
+}
+
+impl PipelineConfig {
+    /// The defaults for a viewport of `viewport` pixels.
+    pub fn new(viewport: [u32; 2]) -> Self {
+        PipelineConfig {
+            scene: SceneConfig::default(),
+            fov_x_deg: 60.0,
+            viewport,
+            load_budget: 32,
+            loader: LoaderMode::Thread { queue: 256 },
+        }
+    }
+}
+
+/// Why the pipeline could not make a frame.
+#[derive(Debug, thiserror::Error)]
+pub enum PipelineError {
+    /// Paging failed (the loader thread could not start, a view is invalid).
+    #[error(transparent)]
+    Clipmap(#[from] ClipmapError),
+    /// The camera or the tiling was invalid, or the buffer could not hold the root.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+}
+
+/// Why a frame failed: in the pipeline or in the backend drawing it.
+#[derive(Debug, thiserror::Error)]
+pub enum FrameError<E: std::error::Error + 'static> {
+    /// The GL-free part.
+    #[error(transparent)]
+    Pipeline(#[from] PipelineError),
+    /// The backend's upload or draw.
+    #[error(transparent)]
+    Backend(E),
+}
+
+/// What one frame did and cost. Its fields are `stats.json`'s per-frame keys.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct FrameStats {
+    /// Selection, tiles and uploads.
+    #[serde(flatten)]
+    pub scene: SceneStats,
+    /// Draw calls the backend issued (tiles once per depth slice they reach, and the sky).
+    pub draw_calls: u64,
+    /// Every call the backend issued, by kind.
+    pub calls: CallStats,
+    /// Nodes in the atlas after paging.
+    pub resident_nodes: u32,
+    /// Loads copied into the atlas this frame.
+    pub nodes_loaded: u32,
+    /// Paging, milliseconds.
+    pub clipmap_ms: f64,
+    /// Upload, draw and the wait for the backend to finish, milliseconds.
+    pub gl_ms: f64,
+    /// The whole frame, milliseconds.
+    pub frame_ms: f64,
+}
+
+/// The clipmap and the scene over one node source.
+pub struct FramePipeline {
+    clipmap: Clipmap,
+    scene: Scene,
+    view: ViewId,
+    summary: TerrainSummary,
+}
+
+impl FramePipeline {
+    /// Builds the clipmap over `source` (whose per-level error and height
+    /// range `summary` gives), sized for the scene's rings, and the scene.
+    pub fn new(
+        config: &PipelineConfig,
+        source: Arc<dyn NodeSource>,
+        summary: TerrainSummary,
+    ) -> Result<FramePipeline, PipelineError> {
+        let layout = *source.layout();
+        let view_config = clipmap_view(config, &summary, &layout)?;
+        let clipmap_config = ClipmapConfig {
+            atlas_slots: sizing::atlas_slots(&view_config, layout.levels),
+            budget: config.load_budget,
+            loader: config.loader,
+        };
+        let mut clipmap = Clipmap::new(source, clipmap_config)?;
+        let view = clipmap.add_view(view_config, DVec3::ZERO)?;
+        let terrain = ClipmapTerrain { clipmap: &clipmap, summary: &summary };
+        let scene = Scene::new(config.scene, &terrain)?;
+        Ok(FramePipeline { clipmap, scene, view, summary })
+    }
+
+    /// Pages, tiles, uploads and draws one frame for `camera` on `backend`,
+    /// then waits for it ([`RenderBackend::finish`]) so `frame_ms` is the
+    /// whole frame. A pipeline's uploads go to the backend they were made
+    /// for: give every frame of one pipeline the same backend.
+    pub fn frame<B: RenderBackend>(
+        &mut self,
+        camera: &Camera,
+        backend: &mut B,
+    ) -> Result<FrameStats, FrameError<B::Error>> {
+        let start = Instant::now();
+        let update = self.page(camera)?;
+        let paged = Instant::now();
+        let terrain = ClipmapTerrain { clipmap: &self.clipmap, summary: &self.summary };
+        let scene = self.scene.frame(camera, &terrain).map_err(PipelineError::from)?;
+        let tiled = Instant::now();
+        let (staging, dirty) = self.scene.uploads();
+        let output = FrameOutput { list: self.scene.draw_list(), staging, dirty };
+        backend.render(&output).map_err(FrameError::Backend)?;
+        backend.finish();
+        let done = Instant::now();
+        let calls = backend.take_calls();
+        Ok(FrameStats {
+            scene,
+            draw_calls: calls.draw_calls,
+            calls,
+            resident_nodes: self.clipmap.atlas().resident_count(),
+            nodes_loaded: update.applied,
+            clipmap_ms: ms(start, paged),
+            gl_ms: ms(tiled, done),
+            frame_ms: ms(start, done),
+        })
+    }
+
+    fn page(&mut self, camera: &Camera) -> Result<UpdateStats, PipelineError> {
+        // Refused here, before a position that is not a number reaches the clipmap.
+        camera.validate().map_err(SceneError::from)?;
+        self.clipmap.set_view_position(self.view, camera.position)?;
+        Ok(self.clipmap.update()?)
+    }
+
+    /// Pages in every node the view wants around `camera` before a frame
+    /// (start-up, and tests that need complete, repeatable frames). Gives up
+    /// after `max_updates` clipmap updates; returns how many ran.
+    pub fn settle(&mut self, camera: &Camera, max_updates: u32) -> Result<u32, PipelineError> {
+        for update in 1..=max_updates {
+            let stats = self.page(camera)?;
+            if stats.missing == 0 && stats.in_flight == 0 {
+                return Ok(update);
+            }
+            if stats.applied == 0 {
+                std::thread::sleep(std::time::Duration::from_millis(1));
+            }
+        }
+        Ok(max_updates)
+    }
+
+    /// The last frame's draw list; its uniforms are the ones passes drawn
+    /// beside that frame (truth, positions) must use.
+    pub fn draw_list(&self) -> &DrawList {
+        self.scene.draw_list()
+    }
+
+    /// The staging copy the backend's GPU buffer mirrors.
+    pub fn staging(&self) -> &[u8] {
+        self.scene.uploads().0
+    }
+
+    /// The scene (its configuration, rings and tile cache).
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// The clipmap (its atlas and views).
+    pub fn clipmap(&self) -> &Clipmap {
+        &self.clipmap
+    }
+
+    /// The data's per-level error and height range.
+    pub fn summary(&self) -> &TerrainSummary {
+        &self.summary
+    }
+
+    /// The terrain as the scene sees it now: the clipmap's resident nodes.
+    pub fn terrain(&self) -> ClipmapTerrain<'_> {
+        ClipmapTerrain { clipmap: &self.clipmap, summary: &self.summary }
+    }
+}
+
+fn ms(from: Instant, to: Instant) -> f64 {
+    (to - from).as_secs_f64() * 1e3
+}

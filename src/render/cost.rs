@@ -1,0 +1,172 @@
+//! The cost model: how many GL calls of each kind a frame issues, computed
+//! from the frame's data alone. The null backend reports these numbers; the
+//! GL backend counts the calls it really makes (`gl::calls`), and a test flies
+//! the default flight through both and requires the counts to be equal, so
+//! every change to a GL pass must be mirrored here or that test fails.
+//!
+//! Each function below mirrors one GL pass call for call; its comments name
+//! the calls, in the order the pass makes them.
+
+use super::{DrawList, Slice};
+use std::ops::Range;
+
+/// GL calls by kind, summed over frames (since creation or the last take).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct CallStats {
+    /// Frames drawn (a draw call of the backend trait with frame uniforms).
+    pub frames: u64,
+    /// glBufferSubData calls, and the bytes they carried.
+    pub upload_calls: u64,
+    /// Bytes carried by the upload calls.
+    pub bytes_uploaded: u64,
+    /// glDrawElements and glDrawArrays calls.
+    pub draw_calls: u64,
+    /// Triangles those draw calls drew (skirts included).
+    pub triangles: u64,
+    /// glUniform* calls.
+    pub uniform_writes: u64,
+    /// glVertexAttribPointer calls.
+    pub attribute_pointer_changes: u64,
+    /// glBindBuffer calls.
+    pub buffer_binds: u64,
+    /// glUseProgram calls.
+    pub program_binds: u64,
+    /// glBindVertexArray calls.
+    pub vertex_array_binds: u64,
+    /// glEnableVertexAttribArray and glDisableVertexAttribArray calls.
+    pub attribute_array_toggles: u64,
+    /// glClear calls.
+    pub clears: u64,
+    /// Fixed-function state: glViewport, glEnable, glDisable, glDepthFunc,
+    /// glDepthMask, glCullFace, glFrontFace, glColorMask, glClearColor,
+    /// glClearDepth.
+    pub state_changes: u64,
+}
+
+impl CallStats {
+    /// Every GL call counted (bytes and triangles are not calls).
+    pub fn calls(&self) -> u64 {
+        self.upload_calls
+            + self.draw_calls
+            + self.uniform_writes
+            + self.attribute_pointer_changes
+            + self.buffer_binds
+            + self.program_binds
+            + self.vertex_array_binds
+            + self.attribute_array_toggles
+            + self.clears
+            + self.state_changes
+    }
+
+    /// Adds `other` into `self`.
+    pub fn add(&mut self, other: &CallStats) {
+        *self = CallStats {
+            frames: self.frames + other.frames,
+            upload_calls: self.upload_calls + other.upload_calls,
+            bytes_uploaded: self.bytes_uploaded + other.bytes_uploaded,
+            draw_calls: self.draw_calls + other.draw_calls,
+            triangles: self.triangles + other.triangles,
+            uniform_writes: self.uniform_writes + other.uniform_writes,
+            attribute_pointer_changes: self.attribute_pointer_changes
+                + other.attribute_pointer_changes,
+            buffer_binds: self.buffer_binds + other.buffer_binds,
+            program_binds: self.program_binds + other.program_binds,
+            vertex_array_binds: self.vertex_array_binds + other.vertex_array_binds,
+            attribute_array_toggles: self.attribute_array_toggles + other.attribute_array_toggles,
+            clears: self.clears + other.clears,
+            state_changes: self.state_changes + other.state_changes,
+        };
+    }
+}
+
+/// What the cost of a frame depends on besides its data.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CostModel {
+    /// The context has vertex array objects (ES 3, or ES 2 with the
+    /// extension): passes bind their own.
+    pub vertex_arrays: bool,
+    /// The sky is drawn (no sentinel colour).
+    pub sky: bool,
+}
+
+/// Uploading `ranges`: per range, a vertex-array unbind (with VAOs, so the
+/// bind cannot change a VAO's state), glBindBuffer and glBufferSubData.
+pub fn upload(model: &CostModel, ranges: &[Range<u32>]) -> CallStats {
+    let n = ranges.len() as u64;
+    CallStats {
+        upload_calls: n,
+        bytes_uploaded: ranges.iter().map(|r| (r.end - r.start) as u64).sum(),
+        buffer_binds: n,
+        vertex_array_binds: if model.vertex_arrays { n } else { 0 },
+        ..CallStats::default()
+    }
+}
+
+/// A frame of the display: clear, sky, terrain.
+pub fn frame(model: &CostModel, list: &DrawList) -> CallStats {
+    if list.frame.is_none() {
+        return CallStats::default();
+    }
+    let mut stats = clear();
+    if model.sky {
+        stats.add(&sky(model));
+    }
+    stats.add(&terrain(model, list));
+    stats.frames = 1;
+    stats
+}
+
+/// The clear: glViewport, glDisable(SCISSOR), glColorMask, glDepthMask,
+/// glClearColor, glClearDepth, glClear.
+pub fn clear() -> CallStats {
+    CallStats { state_changes: 6, clears: 1, ..CallStats::default() }
+}
+
+/// The sky pass: glViewport, glDisable(DEPTH), glDepthMask, glDisable(CULL),
+/// glDisable(BLEND), glUseProgram, five uniforms, the VAO bind, the corner
+/// buffer bind, enable, pointer, glDrawArrays, disable, glDepthMask.
+pub fn sky(model: &CostModel) -> CallStats {
+    CallStats {
+        state_changes: 6,
+        program_binds: 1,
+        uniform_writes: 5,
+        vertex_array_binds: model.vertex_arrays as u64,
+        buffer_binds: 1,
+        attribute_array_toggles: 2,
+        attribute_pointer_changes: 1,
+        draw_calls: 1,
+        triangles: 1,
+        ..CallStats::default()
+    }
+}
+
+/// The terrain pass: nine state calls, glUseProgram, five frame uniforms, the
+/// VAO bind, the index and grid buffer binds, three attribute enables, the
+/// grid pointer, the height buffer bind; then per depth slice one matrix
+/// uniform and per tile two uniforms, two pointers and a glDrawElements, with
+/// a depth clear between slices; three attribute disables and the VAO unbind.
+pub fn terrain(model: &CostModel, list: &DrawList) -> CallStats {
+    let Some(frame) = list.frame else { return CallStats::default() };
+    let mut stats = CallStats {
+        state_changes: 9,
+        program_binds: 1,
+        uniform_writes: 5,
+        vertex_array_binds: 2 * model.vertex_arrays as u64,
+        buffer_binds: 3,
+        attribute_array_toggles: 6,
+        attribute_pointer_changes: 1,
+        ..CallStats::default()
+    };
+    let slices: &[Slice] =
+        if frame.slices.far.is_some() { &[Slice::Far, Slice::Near] } else { &[Slice::Near] };
+    for &slice in slices {
+        stats.uniform_writes += 1;
+        let tiles = list.tiles_in(slice).count() as u64;
+        stats.uniform_writes += 2 * tiles;
+        stats.attribute_pointer_changes += 2 * tiles;
+        stats.draw_calls += tiles;
+        stats.triangles += tiles * (list.indices_per_tile as u64 / 3);
+    }
+    stats.clears += slices.len() as u64 - 1;
+    stats
+}

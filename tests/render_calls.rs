@@ -1,0 +1,68 @@
+//! One cost model: the default flight drawn by the GL renderer (its calls
+//! counted as they are made) and by the null backend (its calls computed by
+//! the cost model) must issue exactly the same calls, kind by kind, frame by
+//! frame, depth slices included; on ES 3 and ES 2.0, with the sky and
+//! without. A GL call added to a pass without its twin in
+//! `render::cost` fails this test.
+
+use ridgeline::display::{DisplayConfig, DisplayParts};
+use ridgeline::flight::builtin_approach;
+use ridgeline::gl::{GlBackend, GlesVersion};
+use ridgeline::node::NodeSource;
+use ridgeline::pipeline::FramePipeline;
+use ridgeline::render::{CallStats, NullBackend};
+use ridgeline::scene::TerrainSummary;
+use testkit::builtin_pyramid;
+use testkit::render::{config, SENTINEL, SIZE};
+
+const FRAMES: u32 = 24;
+
+/// Flies the built-in approach through both backends; returns the totals
+/// and how many frames were cut into two depth slices.
+fn fly_both(config: &DisplayConfig) -> (CallStats, u32) {
+    let pyramid = builtin_pyramid();
+    let summary = TerrainSummary::from_pyramid(pyramid.info());
+    let mut gl = DisplayParts::open(config, pyramid.clone(), summary.clone()).expect("EGL display");
+    let mut null_pipeline =
+        FramePipeline::new(&config.pipeline(), pyramid.clone(), summary).expect("pipeline");
+    let mut null = NullBackend::new(config.scene.buffer_bytes, gl.renderer.cost_model());
+    let layout = *pyramid.layout();
+    let path =
+        builtin_approach(layout.extent_m(), &|x, y| pyramid.exact_height(x, y).unwrap_or(0.0));
+    let (mut total, mut sliced) = (CallStats::default(), 0);
+    for (k, t) in path.frame_times(FRAMES).enumerate() {
+        let camera = path.sample(t).camera(60.0, [SIZE.x, SIZE.y]);
+        gl.pipeline.settle(&camera, 1000).expect("settle");
+        let drawn = gl.frame(&camera).expect("GL frame").calls;
+        null_pipeline.settle(&camera, 1000).expect("settle");
+        let counted = null_pipeline.frame(&camera, &mut null).expect("null frame").calls;
+        assert_eq!(
+            gl.pipeline.draw_list().tiles,
+            null_pipeline.draw_list().tiles,
+            "frame {k}: both pipelines chose the same tiles"
+        );
+        assert_eq!(drawn, counted, "frame {k} at t = {t:.1} s: GL issued what the model counts");
+        sliced += u32::from(gl.pipeline.draw_list().frame.and_then(|f| f.slices.far).is_some());
+        total.add(&drawn);
+    }
+    (total, sliced)
+}
+
+#[test]
+fn gl_and_null_backends_issue_the_same_calls_on_the_default_flight() {
+    let (total, sliced) = fly_both(&config(GlBackend::Egl, GlesVersion::Es3));
+    println!("ES 3, {FRAMES} frames ({sliced} in two depth slices): {total:?}");
+    assert_eq!(total.frames, FRAMES as u64);
+    assert!(total.draw_calls > 100 * FRAMES as u64 / 4, "the flight draws terrain");
+    assert!(total.upload_calls > 0 && total.uniform_writes > 2 * total.draw_calls - 20);
+    assert!(sliced > 0, "the flight includes frames drawn in two depth slices");
+}
+
+#[test]
+fn the_counts_agree_on_es2_and_without_the_sky() {
+    let es2 = fly_both(&config(GlBackend::Egl, GlesVersion::Es2)).0;
+    let mut no_sky = config(GlBackend::Egl, GlesVersion::Es3);
+    no_sky.sentinel = Some(SENTINEL);
+    let sentinel = fly_both(&no_sky).0;
+    assert!(sentinel.draw_calls < es2.draw_calls, "the sky is one draw a frame fewer");
+}

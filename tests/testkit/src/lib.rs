@@ -1,0 +1,86 @@
+//! What Ridgeline's test binaries share, as one library so that nothing in
+//! it is compiled per binary or left unused in silence:
+//!
+//! | module | holds |
+//! |---|---|
+//! | [`alloc`] | a global allocator that counts allocations (the no-allocation tests) |
+//! | [`dem`] | writers of every elevation format the importers read, scratch folders |
+//! | [`pyramid`] | random grids, pyramids built and written |
+//! | [`clipmap`] | a small-node procedural earth and checks of the clipmap's state |
+//! | [`scene`] | the frame pipeline over the built-in terrain on the null backend, shared-edge checks |
+//! | [`gl`] | one GL context at a time, loud skips of optional backends, Xvfb, child processes |
+//! | [`render`] | displays over the built-in terrain, the fixed views, image comparison ([`compare`]) and hole detection ([`coverage`]) |
+//!
+//! Everything a test writes goes under [`target_tmp`]; the built-in terrain
+//! is built there once ([`builtin_pyramid`]) and shared by every binary.
+
+pub mod alloc;
+pub mod clipmap;
+pub mod compare;
+pub mod coverage;
+pub mod dem;
+pub mod gl;
+pub mod pyramid;
+pub mod render;
+pub mod scene;
+
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, OnceLock};
+
+use glam::DVec3;
+use ridgeline::camera::Camera;
+use ridgeline::pyramid::{Pyramid, Silent};
+
+/// The target folder's `tmp` (Cargo's `CARGO_TARGET_TMPDIR` for tests):
+/// the running test binary is `target/<profile>/deps/<name>`.
+pub fn target_tmp() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let exe = std::env::current_exe().expect("the test binary's path");
+        let target = exe.ancestors().nth(3).expect("target/<profile>/deps/<binary>");
+        let dir = target.join("tmp");
+        std::fs::create_dir_all(&dir).expect("target/tmp");
+        dir
+    })
+}
+
+/// A fresh, empty folder under [`target_tmp`] for one test of this process.
+pub fn fresh_dir(name: &str) -> PathBuf {
+    let dir = target_tmp().join(format!("{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch directory");
+    dir
+}
+
+/// The built-in terrain, built on first use into one cache under
+/// [`target_tmp`] that every test binary shares (pyramids are written
+/// beside and renamed into place, so a reader never sees half a file).
+pub fn builtin_pyramid() -> Arc<Pyramid> {
+    static PYRAMID: OnceLock<Arc<Pyramid>> = OnceLock::new();
+    let pyramid = PYRAMID.get_or_init(|| {
+        let cache = target_tmp().join("builtin-terrain");
+        std::fs::create_dir_all(&cache).expect("terrain cache directory");
+        Arc::new(ridgeline::dataset::open(None, &cache, &Silent).expect("built-in terrain"))
+    });
+    Arc::clone(pyramid)
+}
+
+/// A camera at `(x, y, altitude)` metres, heading and pitch in degrees, no
+/// roll, a 60 degree field of view, over `viewport` pixels.
+pub fn camera(
+    viewport: [u32; 2],
+    x: f64,
+    y: f64,
+    altitude: f64,
+    heading: f64,
+    pitch: f64,
+) -> Camera {
+    Camera {
+        position: DVec3::new(x, y, altitude),
+        heading_deg: heading,
+        pitch_deg: pitch,
+        roll_deg: 0.0,
+        fov_x_deg: 60.0,
+        viewport,
+    }
+}
