@@ -261,7 +261,7 @@ fn measure_point(
 /// of a frame drawn at `camera`.
 fn sky_only(display: &mut DisplayParts, camera: &Camera) -> f64 {
     display.frame(camera).expect("frame");
-    let frame = display.pipeline.draw_list().frame.expect("frame uniforms");
+    let frame = display.pipeline.draw_list().uniforms.expect("frame uniforms");
     let start = Instant::now();
     for _ in 0..5 {
         display.renderer.draw_background(&frame).expect("sky");

@@ -42,7 +42,7 @@ fn fly_both(config: &DisplayConfig) -> (CallStats, u32) {
             "frame {k}: both pipelines chose the same tiles"
         );
         assert_eq!(drawn, counted, "frame {k} at t = {t:.1} s: GL issued what the model counts");
-        sliced += u32::from(gl.pipeline.draw_list().frame.and_then(|f| f.slices.far).is_some());
+        sliced += u32::from(gl.pipeline.draw_list().uniforms.and_then(|f| f.slices.far).is_some());
         total.add(&drawn);
     }
     (total, sliced)

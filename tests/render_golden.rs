@@ -218,7 +218,7 @@ fn centre_tile(
     let side = display.pipeline.scene().config().lod.grid_size as f32;
     let list = display.pipeline.scene().draw_list();
     // Tile corners are relative to the camera.
-    let posts = list.frame.expect("a drawn frame").posts;
+    let posts = list.uniforms.expect("a drawn frame").posts;
     list.tiles
         .iter()
         .position(|t| {

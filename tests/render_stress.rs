@@ -159,7 +159,7 @@ fn drawn(display: &DisplayParts, list: &DrawList) -> BTreeMap<TileKey, Drawn> {
                 tile.key,
                 Drawn {
                     uniforms: *tile,
-                    posts: list.frame.expect("a drawn frame").posts,
+                    posts: list.uniforms.expect("a drawn frame").posts,
                     vertices,
                 },
             )
@@ -269,7 +269,7 @@ fn moved_back(key: TileKey, grid: u32) -> TileKey {
 /// The fault this test exists for: posts placed in f32 absolute
 /// coordinates (absolute post numbers and the camera each narrowed to f32).
 fn origins_in_f32_absolute(list: &mut DrawList, eye: DVec3, grid: u32) {
-    if let Some(frame) = &mut list.frame {
+    if let Some(frame) = &mut list.uniforms {
         frame.posts.anchor = [0, 0];
         frame.posts.offset = [eye.x as f32, eye.y as f32];
     }

@@ -21,7 +21,8 @@ fn scripted_flight_counts_and_a_still_camera_uploads_nothing() {
         let cam = camera(10_000.0 + 1_500.0 * k as f64, 20_000.0, 3_500.0, 60.0, -6.0);
         let stats = fly(&mut pipeline, &mut backend, &cam).unwrap();
         let (calls, scene) = (stats.calls, stats.scene);
-        let slices = if pipeline.draw_list().frame.unwrap().slices.far.is_some() { 2 } else { 1 };
+        let slices =
+            if pipeline.draw_list().uniforms.unwrap().slices.far.is_some() { 2 } else { 1 };
         let tiles: usize = [Slice::Near, Slice::Far]
             .iter()
             .map(|&slice| pipeline.draw_list().tiles_in(slice).count())
@@ -108,7 +109,7 @@ fn the_near_plane_follows_the_nearest_tile() {
     let mut scene = Scene::new(SceneConfig::default(), terrain).expect("scene");
     let near = |scene: &mut Scene, cam: &ridgeline::camera::Camera| {
         scene.frame(cam, terrain).expect("frame");
-        let frame = scene.draw_list().frame.expect("frame uniforms");
+        let frame = scene.draw_list().uniforms.expect("frame uniforms");
         let m = frame.view_projection.to_cols_array();
         // Perspective: near = m[14] / (m[10] - 1) for glam's right-handed GL projection.
         let (c, d) = (m[10] as f64, m[14] as f64);

@@ -53,7 +53,7 @@ fn corner_error(earth: &Arc<ProceduralEarth>, at: (f64, f64), radius: f64) -> (f
                 continue;
             }
             // What the vertex shader computes, in f32.
-            let posts = scene.draw_list().frame.expect("a drawn frame").posts;
+            let posts = scene.draw_list().uniforms.expect("a drawn frame").posts;
             let [x, y] = tile.post_position(&posts, i as f32, j as f32);
             worst = worst.max((x as f64 - exact_x).abs()).max((y as f64 - exact_y).abs());
             tiles += 1;

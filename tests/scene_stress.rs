@@ -18,7 +18,7 @@ fn check_frame(
     let stats = fly(pipeline, backend, cam).unwrap_or_else(|e| panic!("{cam:?}: {e}"));
     let report = stats.scene;
     let list = pipeline.draw_list();
-    let frame = list.frame.expect("frame uniforms");
+    let frame = list.uniforms.expect("frame uniforms");
     assert!(frame.view_projection.is_finite(), "{cam:?}: projection not finite");
     for tile in &list.tiles {
         let values = [

@@ -46,15 +46,15 @@ impl LodSurface {
         let tiles: HashMap<TileKey, TileUniforms> =
             list.tiles.iter().map(|t| (t.key, *t)).collect();
         let levels = list.tiles.iter().map(|t| t.key.level + 1).max().unwrap_or(0);
-        let altitude = list.frame.map_or(0.0, |f| f.camera_altitude as f32 as f64);
-        let curvature = list.frame.map_or(0.0, |f| {
+        let altitude = list.uniforms.map_or(0.0, |f| f.camera_altitude as f32 as f64);
+        let curvature = list.uniforms.map_or(0.0, |f| {
             if f.curvature {
                 (1.0 / (2.0 * EARTH_RADIUS_M)) as f32 as f64
             } else {
                 0.0
             }
         });
-        let posts = list.frame.map_or(PostFrame::default(), |f| f.posts);
+        let posts = list.uniforms.map_or(PostFrame::default(), |f| f.posts);
         LodSurface { tiles, levels, grid_size, spacing_m, eye, posts, altitude, curvature }
     }
 

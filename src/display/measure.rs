@@ -167,7 +167,7 @@ fn measure_one(
     passes.positions.read_positions(lod)?;
     let truth_stats = draw_truth(display, passes.truth)?;
     passes.positions.bind();
-    display.renderer.draw_positions(&DrawList { frame: Some(frame), ..DrawList::default() })?;
+    display.renderer.draw_positions(&DrawList { uniforms: Some(frame), ..DrawList::default() })?;
     passes.truth.draw(&frame, crate::gl::TerrainOutput::Position)?;
     passes.positions.read_positions(truth_positions)?;
     display.context.bind_target();
@@ -214,7 +214,7 @@ fn measure_one(
 /// The uniforms of the frame the pipeline drew last.
 fn frame_of(list: &DrawList) -> Result<FrameUniforms, DisplayError> {
     let why = "the accuracy passes need a frame drawn first";
-    list.frame.ok_or_else(|| GlError::InvalidRequest(why.to_owned()).into())
+    list.uniforms.ok_or_else(|| GlError::InvalidRequest(why.to_owned()).into())
 }
 
 /// Draws the truth into the display's target with the last LOD frame's

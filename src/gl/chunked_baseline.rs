@@ -132,7 +132,7 @@ impl RenderBackend for ChunkedBaseline {
 
     fn render(&mut self, frame: &FrameOutput<'_>) -> Result<(), GlError> {
         check_uploads(frame.staging, frame.staging.len() as u32, frame.dirty)?;
-        let Some(uniforms) = frame.list.frame else { return Ok(()) };
+        let Some(uniforms) = frame.list.uniforms else { return Ok(()) };
         self.gl.tally(|c| c.frames += 1);
         self.background.draw_background(&uniforms)?;
         self.last = self.tiles(frame.list, frame.staging, frame.dirty)?;

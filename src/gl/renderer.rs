@@ -70,7 +70,7 @@ impl GlRenderer {
     /// `list`'s tiles as camera-relative positions (the accuracy tool's
     /// position pass over the tiles this renderer holds).
     pub fn draw_positions(&mut self, list: &DrawList) -> Result<(), GlError> {
-        let Some(frame) = list.frame else { return Ok(()) };
+        let Some(frame) = list.uniforms else { return Ok(()) };
         self.clear(frame.viewport, [0.0; 4])?;
         self.terrain.draw(list, TerrainOutput::Position)
     }
@@ -120,7 +120,7 @@ impl GlRenderer {
 
     /// Clears, draws the sky and the tiles of `list` from the height buffer.
     pub fn draw(&mut self, list: &DrawList) -> Result<(), GlError> {
-        let Some(frame) = list.frame else { return Ok(()) };
+        let Some(frame) = list.uniforms else { return Ok(()) };
         self.gl.tally(|c| c.frames += 1);
         self.draw_background(&frame)?;
         self.terrain.draw(list, TerrainOutput::Colour)

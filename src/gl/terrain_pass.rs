@@ -162,7 +162,7 @@ impl TerrainPass {
         output: TerrainOutput,
         vertices: TileVertices<'_>,
     ) -> Result<(), GlError> {
-        let Some(frame) = list.frame else { return Ok(()) };
+        let Some(frame) = list.uniforms else { return Ok(()) };
         let calls = Calls::new(&self.gl);
         let program = match output {
             TerrainOutput::Colour => &self.colour,

@@ -117,7 +117,7 @@ impl TruthPass {
             .collect();
         let indices_per_tile = grid::index_count(CHUNK_CELLS) as u32;
         let mut list =
-            DrawList { frame: Some(*frame), tiles, indices_per_tile, grid_size: CHUNK_CELLS };
+            DrawList { uniforms: Some(*frame), tiles, indices_per_tile, grid_size: CHUNK_CELLS };
         // As the display does: a fair brute force gets early z too.
         list.sort_front_to_back(CHUNK_CELLS);
         self.terrain.draw(&list, output)

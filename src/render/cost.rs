@@ -104,7 +104,7 @@ pub fn upload(model: &CostModel, ranges: &[Range<u32>]) -> CallStats {
 
 /// A frame of the display: clear, sky, terrain.
 pub fn frame(model: &CostModel, list: &DrawList) -> CallStats {
-    if list.frame.is_none() {
+    if list.uniforms.is_none() {
         return CallStats::default();
     }
     let mut stats = clear();
@@ -146,7 +146,7 @@ pub fn sky(model: &CostModel) -> CallStats {
 /// uniform and per tile two uniforms, two pointers and a glDrawElements, with
 /// a depth clear between slices; three attribute disables and the VAO unbind.
 pub fn terrain(model: &CostModel, list: &DrawList) -> CallStats {
-    let Some(frame) = list.frame else { return CallStats::default() };
+    let Some(frame) = list.uniforms else { return CallStats::default() };
     let mut stats = CallStats {
         state_changes: 9,
         program_binds: 1,

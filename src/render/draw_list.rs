@@ -185,7 +185,8 @@ impl TileUniforms {
 /// Everything drawn in one frame; buffers are kept and reused.
 #[derive(Clone, Debug, Default)]
 pub struct DrawList {
-    pub frame: Option<FrameUniforms>,
+    /// The uniforms every tile of the frame shares (none before a frame is built).
+    pub uniforms: Option<FrameUniforms>,
     pub tiles: Vec<TileUniforms>,
     /// Indices per tile in the shared index buffer.
     pub indices_per_tile: u32,
@@ -215,7 +216,7 @@ pub struct TileGeometry<'a> {
 impl DrawList {
     pub fn with_capacity(tiles: usize) -> Self {
         DrawList {
-            frame: None,
+            uniforms: None,
             tiles: Vec::with_capacity(tiles),
             indices_per_tile: 0,
             grid_size: 0,
@@ -226,7 +227,7 @@ impl DrawList {
     /// the near slice when the range is not cut, none in the far one). The
     /// GL terrain pass and the cost model both walk this.
     pub fn tiles_in(&self, slice: Slice) -> impl Iterator<Item = &TileUniforms> + '_ {
-        let frame = self.frame;
+        let frame = self.uniforms;
         let cells = self.grid_size as f32;
         self.tiles.iter().filter(move |tile| {
             let Some(frame) = frame else { return false };
@@ -246,7 +247,7 @@ impl DrawList {
         ranges: &LevelRanges,
         geometry: TileGeometry<'_>,
     ) {
-        self.frame = Some(frame);
+        self.uniforms = Some(frame);
         self.grid_size = geometry.grid_size;
         self.tiles.clear();
         for draw in draws {
@@ -261,7 +262,7 @@ impl DrawList {
     /// took the default flight from about 125 to 70 ms a frame. In place, so
     /// no allocation.
     pub fn sort_front_to_back(&mut self, grid_size: u32) {
-        let Some(frame) = self.frame else { return };
+        let Some(frame) = self.uniforms else { return };
         let half = grid_size as f32 / 2.0;
         let distance = |tile: &TileUniforms| {
             let [x, y] = tile.post_position(&frame.posts, half, half);
@@ -385,7 +386,7 @@ mod tests {
             tile(2, [20.0, -2.0]),
             tile(3, [500.0, -2.0]),
         ];
-        let mut list = DrawList { frame: Some(frame(posts)), tiles, ..DrawList::default() };
+        let mut list = DrawList { uniforms: Some(frame(posts)), tiles, ..DrawList::default() };
         list.sort_front_to_back(4);
         let order: Vec<u32> = list.tiles.iter().map(|t| t.key.x).collect();
         assert_eq!(order, [1, 2, 0, 3]);

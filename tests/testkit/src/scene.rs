@@ -89,7 +89,7 @@ pub fn edge_heights(
             .collect();
         let drawn = |i: u32, j: u32| {
             let v = vertices[(i + j * (grid + 1)) as usize];
-            let posts = list.frame.expect("a built list has its frame").posts;
+            let posts = list.uniforms.expect("a built list has its frame").posts;
             let [x, y] = tile.post_position(&posts, i as f32, j as f32).map(f64::from);
             let distance = (x * x + y * y + (v.height as f64 - altitude).powi(2)).sqrt();
             morphed_height(
