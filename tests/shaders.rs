@@ -65,8 +65,9 @@ fn terrain_morph_matches_its_rust_mirror() {
         code(&vert).contains("clamp((distance - u_morph.x) / (u_morph.y - u_morph.x), 0.0, 1.0)")
     );
     assert!(
-        code(&vert).contains("length(vec3(position, a_height.x - altitude))"),
-        "distance uses the unmorphed height"
+        code(&vert).contains("length(vec3(position, own - altitude))")
+            && code(&vert).contains("float own = no_data ? a_height.y : a_height.x;"),
+        "distance uses the unmorphed height (a post without data: its stand-in)"
     );
     assert!(code(&rust).contains("((distance - start) / (end - start)).clamp(0.0, 1.0)"));
 }

@@ -11,6 +11,17 @@ precision mediump float;
 
 varying vec3 v_position;
 
+#ifdef VOIDS
+// Drawn for tiles with posts without data: a triangle touching one is
+// dropped whole (v_void is above 0 everywhere inside it).
+varying float v_void;
+#endif
+
 void main() {
+#ifdef VOIDS
+    if (v_void > 0.0) {
+        discard;
+    }
+#endif
     gl_FragColor = vec4(v_position, 1.0);
 }

@@ -27,7 +27,18 @@ vec3 elevation_tint(float h) {
     return mix(c, vec3(0.93, 0.94, 0.96), clamp((h - 3600.0) / 1200.0, 0.0, 1.0));
 }
 
+#ifdef VOIDS
+// Drawn for tiles with posts without data: a triangle touching one is
+// dropped whole (v_void is above 0 everywhere inside it).
+varying float v_void;
+#endif
+
 void main() {
+#ifdef VOIDS
+    if (v_void > 0.0) {
+        discard;
+    }
+#endif
     vec3 n = normalize(v_normal);
     // Lambert from the sun plus a sky fill, so slopes facing away stay readable.
     float light = 0.30 + 0.75 * max(dot(n, u_sun), 0.0);

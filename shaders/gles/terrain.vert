@@ -24,13 +24,19 @@ varying float v_relative_height;  // terrain height minus aircraft altitude
 varying float v_height;
 varying float v_distance;
 varying vec3 v_position;     // camera-relative, for the accuracy tool's position output
+varying float v_void;        // 1 at a post without data, 0 elsewhere (see VOIDS in the fragment shaders)
 
 void main() {
     vec2 position = (u_tile.xy + a_grid.xy * u_tile.z) * u_posts.xy - u_posts.zw;
     float altitude = u_frame.x;
-    float distance = length(vec3(position, a_height.x - altitude));
+    // A post without data carries tiles::NO_DATA (-1e9 m) and, as its target,
+    // a real height nearby: its triangles are dropped, but stay small.
+    bool no_data = a_height.x < -1.0e8;
+    float own = no_data ? a_height.y : a_height.x;
+    v_void = no_data ? 1.0 : 0.0;
+    float distance = length(vec3(position, own - altitude));
     float morph = clamp((distance - u_morph.x) / (u_morph.y - u_morph.x), 0.0, 1.0);
-    float height = mix(a_height.x, a_height.y, morph);
+    float height = mix(own, a_height.y, morph);
     float drop = dot(position, position) * u_frame.y;
     float z = height - a_grid.z * u_morph.z - altitude - drop;
     vec2 n = mix(a_normal.xy, a_normal.zw, morph);

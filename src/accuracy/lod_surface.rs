@@ -17,6 +17,7 @@ use crate::lod::morph::{morph_factor, morphed_height};
 use crate::lod::TileKey;
 use crate::node::cell_surface;
 use crate::render::{DrawList, PostFrame, TileUniforms};
+use crate::tiles::vertex::is_no_data;
 use crate::tiles::TileVertex;
 
 /// How close to a tile edge, in posts, a drawn point counts as on it (a
@@ -60,10 +61,18 @@ impl LodSurface {
 
     /// Height of the drawn surface at the local point `(x_m, y_m)`, metres
     /// above the datum with the curvature drop taken off (what the GPU drew
-    /// there plus the camera altitude); `None` where no tile was drawn.
+    /// there plus the camera altitude); `None` where no tile was drawn, or
+    /// where the tile's triangle there touches a post without data (the
+    /// display drops such triangles).
     pub fn height_at(&self, staging: &[u8], x_m: f64, y_m: f64) -> Option<f64> {
         let (tile, local) = self.locate(x_m, y_m)?;
-        Some(self.tile_surface(staging, tile, local))
+        let height = self.tile_surface(staging, tile, local);
+        height.is_finite().then_some(height)
+    }
+
+    /// Whether a drawn tile covers `(x_m, y_m)` (with or without data there).
+    pub fn has_tile(&self, x_m: f64, y_m: f64) -> bool {
+        self.locate(x_m, y_m).is_some()
     }
 
     /// Whether `(x_m, y_m)` lies on the edge of the drawn tile there (within
@@ -117,6 +126,9 @@ impl LodSurface {
         let at = tile.byte_offset as usize + index * std::mem::size_of::<TileVertex>();
         let vertex: TileVertex =
             bytemuck::pod_read_unaligned(&staging[at..at + std::mem::size_of::<TileVertex>()]);
+        if is_no_data(vertex.height) {
+            return f64::NAN;
+        }
         let [x, y] = tile.post_position(&self.posts, i as f32, j as f32).map(f64::from);
         let distance = (x * x + y * y + (vertex.height as f64 - self.altitude).powi(2)).sqrt();
         let factor = morph_factor(distance, tile.morph[0] as f64, tile.morph[1] as f64);

@@ -95,6 +95,10 @@ pub struct ViewErrors {
     /// Terrain pixels whose full-resolution ground point no drawn tile
     /// covers (a hole in the LOD surface; their error is the LOD side's).
     pub holes: usize,
+    /// Terrain pixels whose full-resolution ground point a drawn tile covers
+    /// without data (it drops the triangle there): a coverage difference at
+    /// the data's edge, counted with the coverage mismatch.
+    pub no_data: usize,
     /// Terrain pixels (in both images) where the LOD image shows a skirt
     /// (a crack between tiles filled), and the largest error elsewhere.
     pub skirt_pixels: usize,
@@ -111,6 +115,7 @@ struct Counts {
     lod_only: usize,
     truth_only: usize,
     holes: usize,
+    no_data: usize,
     skirt: usize,
     max_surface: f64,
 }
@@ -123,6 +128,7 @@ impl std::ops::Add for Counts {
             lod_only: self.lod_only + o.lod_only,
             truth_only: self.truth_only + o.truth_only,
             holes: self.holes + o.holes,
+            no_data: self.no_data + o.no_data,
             skirt: self.skirt + o.skirt,
             max_surface: self.max_surface.max(o.max_surface),
         }
@@ -161,9 +167,18 @@ pub fn measure_view(
                         counts.terrain += 1;
                         let lod_side = pixel.at_lod_point(p);
                         *mirror = lod_side.mirror_m;
-                        let truth_side = pixel.at_truth_point(t);
-                        counts.holes += usize::from(truth_side.is_none());
-                        *error = lod_side.error_px.max(truth_side.unwrap_or(0.0)) as f32;
+                        let truth_side = match pixel.at_truth_point(t) {
+                            TruthSide::Error(px) => px,
+                            TruthSide::Hole => {
+                                counts.holes += 1;
+                                0.0
+                            }
+                            TruthSide::NoData => {
+                                counts.no_data += 1;
+                                0.0
+                            }
+                        };
+                        *error = lod_side.error_px.max(truth_side) as f32;
                         if lod_side.skirt {
                             counts.skirt += 1;
                         } else {
@@ -185,6 +200,7 @@ pub fn measure_view(
     out.lod_only = counts.lod_only;
     out.truth_only = counts.truth_only;
     out.holes = counts.holes;
+    out.no_data = counts.no_data;
     out.skirt_pixels = counts.skirt;
     out.max_surface_px = counts.max_surface;
 }
@@ -234,14 +250,30 @@ impl Pixel<'_> {
 
     /// At the point the full-resolution mesh shows: the LOD surface there
     /// against the exact one, in pixels (0 where the ground is outside the
-    /// data); `None` where no drawn tile covers it (a hole).
-    fn at_truth_point(&self, t: Vec3) -> Option<f64> {
+    /// data).
+    fn at_truth_point(&self, t: Vec3) -> TruthSide {
         let t = t.as_dvec3();
         let (ground, _) = self.geometry.ground(t);
-        let Some(h) = (self.exact)(ground.x, ground.y) else { return Some(0.0) };
-        let lod = self.surface.height_at(self.staging, ground.x, ground.y)?;
-        Some(self.geometry.projected_vertical(t, lod - self.geometry.drawn_truth(ground, h)))
+        let Some(h) = (self.exact)(ground.x, ground.y) else { return TruthSide::Error(0.0) };
+        match self.surface.height_at(self.staging, ground.x, ground.y) {
+            Some(lod) => TruthSide::Error(
+                self.geometry.projected_vertical(t, lod - self.geometry.drawn_truth(ground, h)),
+            ),
+            None if self.surface.has_tile(ground.x, ground.y) => TruthSide::NoData,
+            None => TruthSide::Hole,
+        }
     }
+}
+
+/// What the LOD surface is at a point the full-resolution mesh shows.
+enum TruthSide {
+    /// Its error there, pixels.
+    Error(f64),
+    /// No drawn tile covers it: a hole in the mesh.
+    Hole,
+    /// A tile covers it but drops the triangle there for a post without data
+    /// (a coarse tile's last cell at the data's edge): a coverage difference.
+    NoData,
 }
 
 #[cfg(test)]

@@ -28,7 +28,8 @@ pub struct ViewRow {
     pub t: f64,
     #[serde(flatten)]
     pub errors: ErrorSummary,
-    /// Share of all pixels where one image shows terrain and the other sky.
+    /// Share of all pixels where one image shows terrain and the other sky,
+    /// or the LOD has no data at the ground point the truth shows.
     pub coverage_mismatch: f64,
     /// Terrain pixels whose ground point no LOD tile covers.
     pub holes: usize,
@@ -105,7 +106,7 @@ pub fn measure_flight(
         let row =
             measure_one(display, passes, exact, spacing_m, *t, camera, &mut images, &mut errors)?;
         all_errors.extend(errors.errors_px.iter().copied().filter(|e| !e.is_nan()));
-        mismatched += errors.lod_only + errors.truth_only;
+        mismatched += errors.lod_only + errors.truth_only + errors.no_data;
         pixels += errors.errors_px.len();
         holes += errors.holes;
         let is_worse = |w: &WorstView| {
@@ -195,7 +196,7 @@ fn measure_one(
     Ok(ViewRow {
         t,
         errors: ErrorSummary::of(&mut view_errors),
-        coverage_mismatch: (errors.lod_only + errors.truth_only) as f64
+        coverage_mismatch: (errors.lod_only + errors.truth_only + errors.no_data) as f64
             / errors.errors_px.len().max(1) as f64,
         holes: errors.holes,
         skirt_pixels: errors.skirt_pixels,

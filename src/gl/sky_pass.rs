@@ -15,8 +15,9 @@ const FRAGMENT_SOURCE: &str = include_str!("../../shaders/gles/sky.frag");
 const CORNER: u32 = 0;
 /// Covers the screen with one triangle.
 const TRIANGLE: [[f32; 2]; 3] = [[-1.0, -1.0], [3.0, -1.0], [-1.0, 3.0]];
-/// Ground colour below the horizon where there is no terrain data.
-const GROUND: [f32; 3] = [0.36, 0.31, 0.24];
+/// The "no data" hatching's dark colour (its stripes are twice as bright):
+/// drawn below the horizon wherever no terrain covers the sky.
+const NO_DATA: [f32; 3] = [0.22, 0.22, 0.24];
 
 pub struct SkyPass {
     gl: Rc<Gl>,
@@ -25,7 +26,7 @@ pub struct SkyPass {
     horizon: Option<glow::UniformLocation>,
     zenith: Option<glow::UniformLocation>,
     haze: Option<glow::UniformLocation>,
-    ground: Option<glow::UniformLocation>,
+    no_data: Option<glow::UniformLocation>,
     corners: Buffer,
     vertex_array: Option<VertexArray>,
 }
@@ -45,7 +46,7 @@ impl SkyPass {
             horizon: program.uniform_location("u_horizon"),
             zenith: program.uniform_location("u_zenith"),
             haze: program.uniform_location("u_haze"),
-            ground: program.uniform_location("u_ground"),
+            no_data: program.uniform_location("u_no_data"),
             program,
             corners,
             vertex_array,
@@ -75,7 +76,7 @@ impl SkyPass {
             calls.uniform_4(self.horizon.as_ref(), [dip as f32, 0.0, 0.0, 0.0]);
             calls.uniform_3(self.zenith.as_ref(), palette::SKY_ZENITH);
             calls.uniform_3(self.haze.as_ref(), palette::SKY_HORIZON);
-            calls.uniform_3(self.ground.as_ref(), GROUND);
+            calls.uniform_3(self.no_data.as_ref(), NO_DATA);
             if let Some(vertex_array) = &self.vertex_array {
                 calls.bind_vertex_array(Some(vertex_array));
             }

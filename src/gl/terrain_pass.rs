@@ -84,8 +84,11 @@ impl TerrainProgram {
 
 pub struct TerrainPass {
     gl: Rc<Gl>,
-    colour: TerrainProgram,
-    position: TerrainProgram,
+    /// Per output, the plain program and the one that drops triangles
+    /// touching posts without data (its `discard` costs early depth
+    /// rejection, so only tiles with voids use it).
+    colour: [TerrainProgram; 2],
+    position: [TerrainProgram; 2],
     grid_vertices: Buffer,
     grid_indices: Buffer,
     heights: Buffer,
@@ -97,8 +100,18 @@ impl TerrainPass {
     /// Builds the program, the shared grid of `grid_size` and a height
     /// buffer of `buffer_bytes` (the tile allocator's capacity).
     pub fn new(gl: &Rc<Gl>, grid_size: u32, buffer_bytes: u32) -> Result<TerrainPass, GlError> {
-        let colour = TerrainProgram::build(gl, "terrain", FRAGMENT_SOURCE)?;
-        let position = TerrainProgram::build(gl, "terrain positions", POSITION_SOURCE)?;
+        let colour = [
+            TerrainProgram::build(gl, "terrain", FRAGMENT_SOURCE)?,
+            TerrainProgram::build(gl, "terrain with voids", &with_voids(FRAGMENT_SOURCE))?,
+        ];
+        let position = [
+            TerrainProgram::build(gl, "terrain positions", POSITION_SOURCE)?,
+            TerrainProgram::build(
+                gl,
+                "terrain positions with voids",
+                &with_voids(POSITION_SOURCE),
+            )?,
+        ];
         let grid = TileGrid::new(grid_size);
         let vertex_bytes: &[u8] = bytemuck::cast_slice(&grid.vertices);
         let grid_vertices =
@@ -164,10 +177,11 @@ impl TerrainPass {
     ) -> Result<(), GlError> {
         let Some(frame) = list.uniforms else { return Ok(()) };
         let calls = Calls::new(&self.gl);
-        let program = match output {
+        let programs = match output {
             TerrainOutput::Colour => &self.colour,
             TerrainOutput::Position => &self.position,
         };
+        let program = &programs[0];
         // SAFETY: every object bound is live in this context; attribute
         // pointers stay inside the buffers (grid vertices are indexed by the
         // shared indices, each tile's offset leaves room for a whole tile, as
@@ -196,11 +210,17 @@ impl TerrainPass {
             calls.enable_attribute(HEIGHT);
             calls.enable_attribute(NORMAL);
             // Far slice first; then a clear depth for the near slice.
+            let mut on_plain = true;
             if let Some(far) = frame.slices.far {
-                self.draw_slice(calls, &program.at, list, far, Slice::Far, vertices);
+                on_plain = self.draw_slice(calls, programs, list, far, Slice::Far, vertices);
                 calls.clear(glow::DEPTH_BUFFER_BIT);
             }
-            self.draw_slice(calls, &program.at, list, frame.slices.near, Slice::Near, vertices);
+            if !on_plain {
+                calls.use_program(&program.program);
+                set_frame_uniforms(calls, &program.at, &frame);
+            }
+            let near = frame.slices.near;
+            self.draw_slice(calls, programs, list, near, Slice::Near, vertices);
             calls.disable_attribute(GRID);
             calls.disable_attribute(HEIGHT);
             calls.disable_attribute(NORMAL);
@@ -213,26 +233,55 @@ impl TerrainPass {
     }
 
     /// Draws the tiles of `list` that reach into depth slice `slice` with its
-    /// `view_projection`.
+    /// `view_projection`: those without voids with the plain program (bound
+    /// on entry), then those with voids with the other. Returns whether the
+    /// plain program is still bound.
     #[allow(unsafe_code)]
     fn draw_slice(
         &self,
         calls: Calls<'_>,
-        at: &Locations,
+        programs: &[TerrainProgram; 2],
         list: &DrawList,
         view_projection: glam::Mat4,
         slice: Slice,
         vertices: TileVertices<'_>,
+    ) -> bool {
+        let frame = list.uniforms.expect("drawn lists have uniforms");
+        let [plain, voids] = programs;
+        // SAFETY: the plain program is bound and its location comes from it.
+        unsafe { calls.uniform_matrix(plain.at.view_projection.as_ref(), &view_projection) };
+        self.draw_tiles(calls, &plain.at, list.tiles_with(slice, false), vertices);
+        let mut with_voids = list.tiles_with(slice, true).peekable();
+        if with_voids.peek().is_none() {
+            return true;
+        }
+        // SAFETY: a linked program of this context; its locations come from it.
+        unsafe {
+            calls.use_program(&voids.program);
+            set_frame_uniforms(calls, &voids.at, &frame);
+            calls.uniform_matrix(voids.at.view_projection.as_ref(), &view_projection);
+        }
+        self.draw_tiles(calls, &voids.at, with_voids, vertices);
+        false
+    }
+
+    fn draw_tiles<'t>(
+        &self,
+        calls: Calls<'_>,
+        at: &Locations,
+        tiles: impl Iterator<Item = &'t TileUniforms>,
+        vertices: TileVertices<'_>,
     ) {
-        // SAFETY: the terrain program is bound and its location comes from it.
-        unsafe { calls.uniform_matrix(at.view_projection.as_ref(), &view_projection) };
-        for tile in list.tiles_in(slice) {
+        for tile in tiles {
             let offset = match vertices {
                 TileVertices::Shared => tile.byte_offset,
                 TileVertices::PerTile(buffer_of) => match buffer_of(tile) {
                     Some(buffer) => {
                         // SAFETY: the tile's own live buffer.
-                        unsafe { calls.bind_buffer(buffer) };
+                        #[allow(unsafe_code)]
+                        unsafe {
+                            calls.bind_buffer(buffer)
+                        };
                         0
                     }
                     None => continue,
@@ -279,4 +328,11 @@ fn set_frame_uniforms(calls: Calls<'_>, at: &Locations, frame: &FrameUniforms) {
         calls.uniform_4(at.awareness.as_ref(), awareness);
         calls.uniform_3(at.haze.as_ref(), palette::SKY_HORIZON);
     }
+}
+
+/// `source` with `VOIDS` defined after its `#version` line: the variant
+/// that discards fragments of triangles touching a post without data.
+fn with_voids(source: &str) -> String {
+    let (version, rest) = source.split_once('\n').unwrap_or((source, ""));
+    format!("{version}\n#define VOIDS\n{rest}")
 }

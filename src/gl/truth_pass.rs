@@ -46,6 +46,8 @@ struct ChunkDraw {
     first_post: [i64; 2],
     /// Where the chunk's vertices start in the vertex buffer.
     byte_offset: u32,
+    /// Some posts have no data.
+    voids: bool,
 }
 
 /// The truth mesh on the GPU, drawn by a terrain pass of its own.
@@ -84,6 +86,7 @@ impl TruthPass {
                 ),
                 first_post: mesh.chunk_first_post(chunk),
                 byte_offset: k as u32 * tile_bytes(CHUNK_CELLS),
+                voids: chunk.voids,
             })
             .collect();
         Ok(TruthPass { terrain, chunks, triangles: mesh.triangles() })
@@ -113,6 +116,7 @@ impl TruthPass {
                 morph: NO_MORPH,
                 skirt_depth: 0.0,
                 byte_offset: chunk.byte_offset,
+                voids: chunk.voids,
             })
             .collect();
         let indices_per_tile = grid::index_count(CHUNK_CELLS) as u32;

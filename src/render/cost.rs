@@ -143,8 +143,11 @@ pub fn sky(model: &CostModel) -> CallStats {
 /// The terrain pass: nine state calls, glUseProgram, five frame uniforms, the
 /// VAO bind, the index and grid buffer binds, three attribute enables, the
 /// grid pointer, the height buffer bind; then per depth slice one matrix
-/// uniform and per tile two uniforms, two pointers and a glDrawElements, with
-/// a depth clear between slices; three attribute disables and the VAO unbind.
+/// uniform and per tile two uniforms, two pointers and a glDrawElements, the
+/// tiles with voids last, after a switch to the program that drops their
+/// triangles (glUseProgram, five frame uniforms, the matrix) and back to the
+/// plain one for the next slice; a depth clear between slices; three
+/// attribute disables and the VAO unbind.
 pub fn terrain(model: &CostModel, list: &DrawList) -> CallStats {
     let Some(frame) = list.uniforms else { return CallStats::default() };
     let mut stats = CallStats {
@@ -159,9 +162,25 @@ pub fn terrain(model: &CostModel, list: &DrawList) -> CallStats {
     };
     let slices: &[Slice] =
         if frame.slices.far.is_some() { &[Slice::Far, Slice::Near] } else { &[Slice::Near] };
+    let mut on_plain = true;
     for &slice in slices {
-        stats.uniform_writes += 1;
-        let tiles = list.tiles_in(slice).count() as u64;
+        let switch = |stats: &mut CallStats| {
+            stats.program_binds += 1;
+            stats.uniform_writes += 6;
+        };
+        if on_plain {
+            stats.uniform_writes += 1;
+        } else {
+            switch(&mut stats);
+            on_plain = true;
+        }
+        let plain = list.tiles_with(slice, false).count() as u64;
+        let voids = list.tiles_with(slice, true).count() as u64;
+        if voids > 0 {
+            switch(&mut stats);
+            on_plain = false;
+        }
+        let tiles = plain + voids;
         stats.uniform_writes += 2 * tiles;
         stats.attribute_pointer_changes += 2 * tiles;
         stats.draw_calls += tiles;

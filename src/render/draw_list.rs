@@ -10,7 +10,7 @@
 
 use crate::camera::Camera;
 use crate::lod::{LevelRanges, TileKey};
-use crate::tiles::TileDraw;
+use crate::tiles::{TileCoverage, TileDraw};
 use glam::{DVec2, Mat4, Vec3};
 
 /// Uniforms shared by every tile of a frame.
@@ -168,7 +168,12 @@ pub struct TileUniforms {
     pub morph: [f32; 2],
     /// How far skirt vertices hang below the edge, metres.
     pub skirt_depth: f32,
+    /// Where the tile's vertices start in the height buffer, bytes.
     pub byte_offset: u32,
+    /// Some posts have no data: drawn by the program that drops the
+    /// triangles touching them (after the tiles without voids, since that
+    /// program cannot use early depth rejection).
+    pub voids: bool,
 }
 
 impl TileUniforms {
@@ -223,9 +228,18 @@ impl DrawList {
         }
     }
 
-    /// The tiles drawn in depth slice `slice`, in draw order (every tile in
-    /// the near slice when the range is not cut, none in the far one). The
-    /// GL terrain pass and the cost model both walk this.
+    /// The tiles drawn in depth slice `slice` with or without `voids`, in
+    /// draw order. The GL terrain pass and the cost model both walk this.
+    pub fn tiles_with(
+        &self,
+        slice: Slice,
+        voids: bool,
+    ) -> impl Iterator<Item = &TileUniforms> + '_ {
+        self.tiles_in(slice).filter(move |tile| tile.voids == voids)
+    }
+
+    /// The tiles drawn in depth slice `slice`, in list order (every tile in
+    /// the near slice when the range is not cut, none in the far one).
     pub fn tiles_in(&self, slice: Slice) -> impl Iterator<Item = &TileUniforms> + '_ {
         let frame = self.uniforms;
         let cells = self.grid_size as f32;
@@ -291,6 +305,7 @@ fn tile_uniforms(
         morph,
         skirt_depth: skirt_depth(draw, geometry.delta_per_level),
         byte_offset: draw.byte_offset,
+        voids: draw.coverage != TileCoverage::Full,
     }
 }
 
@@ -317,6 +332,7 @@ mod tests {
             morph: [0.0, 1.0],
             skirt_depth: 1.0,
             byte_offset: 0,
+            voids: false,
         }
     }
 

@@ -14,7 +14,7 @@
 //! happens to the buffer there is always a coarse tile to draw.
 
 use super::grid::vertex_count;
-use super::vertex::{fill_tile, tile_bytes, tile_node, PostReader, TileVertex};
+use super::vertex::{fill_tile, tile_bytes, tile_node, PostReader, TileCoverage, TileVertex};
 use super::{best_resident, ResidentNodes};
 use crate::allocator::{
     AllocError, AllocatorConfig, ConfigError, ContiguousAllocator, GeneratorId, Request,
@@ -47,6 +47,9 @@ pub struct TileDraw {
     /// Level of the node the heights came from (above `key.level` when only
     /// coarser data was resident: best available).
     pub source_level: u8,
+    /// Whether some of its posts have no data (never [`TileCoverage::Empty`]:
+    /// tiles without data are not drawn).
+    pub coverage: TileCoverage,
 }
 
 /// What one frame of the cache did.
@@ -83,6 +86,7 @@ pub enum TileError {
 struct Resident {
     key: TileKey,
     source_level: u8,
+    coverage: TileCoverage,
     last_frame: u64,
     pinned: bool,
 }
@@ -266,8 +270,13 @@ impl TileCache {
             selected: self.by_key.len() + 1,
             max: self.config.max_tiles,
         })?;
-        self.slots[slot as usize] =
-            Some(Resident { key, source_level, last_frame: 0, pinned: false });
+        self.slots[slot as usize] = Some(Resident {
+            key,
+            source_level,
+            coverage: TileCoverage::Full,
+            last_frame: 0,
+            pinned: false,
+        });
         self.by_key.insert(key, slot);
         Ok(slot)
     }
@@ -313,7 +322,7 @@ impl TileCache {
                 let reader = PostReader::new(&layout, resident.key, grid_size, source, data);
                 let scale = 2f64.powi(resident.key.level as i32);
                 let spacing = [layout.spacing_m[0] * scale, layout.spacing_m[1] * scale];
-                fill_tile(&reader, grid_size, spacing, vertices);
+                resident.coverage = fill_tile(&reader, grid_size, spacing, vertices);
                 bytes.copy_from_slice(bytemuck::cast_slice(vertices));
                 resident.source_level = source.level;
                 bytes_uploaded += bytes.len() as u64;
@@ -353,12 +362,17 @@ impl TileCache {
         for tile in selected {
             let slot = self.by_key[&tile.key];
             let resident = self.slots[slot as usize].expect("selected tiles are resident");
+            if resident.coverage == TileCoverage::Empty {
+                // Nothing to draw: no post of it has data.
+                continue;
+            }
             let range =
                 self.allocator.block_range(GeneratorId(slot)).expect("resident tiles own a block");
             self.draws.push(TileDraw {
                 key: tile.key,
                 byte_offset: range.start,
                 source_level: resident.source_level,
+                coverage: resident.coverage,
             });
         }
         // Memory order keeps the attribute pointer moving forward.

@@ -10,7 +10,7 @@ pub mod vertex;
 
 pub use cache::{TileCache, TileCacheConfig, TileDraw, TileError, TileFrameStats};
 pub use grid::TileGrid;
-pub use vertex::TileVertex;
+pub use vertex::{TileCoverage, TileVertex, NO_DATA};
 
 use crate::node::{NodeData, NodeId, NodeLayout};
 

@@ -7,6 +7,31 @@ use super::grid::{edge_posts, vertex_count};
 use crate::lod::TileKey;
 use crate::node::{cell_surface, NodeData, NodeId, NodeLayout};
 
+/// The height a vertex carries where the data has none (a void, or beyond
+/// the data's edge): far below any terrain, so that no consumer mistakes it
+/// for one. Its morph target then holds a nearby real height, for the
+/// rasteriser's sake only; every triangle touching such a vertex is dropped
+/// (see [`TileCoverage`] and the terrain shaders' `VOIDS` variant).
+pub const NO_DATA: f32 = -1.0e9;
+
+/// Whether a vertex's height is [`NO_DATA`].
+pub fn is_no_data(height: f32) -> bool {
+    height <= NO_DATA * 0.5
+}
+
+/// How much of a tile has data.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub enum TileCoverage {
+    /// Every post has data.
+    #[default]
+    Full,
+    /// Some posts have none: the tile is drawn with the program that drops
+    /// the triangles touching them.
+    Partial,
+    /// No post has data: nothing to draw.
+    Empty,
+}
+
 /// Twelve bytes per vertex.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
@@ -59,10 +84,16 @@ impl<'a> PostReader<'a> {
     }
 
     /// Height of the tile's post `(i, j)`; `i` and `j` may reach two posts
-    /// outside the tile (into the node's border).
+    /// outside the tile (into the node's border). NaN where the data has no
+    /// post: a void in the node, or beyond the data's edge (never an
+    /// edge-copied height).
     pub fn post(&self, i: i64, j: i64) -> f32 {
         let x = self.origin[0] + i * self.stride;
         let y = self.origin[1] + j * self.stride;
+        let [last_x, last_y] = self.layout.posts.map(|p| p as i64 - 1);
+        if x < 0 || y < 0 || x > last_x || y > last_y {
+            return f32::NAN;
+        }
         let node_stride = 1i64 << self.node.level;
         let span = (self.layout.node_size as i64) << self.node.level;
         // Position in the node's posts (fractional when the node is coarser).
@@ -87,42 +118,81 @@ pub fn sample_node(layout: &NodeLayout, data: &NodeData, fx: f64, fy: f64) -> f3
     cell_surface(h(x0, y0), h(x0 + 1, y0), h(x0, y0 + 1), h(x0 + 1, y0 + 1), tx, ty) as f32
 }
 
-/// Fills `out` (one tile's vertices, skirt included) from `reader`.
-/// `spacing_m` is the distance between the tile's posts, east and north.
+/// Fills `out` (one tile's vertices, skirt included) from `reader`, and
+/// says how much of the tile has data. `spacing_m` is the distance between
+/// the tile's posts, east and north. A post without data gets [`NO_DATA`];
+/// a morph target or normal that would need a missing neighbour falls back
+/// to what the post's own data gives (no morph, one-sided slopes).
 pub fn fill_tile(
     reader: &PostReader<'_>,
     grid_size: u32,
     spacing_m: [f64; 2],
     out: &mut [TileVertex],
-) {
+) -> TileCoverage {
     let g = grid_size as i64;
     debug_assert_eq!(out.len(), vertex_count(grid_size));
     let h = |i: i64, j: i64| reader.post(i, j) as f64;
     let normal = |i: i64, j: i64, step: i64| {
-        let dx = (h(i + step, j) - h(i - step, j)) / (2.0 * step as f64 * spacing_m[0]);
-        let dy = (h(i, j + step) - h(i, j - step)) / (2.0 * step as f64 * spacing_m[1]);
+        let dx = slope(h(i - step, j), h(i, j), h(i + step, j), step as f64 * spacing_m[0]);
+        let dy = slope(h(i, j - step), h(i, j), h(i, j + step), step as f64 * spacing_m[1]);
         let inv = 1.0 / (dx * dx + dy * dy + 1.0).sqrt();
         [-dx * inv, -dy * inv]
     };
+    let (mut with_data, mut without) = (0usize, 0usize);
+    let mut nearest = f64::NAN;
     for j in 0..=g {
         for i in 0..=g {
-            let own = normal(i, j, 1);
+            let own = h(i, j);
+            let index = (i + j * (g + 1)) as usize;
+            if own.is_nan() {
+                without += 1;
+                out[index] = TileVertex { height: NO_DATA, target: f32::NAN, normal: [0; 4] };
+                continue;
+            }
+            with_data += 1;
+            nearest = own;
+            let slope_here = normal(i, j, 1);
             let (target, parent) = parent_surface(i, j, &h, &|i, j| normal(i, j, 2));
-            out[(i + j * (g + 1)) as usize] = TileVertex {
-                height: h(i, j) as f32,
+            let (target, parent) =
+                if target.is_nan() { (own, slope_here) } else { (target, parent) };
+            out[index] = TileVertex {
+                height: own as f32,
                 target: target as f32,
                 normal: [
-                    quantize(own[0]),
-                    quantize(own[1]),
+                    quantize(slope_here[0]),
+                    quantize(slope_here[1]),
                     quantize(parent[0]),
                     quantize(parent[1]),
                 ],
             };
         }
     }
+    // Vertices without data still need a place for the rasteriser: a real
+    // height of the tile, so their (dropped) triangles stay small.
+    for vertex in out.iter_mut().take(((g + 1) * (g + 1)) as usize) {
+        if vertex.target.is_nan() {
+            vertex.target = nearest as f32;
+        }
+    }
     let posts = ((g + 1) * (g + 1)) as usize;
     for (k, (i, j)) in edge_posts(grid_size).enumerate() {
         out[posts + k] = out[(i + j * grid_size + j) as usize];
+    }
+    match (with_data, without) {
+        (_, 0) => TileCoverage::Full,
+        (0, _) => TileCoverage::Empty,
+        _ => TileCoverage::Partial,
+    }
+}
+
+/// The slope between posts `step_m` apart: central where both neighbours
+/// have data, one-sided where one has, flat where neither has.
+pub fn slope(before: f64, here: f64, after: f64, step_m: f64) -> f64 {
+    match (before.is_nan(), after.is_nan()) {
+        (false, false) => (after - before) / (2.0 * step_m),
+        (true, false) => (after - here) / step_m,
+        (false, true) => (here - before) / step_m,
+        (true, true) => 0.0,
     }
 }
 

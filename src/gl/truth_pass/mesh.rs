@@ -13,7 +13,8 @@
 use crate::lod::select::tiles_at;
 use crate::node::{NodeData, NodeError, NodeId, NodeLayout, NodeSource};
 use crate::tiles::grid::{edge_posts, vertex_count};
-use crate::tiles::TileVertex;
+use crate::tiles::vertex::slope;
+use crate::tiles::{TileVertex, NO_DATA};
 
 /// Most posts a truth mesh may hold (4096^2: 200 MB of vertices on the GPU).
 pub const MAX_TRUTH_POSTS: u64 = 1 << 24;
@@ -74,6 +75,8 @@ pub struct TruthChunk {
     /// `vertex_count(CHUNK_CELLS)` vertices: posts row by row from the
     /// south-west, then the skirt's copies of the edge posts.
     pub vertices: Vec<TileVertex>,
+    /// Some posts have no data ([`crate::tiles::NO_DATA`]).
+    pub voids: bool,
 }
 
 /// Surface triangles of one chunk (its skirts have no area).
@@ -132,23 +135,27 @@ struct MarginGrid {
 }
 
 /// Where each post along one axis of the margin grid comes from: the node
-/// index and the post inside it, after clamping to the data.
+/// index and the post inside it, after clamping to the data, and whether
+/// the post lies inside the data at all (past its edge there is no data).
 struct AxisMap {
     nodes: Vec<u32>,
     local: Vec<u32>,
+    inside: Vec<bool>,
 }
 
 impl AxisMap {
     fn new(first: i64, posts: u32, samples: u32, node_size: u32, node_count: u32) -> Self {
         let last = samples.saturating_sub(1) as i64;
-        let (mut nodes, mut local) = (Vec::new(), Vec::new());
+        let (mut nodes, mut local, mut inside) = (Vec::new(), Vec::new(), Vec::new());
         for k in 0..posts as i64 + 2 {
-            let sample = first.saturating_sub(1).saturating_add(k).clamp(0, last) as u32;
+            let wanted = first.saturating_sub(1).saturating_add(k);
+            let sample = wanted.clamp(0, last) as u32;
             let node = (sample / node_size).min(node_count - 1);
             nodes.push(node);
             local.push(sample - node * node_size);
+            inside.push((0..=last).contains(&wanted));
         }
-        AxisMap { nodes, local }
+        AxisMap { nodes, local, inside }
     }
 
     /// Runs of consecutive posts read from the same node (the map is monotone).
@@ -189,10 +196,12 @@ impl MarginGrid {
                     for column in columns.clone() {
                         let (i, j) = (x.local[column], y.local[row]);
                         let height = node.post(layout, i, j);
-                        if !height.is_finite() {
+                        if height.is_infinite() {
                             return Err(TruthError::NotFinite { id, i, j });
                         }
-                        heights[row * width + column] = height;
+                        // NaN: a void of the data. Past the data: none either.
+                        let inside = x.inside[column] && y.inside[row];
+                        heights[row * width + column] = if inside { height } else { f32::NAN };
                     }
                 }
             }
@@ -205,11 +214,12 @@ impl MarginGrid {
         self.heights[(j + 1) as usize * self.width + (i + 1) as usize] as f64
     }
 
-    /// The unit normal's x and y at region post `(i, j)`, by central
-    /// differences as level-0 tiles compute it (`tiles::vertex::fill_tile`).
+    /// The unit normal's x and y at region post `(i, j)`, by differences as
+    /// level-0 tiles compute them (`tiles::vertex::fill_tile`).
     fn normal(&self, i: i64, j: i64, spacing_m: [f64; 2]) -> [i8; 2] {
-        let dx = (self.at(i + 1, j) - self.at(i - 1, j)) / (2.0 * spacing_m[0]);
-        let dy = (self.at(i, j + 1) - self.at(i, j - 1)) / (2.0 * spacing_m[1]);
+        let here = self.at(i, j);
+        let dx = slope(self.at(i - 1, j), here, self.at(i + 1, j), spacing_m[0]);
+        let dy = slope(self.at(i, j - 1), here, self.at(i, j + 1), spacing_m[1]);
         let inv = 1.0 / (dx * dx + dy * dy + 1.0).sqrt();
         [quantize(-dx * inv), quantize(-dy * inv)]
     }
@@ -217,19 +227,32 @@ impl MarginGrid {
     fn chunk(&self, first_post: [u32; 2], spacing_m: [f64; 2]) -> TruthChunk {
         let g = CHUNK_CELLS;
         let mut vertices = Vec::with_capacity(vertex_count(g));
+        let mut nearest = f32::NAN;
         for j in 0..=g {
             for i in 0..=g {
                 let (i, j) = ((first_post[0] + i) as i64, (first_post[1] + j) as i64);
                 let height = self.at(i, j) as f32;
+                if height.is_nan() {
+                    // As tiles mark a post without data (`tiles::NO_DATA`).
+                    vertices.push(TileVertex { height: NO_DATA, target: f32::NAN, normal: [0; 4] });
+                    continue;
+                }
+                nearest = height;
                 let [nx, ny] = self.normal(i, j, spacing_m);
                 vertices.push(TileVertex { height, target: height, normal: [nx, ny, nx, ny] });
+            }
+        }
+        let voids = vertices.iter().any(|v| v.target.is_nan());
+        for vertex in &mut vertices {
+            if vertex.target.is_nan() {
+                vertex.target = if nearest.is_nan() { 0.0 } else { nearest };
             }
         }
         for (i, j) in edge_posts(g) {
             vertices.push(vertices[(i + j * (g + 1)) as usize]);
         }
         debug_assert_eq!(vertices.len(), vertex_count(g));
-        TruthChunk { first_post, vertices }
+        TruthChunk { first_post, vertices, voids }
     }
 }
 
@@ -272,7 +295,14 @@ mod tests {
         assert_eq!(mesh.chunks.len(), 16);
         assert_eq!(mesh.triangles(), 2 * 512 * 512);
         let spacing = 30.0;
-        let h = |i: i64, j: i64| earth.sample(i, j) as f64;
+        // Past the data's edge (post 512) there is no post: slopes go one-sided.
+        let h = |i: i64, j: i64| {
+            if (0..=512).contains(&i) && (0..=512).contains(&j) {
+                earth.sample(i, j) as f64
+            } else {
+                f64::NAN
+            }
+        };
         let posts = (CHUNK_CELLS as usize + 1).pow(2);
         for chunk in &mesh.chunks {
             assert_eq!(chunk.vertices.len(), vertex_count(CHUNK_CELLS));
@@ -280,8 +310,8 @@ mod tests {
                 let (i, j) = post_of(chunk, k);
                 assert_eq!(vertex.height, earth.sample(i, j), "post ({i}, {j})");
                 assert_eq!(vertex.target, vertex.height);
-                let dx = (h(i + 1, j) - h(i - 1, j)) / (2.0 * spacing);
-                let dy = (h(i, j + 1) - h(i, j - 1)) / (2.0 * spacing);
+                let dx = slope(h(i - 1, j), h(i, j), h(i + 1, j), spacing);
+                let dy = slope(h(i, j - 1), h(i, j), h(i, j + 1), spacing);
                 let inv = 1.0 / (dx * dx + dy * dy + 1.0).sqrt();
                 let expected = [quantize(-dx * inv), quantize(-dy * inv)];
                 assert_eq!(vertex.normal, [expected[0], expected[1], expected[0], expected[1]]);
@@ -295,7 +325,7 @@ mod tests {
     }
 
     #[test]
-    fn regions_widen_to_whole_chunks_and_posts_past_the_data_extend_its_edge() {
+    fn regions_widen_to_whole_chunks_and_posts_past_the_data_have_none() {
         let earth = earth();
         let region = TruthRegion { first: [-3, 500], posts: [5, 20] };
         let mesh = TruthMesh::load(&earth, region).expect("loads");
@@ -303,8 +333,11 @@ mod tests {
         let chunk = &mesh.chunks[0];
         for k in (0..129 * 129).step_by(11) {
             let (i, j) = post_of(chunk, k);
-            assert_eq!(chunk.vertices[k].height, earth.sample(i - 3, j + 500), "post ({i}, {j})");
+            let past = i < 3 || j + 500 > 512;
+            let expected = if past { NO_DATA } else { earth.sample(i - 3, j + 500) };
+            assert_eq!(chunk.vertices[k].height, expected, "post ({i}, {j})");
         }
+        assert!(chunk.voids, "the chunk reaches past the data");
         let tiled = TruthRegion::covering_tiles(earth.layout(), 32);
         assert_eq!(tiled.posts, [513, 513]);
         let wider = TruthRegion { first: [0, 0], posts: [514, 2] };

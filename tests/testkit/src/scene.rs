@@ -12,6 +12,7 @@ use ridgeline::render::{CostModel, NullBackend, RenderBackend};
 use ridgeline::scene::PreloadedTerrain;
 use ridgeline::scene::{SceneConfig, TerrainSummary};
 use ridgeline::tiles::grid::{edge_posts, vertex_count};
+use ridgeline::tiles::vertex::is_no_data;
 use ridgeline::tiles::TileVertex;
 use std::collections::HashMap;
 use std::sync::{Arc, OnceLock};
@@ -89,6 +90,10 @@ pub fn edge_heights(
             .collect();
         let drawn = |i: u32, j: u32| {
             let v = vertices[(i + j * (grid + 1)) as usize];
+            if is_no_data(v.height) {
+                // Triangles touching it are not drawn: no edge to agree on.
+                return f64::NAN;
+            }
             let posts = list.uniforms.expect("a built list has its frame").posts;
             let [x, y] = tile.post_position(&posts, i as f32, j as f32).map(f64::from);
             let distance = (x * x + y * y + (v.height as f64 - altitude).powi(2)).sqrt();
@@ -108,6 +113,9 @@ pub fn edge_heights(
             for pair in edge.windows(2) {
                 let ((i0, j0), (i1, j1)) = (pair[0], pair[1]);
                 let (a, b) = (drawn(i0, j0), drawn(i1, j1));
+                if a.is_nan() || b.is_nan() {
+                    continue;
+                }
                 heights.entry(at(i0, j0)).or_default().push(a);
                 let (p, q) = (at(i0, j0), at(i1, j1));
                 heights.entry(((p.0 + q.0) / 2, (p.1 + q.1) / 2)).or_default().push((a + b) / 2.0);
