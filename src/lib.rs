@@ -12,6 +12,7 @@
 //! | [`dem`] | elevation importers (GeoTIFF, SRTM, DTED, ASCII grid) producing an [`dem::ElevationGrid`] |
 //! | [`camera`] | the viewer's position and attitude, projection, frustum, earth curvature |
 //! | [`lod`] | UDLOD tiling on the CPU: distance rings with Ulrich's bound, quadtree selection, morph |
+//! | [`mesh`] | adaptive chunk meshes, GL-free: the RTIN error map and extraction, exact mesh delta against level 0, morph-target lookup, view-dependent RTIN refinement |
 //! | [`tiles`] | per-tile height buffers: shared grid, vertex data, the tile cache on the allocator |
 //! | [`render`] | the GL-free half of drawing: draw lists, the backend trait, the counting null backend, the palette |
 //! | [`flight`] | camera paths for `fly`: the `--path` CSV, interpolation, frame times, the built-in approach |
@@ -36,6 +37,7 @@ pub mod flight;
 pub mod geo;
 pub mod gl;
 pub mod lod;
+pub mod mesh;
 pub mod node;
 pub mod pipeline;
 pub mod procedural;
