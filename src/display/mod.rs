@@ -166,11 +166,6 @@ impl Display {
         Ok(self.parts.pipeline.settle(camera, max_updates)?)
     }
 
-    /// The pipeline (its draw list, scene and clipmap), read-only.
-    pub fn pipeline(&self) -> &FramePipeline {
-        &self.parts.pipeline
-    }
-
     /// The last frame as RGBA, row 0 at the top.
     pub fn read_pixels(&self) -> Result<RgbaImage, GlError> {
         self.parts.context.read_pixels()
@@ -184,10 +179,5 @@ impl Display {
     /// Handles a window's pending events, waiting up to `timeout`.
     pub fn pump_events(&mut self, timeout: Option<Duration>) -> WindowEvents {
         self.parts.context.pump_events(timeout)
-    }
-
-    /// The target's size, pixels.
-    pub fn size(&self) -> UVec2 {
-        self.parts.context.size()
     }
 }
