@@ -384,8 +384,8 @@ impl Rtin {
     }
 }
 
-/// The smallest `f32` not below `value` (the map is a bound: never round down).
-/// The same as the pyramid delta's private helper; one of them should serve both.
+/// The smallest `f32` not below `value`: error maps and the pyramid's node
+/// deltas are bounds, never rounded down.
 pub(crate) fn round_up_to_f32(value: f64) -> f32 {
     debug_assert!(value >= 0.0, "distances are not negative");
     let rounded = value as f32;

@@ -12,6 +12,7 @@ use rayon::prelude::*;
 use super::progress::Progress;
 use super::raster::LevelRaster;
 use crate::dem::ElevationGrid;
+use crate::mesh::rtin::round_up_to_f32;
 
 /// Delta of every node of level `raster.level`, `nodes[0] * nodes[1]` values in
 /// node order (row by row, south first), each rounded up to `f32`.
@@ -109,18 +110,6 @@ fn record_row(row_error: &[f64], j: u32, nodes: [u32; 2], span: u64, worst: &mut
             let slot = &mut worst[(y * nodes[0] as u64 + x) as usize];
             *slot = slot.max(largest);
         }
-    }
-}
-
-/// The smallest `f32` not below `value` (delta is a bound: never round it down).
-fn round_up_to_f32(value: f64) -> f32 {
-    debug_assert!(value >= 0.0, "distances are not negative");
-    let rounded = value as f32;
-    if (rounded as f64) < value {
-        // The next f32 above a non-negative one (f32::next_up needs Rust 1.86).
-        f32::from_bits(rounded.to_bits() + 1)
-    } else {
-        rounded
     }
 }
 
