@@ -19,8 +19,11 @@ pub const EARTH_RADIUS_M: f64 = 6_371_008.8;
 pub struct Camera {
     /// Position in the local frame: east, north, altitude above mean sea level.
     pub position: DVec3,
+    /// Heading, degrees clockwise from true north.
     pub heading_deg: f64,
+    /// Pitch, degrees, positive nose up.
     pub pitch_deg: f64,
+    /// Roll, degrees, positive right wing down.
     pub roll_deg: f64,
     /// Horizontal field of view.
     pub fov_x_deg: f64,
@@ -31,10 +34,18 @@ pub struct Camera {
 /// Why a camera cannot be used.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum CameraError {
+    /// A position or angle is NaN or infinite.
     #[error("camera {field} is {value}, not a finite number")]
-    NotFinite { field: &'static str, value: f64 },
+    NotFinite {
+        /// Which value: `x`, `y`, `altitude`, `heading`, `pitch`, `roll` or `field of view`.
+        field: &'static str,
+        /// The value found.
+        value: f64,
+    },
+    /// The horizontal field of view, degrees, is not in (0, 179].
     #[error("field of view {0} degrees is outside (0, 179]")]
     FieldOfView(f64),
+    /// The viewport, pixels wide and high, has a zero side.
     #[error("viewport {0}x{1} has no pixels")]
     EmptyViewport(u32, u32),
 }
@@ -79,6 +90,7 @@ impl Camera {
         self.attitude() * DVec3::Y
     }
 
+    /// Viewport width over height.
     pub fn aspect(&self) -> f64 {
         self.viewport[0] as f64 / self.viewport[1] as f64
     }
@@ -115,6 +127,7 @@ impl Camera {
 /// `(n, d)` with `n . p + d >= 0` inside.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frustum {
+    /// Left, right, bottom, top, near and far planes, each `(n, d)` with `n . p + d >= 0` inside.
     pub planes: [Vec4; 6],
 }
 

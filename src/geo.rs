@@ -16,7 +16,10 @@ pub enum Crs {
     /// Longitude and latitude in degrees (WGS 84 / EPSG:4326).
     Geographic,
     /// A planar system in metres (for example UTM), EPSG code where known.
-    Projected { epsg: Option<u32> },
+    Projected {
+        /// The EPSG code of the system, if the file names one.
+        epsg: Option<u32>,
+    },
     /// No georeference: the grid is planar with spacing in metres.
     Local,
 }
@@ -24,6 +27,7 @@ pub enum Crs {
 /// Where sample `(0, 0)` is and how far apart samples are.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct GeoRef {
+    /// What `origin` and `spacing` are measured in.
     pub crs: Crs,
     /// Centre of the south-west sample: (x or longitude, y or latitude).
     pub origin: [f64; 2],
@@ -62,9 +66,13 @@ pub fn metres_per_degree(latitude_deg: f64) -> [f64; 2] {
 /// The corners of a grid's posts in degrees (Geographic grids only).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct BoundsDeg {
+    /// Longitude of the western column of posts, degrees.
     pub west: f64,
+    /// Latitude of the southern row of posts, degrees.
     pub south: f64,
+    /// Longitude of the eastern column of posts, degrees.
     pub east: f64,
+    /// Latitude of the northern row of posts, degrees.
     pub north: f64,
 }
 

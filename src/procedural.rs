@@ -51,6 +51,7 @@ pub struct EarthParams {
     pub border: u32,
     /// Metres between level-0 samples (both axes).
     pub spacing_m: f64,
+    /// Seed of the terrain: the same parameters and seed give the same heights.
     pub seed: u64,
 }
 
@@ -69,12 +70,27 @@ impl EarthParams {
 /// Why the parameters cannot make an earth.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum ProceduralError {
+    /// `node_size` is below 2 cells.
     #[error("procedural earth: node_size {0} must be at least 2")]
     NodeSize(u32),
+    /// `levels` is 0 or above 32, or `node_size << (levels - 1)` cells do not fit below
+    /// 2^32 posts a side.
     #[error("procedural earth: {levels} levels of node_size {node_size} do not fit 2^32 samples")]
-    TooLarge { node_size: u32, levels: u8 },
+    TooLarge {
+        /// Cells per node side asked for.
+        node_size: u32,
+        /// Pyramid levels asked for.
+        levels: u8,
+    },
+    /// `border` is larger than `node_size`.
     #[error("procedural earth: border {border} must be at most node_size {node_size}")]
-    Border { border: u32, node_size: u32 },
+    Border {
+        /// Border posts asked for on each node side.
+        border: u32,
+        /// Cells per node side asked for.
+        node_size: u32,
+    },
+    /// The level-0 post spacing, metres, is not finite and positive.
     #[error("procedural earth: spacing {0} m must be finite and positive")]
     Spacing(f64),
 }
@@ -100,6 +116,7 @@ pub struct ProceduralEarth {
 }
 
 impl ProceduralEarth {
+    /// Builds the earth described by `params`, or says why it cannot.
     pub fn new(params: EarthParams) -> Result<Self, ProceduralError> {
         let EarthParams { node_size, levels, border, spacing_m, seed } = params;
         if node_size < 2 {

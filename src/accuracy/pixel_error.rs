@@ -20,10 +20,13 @@ pub type ExactHeight<'a> = &'a (dyn Fn(f64, f64) -> Option<f32> + Sync);
 /// How camera-relative points reach the screen in one view.
 #[derive(Clone, Copy, Debug)]
 pub struct ViewGeometry {
+    /// Camera position in the local frame, metres.
     pub eye: DVec3,
     /// The altitude the shader subtracts (the f32 uniform, widened).
     pub altitude: f64,
+    /// Projection times the rotation-only view, widened to f64 from the frame's uniforms.
     pub view_projection: DMat4,
+    /// Viewport in pixels, width and height.
     pub viewport: [u32; 2],
     /// 1 / (2 R) when the earth's curvature is drawn, else 0 (the shader's u_frame.y).
     pub curvature: f64,
@@ -32,6 +35,7 @@ pub struct ViewGeometry {
 }
 
 impl ViewGeometry {
+    /// The geometry `camera` and its frame's uniforms drew with.
     pub fn new(camera: &Camera, frame: &FrameUniforms) -> ViewGeometry {
         let m = frame.view_projection.to_cols_array().map(f64::from);
         ViewGeometry {
@@ -91,6 +95,7 @@ pub struct ViewErrors {
     pub terrain_pixels: usize,
     /// Terrain in the LOD image, sky in the truth, and the reverse.
     pub lod_only: usize,
+    /// Terrain pixels in the truth image that are sky in the LOD image.
     pub truth_only: usize,
     /// Terrain pixels whose full-resolution ground point no drawn tile
     /// covers (a hole in the LOD surface; their error is the LOD side's).
@@ -102,6 +107,7 @@ pub struct ViewErrors {
     /// Terrain pixels (in both images) where the LOD image shows a skirt
     /// (a crack between tiles filled), and the largest error elsewhere.
     pub skirt_pixels: usize,
+    /// Largest error, pixels, over terrain pixels that are not on a skirt.
     pub max_surface_px: f64,
     /// Per LOD terrain pixel, |drawn height - the CPU mirror's height| in
     /// metres (NaN elsewhere): near 0 except on skirts, a check that the

@@ -7,7 +7,10 @@ use glam::{UVec2, Vec3};
 /// One RGBA32F read-back, row 0 at the top; alpha 1 marks terrain, 0 sky.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct PositionImage {
+    /// Width and height, pixels.
     pub size: UVec2,
+    /// One RGBA32F texel per pixel, row-major from the top left: the camera-relative
+    /// point in metres (x, y, z) and the terrain flag (alpha).
     pub texels: Vec<[f32; 4]>,
 }
 
@@ -19,6 +22,7 @@ impl PositionImage {
         (w > 0.5).then_some(Vec3::new(x, y, z))
     }
 
+    /// Pixels in the image: width times height.
     pub fn pixel_count(&self) -> usize {
         self.size.x as usize * self.size.y as usize
     }

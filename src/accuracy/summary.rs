@@ -4,10 +4,15 @@
 /// Percentiles of the per-pixel error, pixels.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct ErrorSummary {
+    /// Median error (nearest rank), pixels.
     pub p50_px: f64,
+    /// 99th percentile error, pixels.
     pub p99_px: f64,
+    /// 99.9th percentile error, pixels.
     pub p999_px: f64,
+    /// Largest error, pixels.
     pub max_px: f64,
+    /// Mean error, pixels.
     pub mean_px: f64,
     /// How many pixel errors these are taken over.
     pub pixels: usize,

@@ -61,7 +61,9 @@ pub struct VertexFormat(pub u16);
 /// One generator's announcement in pass 1.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Request {
+    /// The generator (tile) that will own the block.
     pub generator: GeneratorId,
+    /// The block's vertex layout; runs are sorted by it.
     pub format: VertexFormat,
     /// Bytes it will write in pass 2 (rounded up to the alignment).
     pub size: u32,
@@ -98,13 +100,21 @@ impl AllocatorConfig {
 /// A snapshot of how the address space is used.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct AllocatorStats {
+    /// Bytes in the address space.
     pub capacity: u32,
+    /// Blocks owned by a generator.
     pub live_blocks: usize,
+    /// Bytes in live blocks.
     pub live_bytes: u64,
+    /// Released blocks still waiting out their frames in flight.
     pub retiring_blocks: usize,
+    /// Bytes in retiring blocks.
     pub retiring_bytes: u64,
+    /// Free gaps (free blocks; neighbouring free space is always merged).
     pub free_gaps: usize,
+    /// Bytes neither live nor retiring.
     pub free_bytes: u64,
+    /// Bytes in the largest free gap.
     pub largest_gap: u32,
     /// End of the highest block that is not free: the buffer size this state needs.
     pub workspace_end: u32,
@@ -189,6 +199,7 @@ impl ContiguousAllocator {
         })
     }
 
+    /// The configuration the allocator was built with.
     pub fn config(&self) -> &AllocatorConfig {
         &self.config
     }
@@ -248,6 +259,7 @@ impl ContiguousAllocator {
         &self.scratch.pieces
     }
 
+    /// How the address space is used now.
     pub fn stats(&self) -> AllocatorStats {
         let tail = self.blocks.get(self.blocks.tail());
         let workspace_end = if tail.state == BlockState::Free { tail.offset } else { tail.end() };

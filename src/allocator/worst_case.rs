@@ -25,14 +25,23 @@ use std::collections::{HashMap, VecDeque};
 pub enum Move {
     /// Reallocate the blocks at the slots in `mask` and place `new` new blocks,
     /// all in one call.
-    Allocate { mask: u64, new: u32 },
+    Allocate {
+        /// Occupied slots reallocated, one bit per slot of S bytes.
+        mask: u64,
+        /// New blocks placed in the same run.
+        new: u32,
+    },
     /// Release the block at `slot`.
-    Release { slot: u32 },
+    Release {
+        /// Slot (offset in units of S) of the released block.
+        slot: u32,
+    },
 }
 
 /// The result for one `k`.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct WorstCase {
+    /// Number of equal blocks searched.
     pub k: u32,
     /// The paper's bound, (2k - 2) S, in units of S.
     pub paper_bound: u32,

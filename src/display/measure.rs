@@ -26,6 +26,7 @@ const SETTLE_UPDATES: u32 = 10_000;
 pub struct ViewRow {
     /// Time along the flight path, seconds.
     pub t: f64,
+    /// Percentiles of this view's per-pixel error, pixels.
     #[serde(flatten)]
     pub errors: ErrorSummary,
     /// Share of all pixels where one image shows terrain and the other sky,
@@ -35,14 +36,18 @@ pub struct ViewRow {
     pub holes: usize,
     /// Terrain pixels showing a skirt, and the largest error off skirts.
     pub skirt_pixels: usize,
+    /// Largest error, pixels, over terrain pixels that show no skirt.
     pub max_surface_px: f64,
     /// 99th percentile of |GPU-drawn height - CPU mirror| over LOD terrain
     /// pixels, metres: the measurement's own check.
     pub mirror_p99_m: f64,
     /// Surface triangles (skirts left out, as the truth has none).
     pub triangles_lod: u64,
+    /// Surface triangles of the truth mesh drawn for the view.
     pub triangles_truth: u64,
+    /// Draw calls of the LOD frame.
     pub draw_calls_lod: usize,
+    /// Draw calls of the truth pass.
     pub draw_calls_truth: usize,
     /// LOD tiles per level, finest first.
     pub tiles_per_level: Vec<usize>,
@@ -50,12 +55,15 @@ pub struct ViewRow {
     /// view's pose after a first frame there made its tiles, and the truth's
     /// draw right after it.
     pub lod_frame_ms: f64,
+    /// Milliseconds of the truth's draw, to glFinish.
     pub truth_frame_ms: f64,
 }
 
 /// The view with the largest p99.9 error (then the largest maximum).
 pub struct WorstView {
+    /// Position of the view among the measured views, from 0.
     pub index: usize,
+    /// Per-pixel error of the view coloured against tau.
     pub heat_map: RgbaImage,
     /// The LOD display's own picture of that view.
     pub picture: RgbaImage,
@@ -63,16 +71,21 @@ pub struct WorstView {
 
 /// Everything measured over the views.
 pub struct AccuracyRun {
+    /// The tau, pixels, the LOD selected tiles with.
     pub tau_px: f64,
     /// Over every terrain pixel of every view.
     pub summary: ErrorSummary,
     /// Share of all pixels of all views.
     pub coverage_mismatch: f64,
+    /// Terrain pixels of all views whose ground point no LOD tile covers.
     pub holes: usize,
+    /// Terrain pixels of all views that show a skirt.
     pub skirt_pixels: usize,
     /// The largest error over pixels that show no skirt.
     pub max_surface_px: f64,
+    /// One row per view, in the order measured.
     pub views: Vec<ViewRow>,
+    /// The view with the largest p99.9 error; `None` when there were no views.
     pub worst: Option<WorstView>,
 }
 

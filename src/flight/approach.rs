@@ -34,16 +34,25 @@ use glam::DVec2;
 use super::path::{FlightPath, Waypoint};
 use super::pose::{heading_difference, normalize_heading, Pose};
 
+/// Seconds to fly the whole ground track, unless [`MAX_GROUND_SPEED`] caps the speed.
 pub const APPROACH_SECONDS: f64 = 75.0;
+/// Seconds between waypoints.
 pub const ROW_INTERVAL_S: f64 = 2.5;
 /// Metres per second (about 490 knots).
 pub const MAX_GROUND_SPEED: f64 = 250.0;
+/// Metres above the highest terrain under the flown track at the first waypoint.
 pub const START_ABOVE_HIGHEST_M: f64 = 1500.0;
+/// Metres above the terrain under the last waypoint that the descent aims for.
 pub const END_ABOVE_TERRAIN_M: f64 = 300.0;
+/// Least clearance, metres, above the terrain along every leg between waypoints.
 pub const MIN_CLEARANCE_M: f64 = 150.0;
+/// Degrees the nose is pitched down below the leg's flight-path angle.
 pub const LOOK_DOWN_DEG: f64 = 2.0;
+/// Steepest nose-down pitch, degrees (pitch stays within [-this, 0]).
 pub const MAX_PITCH_DOWN_DEG: f64 = 12.0;
+/// Largest bank angle, degrees, of the coordinated turn.
 pub const MAX_BANK_DEG: f64 = 25.0;
+/// Seconds over which the bank fades in at the start and out at the end.
 pub const BANK_FADE_S: f64 = 15.0;
 
 /// Ground-track control points as fractions of the extent (east, north).

@@ -5,29 +5,52 @@
 /// One column of a camera path.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Column {
+    /// `t`: seconds.
     Time,
+    /// `x`: metres east of the dataset's south-west post.
     X,
+    /// `y`: metres north of the dataset's south-west post.
     Y,
+    /// `lat`: latitude, degrees (geographic datasets only).
     Lat,
+    /// `lon`: longitude, degrees (geographic datasets only).
     Lon,
+    /// `alt`: metres above mean sea level.
     Altitude,
+    /// `heading`: degrees clockwise from true north.
     Heading,
+    /// `pitch`: degrees, positive nose up.
     Pitch,
+    /// `roll`: degrees, positive right wing down.
     Roll,
 }
 
 /// Why a value cannot be used.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum ValueProblem {
+    /// The cell holds nothing but whitespace.
     #[error("the cell is empty")]
     Empty,
+    /// The cell (as written, trimmed) does not parse as a number.
     #[error("`{0}` is not a number")]
     NotANumber(String),
     /// The value as written (or printed, for a value that came from code).
     #[error("`{0}` is not a finite number")]
     NotFinite(String),
+    /// The value is finite but outside the column's accepted range.
     #[error("{value} is outside [{min}, {max}] {unit}{why}")]
-    OutOfRange { value: f64, min: f64, max: f64, unit: &'static str, why: &'static str },
+    OutOfRange {
+        /// The value given.
+        value: f64,
+        /// Smallest accepted value, in `unit`.
+        min: f64,
+        /// Largest accepted value, in `unit`.
+        max: f64,
+        /// Unit of the column: `seconds`, `metres` or `degrees`.
+        unit: &'static str,
+        /// Why the bounds are where they are (empty, or a parenthesis led by a space).
+        why: &'static str,
+    },
 }
 
 impl Column {

@@ -36,41 +36,115 @@ pub const XY_HEADER: &str = "t,x,y,alt,heading,pitch,roll";
 #[derive(Debug, thiserror::Error)]
 #[error("camera path {}: {problem}", path.display())]
 pub struct PathError {
+    /// The camera path file as given.
     pub path: PathBuf,
+    /// What is wrong with it.
     pub problem: PathProblem,
 }
 
 /// What is wrong with a camera path file.
 #[derive(Debug, thiserror::Error)]
 pub enum PathProblem {
+    /// The file could not be read.
     #[error("cannot read: {0}")]
     Io(#[from] std::io::Error),
+    /// The file is larger than [`MAX_FILE_BYTES`].
     #[error("{bytes} bytes is too large for a camera path (at most {MAX_FILE_BYTES})")]
-    TooLarge { bytes: u64 },
+    TooLarge {
+        /// Size of the file, bytes.
+        bytes: u64,
+    },
+    /// The file holds only blank lines and `#` comments.
     #[error(
         "no header: expected `t,x,y,alt,heading,pitch,roll` or `t,lat,lon,alt,heading,pitch,roll`"
     )]
     NoHeader,
+    /// A header name is none of the [`Column`] names.
     #[error("header (line {line}), column {position} `{name}`: unknown column; the columns are t, x, y (or lat, lon), alt, heading, pitch, roll")]
-    UnknownColumn { line: usize, position: usize, name: String },
+    UnknownColumn {
+        /// Line of the header in the file, from 1.
+        line: usize,
+        /// Position of the name in the header, from 1.
+        position: usize,
+        /// The name as written.
+        name: String,
+    },
+    /// The header names a column twice.
     #[error("header (line {line}), column `{}`: named twice", column.name())]
-    DuplicateColumn { line: usize, column: Column },
+    DuplicateColumn {
+        /// Line of the header in the file, from 1.
+        line: usize,
+        /// The column named twice.
+        column: Column,
+    },
+    /// The header lacks a column every path needs.
     #[error("header (line {line}), column `{}`: missing", column.name())]
-    MissingColumn { line: usize, column: Column },
+    MissingColumn {
+        /// Line of the header in the file, from 1.
+        line: usize,
+        /// The first column missing.
+        column: Column,
+    },
+    /// The header gives the position as both `x,y` and `lat,lon`.
     #[error(
         "header (line {line}), columns `x,y` and `lat,lon`: give the position one way, not both"
     )]
-    MixedPosition { line: usize },
+    MixedPosition {
+        /// Line of the header in the file, from 1.
+        line: usize,
+    },
+    /// The header gives `lat,lon` but the dataset is not in geographic coordinates.
     #[error("header (line {line}), columns `lat,lon`: the dataset is not in longitude/latitude ({}), so positions must be `x,y` metres east and north of its south-west corner", describe_crs(crs))]
-    LatLonNeedsGeographic { line: usize, crs: Crs },
+    LatLonNeedsGeographic {
+        /// Line of the header in the file, from 1.
+        line: usize,
+        /// The dataset's coordinate system.
+        crs: Crs,
+    },
+    /// A row has more or fewer cells than the header has columns.
     #[error("row {row} (line {line}), column {column}: the row has {found} cells, the header {expected}")]
-    CellCount { row: usize, line: usize, found: usize, expected: usize, column: String },
+    CellCount {
+        /// Row, from 1 for the first row after the header.
+        row: usize,
+        /// Line of the row in the file, from 1.
+        line: usize,
+        /// Cells in the row.
+        found: usize,
+        /// Columns in the header.
+        expected: usize,
+        /// The first column without a cell, or the first cell beyond the header, as text.
+        column: String,
+    },
+    /// A cell cannot be used as its column's value.
     #[error("row {row} (line {line}), column `{}`: {problem}", column.name())]
-    Value { row: usize, line: usize, column: Column, problem: ValueProblem },
+    Value {
+        /// Row, from 1 for the first row after the header.
+        row: usize,
+        /// Line of the row in the file, from 1.
+        line: usize,
+        /// The cell's column.
+        column: Column,
+        /// What is wrong with the value.
+        problem: ValueProblem,
+    },
+    /// A row's time is not later than the previous row's.
     #[error("row {row} (line {line}), column `t`: {t} s does not come after the previous row's {previous} s; times must strictly increase")]
-    TimeNotIncreasing { row: usize, line: usize, t: f64, previous: f64 },
+    TimeNotIncreasing {
+        /// Row, from 1 for the first row after the header.
+        row: usize,
+        /// Line of the row in the file, from 1.
+        line: usize,
+        /// This row's time, seconds.
+        t: f64,
+        /// The previous row's time, seconds.
+        previous: f64,
+    },
+    /// The header is followed by no rows.
     #[error("no rows after the header (line {line}): a camera path needs at least one")]
-    NoRows { line: usize },
+    NoRows {
+        /// Line of the header in the file, from 1.
+        line: usize,
+    },
 }
 
 fn describe_crs(crs: &Crs) -> String {

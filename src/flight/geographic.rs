@@ -26,7 +26,9 @@ use crate::geo::{metres_per_degree, GeoRef};
 /// A latitude and longitude in degrees.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LatLon {
+    /// Latitude, degrees north.
     pub lat: f64,
+    /// Longitude, degrees east.
     pub lon: f64,
 }
 

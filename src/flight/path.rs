@@ -8,7 +8,9 @@ use super::pose::{normalize_heading, Pose};
 /// A pose at a time (seconds).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Waypoint {
+    /// Time, seconds.
     pub t: f64,
+    /// Where the aircraft is and how it is turned at `t`.
     pub pose: Pose,
 }
 
@@ -24,12 +26,29 @@ pub struct FlightPath {
 /// Why waypoints do not make a path.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum InvalidPath {
+    /// No waypoints were given.
     #[error("a camera path needs at least one waypoint")]
     Empty,
+    /// A waypoint value is not finite or outside its column's range.
     #[error("waypoint {index}, `{}`: {problem}", column.name())]
-    Value { index: usize, column: Column, problem: ValueProblem },
+    Value {
+        /// Position of the waypoint, from 0.
+        index: usize,
+        /// The column of the value.
+        column: Column,
+        /// What is wrong with it.
+        problem: ValueProblem,
+    },
+    /// A waypoint's time is not later than the one before it.
     #[error("waypoint {index}: time {t} s does not come after the previous {previous} s")]
-    TimeNotIncreasing { index: usize, t: f64, previous: f64 },
+    TimeNotIncreasing {
+        /// Position of the waypoint, from 0.
+        index: usize,
+        /// Its time, seconds.
+        t: f64,
+        /// The previous waypoint's time, seconds.
+        previous: f64,
+    },
 }
 
 impl FlightPath {
@@ -70,18 +89,22 @@ impl FlightPath {
         FlightPath { waypoints }
     }
 
+    /// The waypoints, in time order.
     pub fn waypoints(&self) -> &[Waypoint] {
         &self.waypoints
     }
 
+    /// Time of the first waypoint, seconds.
     pub fn start_time(&self) -> f64 {
         self.waypoints[0].t
     }
 
+    /// Time of the last waypoint, seconds.
     pub fn end_time(&self) -> f64 {
         self.waypoints[self.waypoints.len() - 1].t
     }
 
+    /// Seconds from the first waypoint to the last.
     pub fn duration(&self) -> f64 {
         self.end_time() - self.start_time()
     }

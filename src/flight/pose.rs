@@ -10,9 +10,13 @@ use crate::camera::Camera;
 /// heading clockwise from true north, pitch nose up, roll right wing down.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pose {
+    /// Local frame, metres: east, north, altitude above mean sea level.
     pub position: DVec3,
+    /// Heading, degrees clockwise from true north.
     pub heading_deg: f64,
+    /// Pitch, degrees, positive nose up.
     pub pitch_deg: f64,
+    /// Roll, degrees, positive right wing down.
     pub roll_deg: f64,
 }
 

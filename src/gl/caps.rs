@@ -33,8 +33,11 @@ pub enum GlApi {
 /// The version the driver reports, parsed from GL_VERSION.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ReportedVersion {
+    /// OpenGL ES or desktop OpenGL.
     pub api: GlApi,
+    /// Major version number.
     pub major: u32,
+    /// Minor version number.
     pub minor: u32,
 }
 
@@ -81,11 +84,15 @@ pub struct Capabilities {
 /// Implementation limits read with glGetIntegerv.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub struct Limits {
+    /// GL_MAX_TEXTURE_SIZE: the widest texture side, texels.
     pub max_texture_size: i32,
+    /// GL_MAX_RENDERBUFFER_SIZE: the widest renderbuffer side, pixels.
     pub max_renderbuffer_size: i32,
+    /// GL_MAX_VERTEX_ATTRIBS: vertex attributes a program may use.
     pub max_vertex_attribs: i32,
     /// Zero on the target boards: no texture reads in the vertex shader.
     pub max_vertex_texture_units: i32,
+    /// GL_MAX_VIEWPORT_DIMS: the largest viewport width and height, pixels.
     pub max_viewport: [i32; 2],
 }
 

@@ -24,6 +24,7 @@ use crate::tiles::vertex::tile_bytes;
 pub struct BaselineFrameStats {
     /// Buffer uploads (one per tile that appeared).
     pub uploads: usize,
+    /// Bytes uploaded this frame.
     pub bytes_uploaded: u64,
     /// Vertex buffers alive after the frame.
     pub buffers: usize,
@@ -45,6 +46,7 @@ pub struct ChunkedBaseline {
 }
 
 impl ChunkedBaseline {
+    /// The baseline for tiles of `grid_size` cells a side; no tile buffers yet.
     pub fn new(gl: &Rc<Gl>, grid_size: u32) -> Result<ChunkedBaseline, GlError> {
         let tile_bytes = tile_bytes(grid_size);
         Ok(ChunkedBaseline {

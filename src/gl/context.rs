@@ -36,12 +36,16 @@ pub enum GlBackend {
 /// The platform a context was actually opened on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum OpenedBackend {
+    /// A window through winit (X11 or Wayland).
     Window,
+    /// Headless OpenGL ES through EGL.
     Egl,
+    /// Headless desktop GL through libOSMesa.
     OsMesa,
 }
 
 impl OpenedBackend {
+    /// The backend's name as `--backend` spells it: `window`, `egl` or `osmesa`.
     pub fn name(self) -> &'static str {
         match self {
             OpenedBackend::Window => "window",
@@ -59,7 +63,9 @@ impl OpenedBackend {
 /// What to open.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ContextRequest {
+    /// Which platform to open the context on (`auto` tries them in turn).
     pub backend: GlBackend,
+    /// The OpenGL ES level the code asks for.
     pub version: GlesVersion,
     /// Offscreen target size, or the window's initial inner size.
     pub size: UVec2,
@@ -68,6 +74,7 @@ pub struct ContextRequest {
 }
 
 impl ContextRequest {
+    /// A request titled `Ridgeline`.
     pub fn new(backend: GlBackend, version: GlesVersion, size: UVec2) -> ContextRequest {
         ContextRequest { backend, version, size, title: "Ridgeline".to_owned() }
     }
@@ -76,16 +83,22 @@ impl ContextRequest {
 /// What the driver says about itself, and what was asked of it.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct GlInfo {
+    /// The platform the context was actually opened on.
     pub backend: OpenedBackend,
     /// The platform underneath: EGL version and device, OSMesa library, or
     /// window system and GL display.
     pub platform: String,
+    /// The OpenGL ES level that was asked for.
     pub requested: GlesVersion,
     /// GL_VERSION, GL_RENDERER, GL_VENDOR, GL_SHADING_LANGUAGE_VERSION.
     pub version: String,
+    /// GL_RENDERER: the driver's name for the GPU or rasteriser.
     pub renderer: String,
+    /// GL_VENDOR.
     pub vendor: String,
+    /// GL_SHADING_LANGUAGE_VERSION.
     pub shading_language_version: String,
+    /// What the renderer may use on this context.
     pub caps: Capabilities,
     /// Why `--backend auto` did not open a window, when it did not.
     pub auto_fallback: Option<String>,
@@ -201,10 +214,12 @@ impl GlContext {
         &self.gl
     }
 
+    /// What the driver says about itself, and what was asked of it.
     pub fn info(&self) -> &GlInfo {
         &self.info
     }
 
+    /// Features the renderer may use on this context.
     pub fn caps(&self) -> &Capabilities {
         self.gl.caps()
     }

@@ -61,6 +61,7 @@ impl OffscreenTarget {
         Ok(OffscreenTarget { framebuffer, colour, depth })
     }
 
+    /// Width and height of the target, pixels.
     pub fn size(&self) -> UVec2 {
         self.colour.size()
     }

@@ -32,6 +32,7 @@ pub struct SmokePass {
 }
 
 impl SmokePass {
+    /// Builds the program and uploads the triangle's vertices.
     pub fn new(gl: &Rc<Gl>) -> Result<SmokePass, GlError> {
         let program = Program::build(
             gl,

@@ -35,6 +35,7 @@ const NO_MORPH: [f32; 2] = [1e30, 2e30];
 pub struct TruthFrameStats {
     /// Surface triangles (the chunks' zero-depth skirts are submitted too).
     pub triangles: u64,
+    /// Draw calls: one per chunk.
     pub draw_calls: usize,
     /// Clear, sky and every chunk, measured up to glFinish.
     pub frame_ms: f64,

@@ -26,12 +26,16 @@ pub use select::{SelectedTile, TileSelector};
 /// north, `span = grid_size << level`, sampling every `1 << level`-th post.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
 pub struct TileKey {
+    /// Level of the tile: 0 is the finest, each level doubles the post spacing.
     pub level: u8,
+    /// Column of the tile among its level's tiles, from the west edge.
     pub x: u32,
+    /// Row of the tile among its level's tiles, from the south edge.
     pub y: u32,
 }
 
 impl TileKey {
+    /// The tile of `level` at column `x` and row `y`.
     pub fn new(level: u8, x: u32, y: u32) -> Self {
         TileKey { level, x, y }
     }
@@ -48,6 +52,7 @@ impl TileKey {
         ]
     }
 
+    /// The tile one level coarser that contains this one.
     pub fn parent(self) -> TileKey {
         TileKey::new(self.level + 1, self.x / 2, self.y / 2)
     }
@@ -86,16 +91,27 @@ impl Default for LodConfig {
 /// Why a tiling configuration cannot be used.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum LodError {
+    /// `grid_size` is not a power of two in 2..=256.
     #[error("grid size {0} is not a power of two between 2 and 256")]
     GridSize(u32),
+    /// `grid_size` does not divide the pyramid's node size.
     #[error("grid size {grid} does not divide the node size {node}")]
-    GridNotInNode { grid: u32, node: u32 },
+    GridNotInNode {
+        /// Cells per tile side.
+        grid: u32,
+        /// Cells per node side.
+        node: u32,
+    },
+    /// `view_distance` is not finite or is below 1 tile.
     #[error("view distance {0} must be a finite number of at least 1 tile")]
     ViewDistance(f64),
+    /// `morph_range` is outside (0, 0.5].
     #[error("morph range {0} must lie in (0, 0.5]")]
     MorphRange(f64),
+    /// `tau_px` is not a finite number above 0 pixels.
     #[error("tau {0} px must be a finite number above 0")]
     Tau(f64),
+    /// `max_tiles` is 0.
     #[error("max tiles must be at least 1")]
     MaxTiles,
 }

@@ -38,6 +38,7 @@ pub struct RingInputs<'a> {
 }
 
 impl LevelRanges {
+    /// The rings for `config` and `inputs`.
     pub fn new(config: &LodConfig, inputs: RingInputs<'_>) -> Self {
         let mut ranges = LevelRanges {
             split: Vec::with_capacity(inputs.delta_per_level.len() + 1),

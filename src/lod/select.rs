@@ -13,6 +13,7 @@ use glam::DVec3;
 /// A tile chosen for this frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SelectedTile {
+    /// The tile to draw.
     pub key: TileKey,
     /// Distance from the camera to the tile's bounding box, metres.
     pub distance: f64,
@@ -39,15 +40,18 @@ pub struct TileSelector {
 
 /// A view to select tiles for: camera position, frustum and rings.
 pub struct View<'a> {
+    /// Camera position in the local frame, metres.
     pub eye: DVec3,
     /// Frustum in camera-relative coordinates.
     pub frustum: &'a Frustum,
+    /// The rings to select from.
     pub ranges: &'a LevelRanges,
     /// Apply the earth's curvature to bounding boxes.
     pub curvature: bool,
 }
 
 impl TileSelector {
+    /// A selector for `config`, its lists sized once to `max_tiles`.
     pub fn new(config: LodConfig) -> Self {
         TileSelector {
             config,
@@ -57,10 +61,12 @@ impl TileSelector {
         }
     }
 
+    /// The tiling parameters it selects with.
     pub fn config(&self) -> &LodConfig {
         &self.config
     }
 
+    /// Tiles dropped by the frustum in the last selection.
     pub fn culled(&self) -> usize {
         self.culled
     }

@@ -28,7 +28,9 @@ pub struct FrameUniforms {
     /// Terrain-awareness bands, metres relative to the aircraft: terrain above
     /// `warning_above_m` is red, above `-caution_below_m` amber.
     pub warning_above_m: f32,
+    /// Depth, metres below the aircraft, above which terrain is amber (see `warning_above_m`).
     pub caution_below_m: f32,
+    /// Viewport in pixels, width and height.
     pub viewport: [u32; 2],
     /// Distance at which fog has fully hidden the terrain, metres.
     pub fog_distance_m: f32,
@@ -159,6 +161,7 @@ impl PostFrame {
 /// Per-tile uniforms.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TileUniforms {
+    /// The tile drawn.
     pub key: TileKey,
     /// The tile's south-west post, numbered from the frame's anchor.
     pub first_post: [f32; 2],
@@ -192,6 +195,7 @@ impl TileUniforms {
 pub struct DrawList {
     /// The uniforms every tile of the frame shares (none before a frame is built).
     pub uniforms: Option<FrameUniforms>,
+    /// One entry per tile drawn this frame, nearest first.
     pub tiles: Vec<TileUniforms>,
     /// Indices per tile in the shared index buffer.
     pub indices_per_tile: u32,
@@ -211,6 +215,7 @@ pub enum Slice {
 /// How tiles map to metres and how deep their skirts hang.
 #[derive(Clone, Copy, Debug)]
 pub struct TileGeometry<'a> {
+    /// Cells per tile side.
     pub grid_size: u32,
     /// Level-0 post spacing, metres.
     pub spacing_m: [f64; 2],
@@ -219,6 +224,7 @@ pub struct TileGeometry<'a> {
 }
 
 impl DrawList {
+    /// An empty draw list with room for `tiles` tiles.
     pub fn with_capacity(tiles: usize) -> Self {
         DrawList {
             uniforms: None,

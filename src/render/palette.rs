@@ -15,6 +15,7 @@ pub const DEFAULT_CAUTION_BELOW_M: f32 = 152.4;
 /// Sun elevation and azimuth used for slope shading: from the north-west,
 /// as cartographers light relief so that it reads as raised, not sunken.
 pub const SUN_AZIMUTH_DEG: f64 = 315.0;
+/// Sun elevation above the horizon, degrees.
 pub const SUN_ELEVATION_DEG: f64 = 45.0;
 
 /// Unit vector toward the sun in the local frame (x east, y north, z up).
@@ -27,4 +28,6 @@ pub fn sun_direction() -> glam::Vec3 {
 /// Colour drawn where there is no terrain in the sky half (clear colour
 /// above the horizon) and the ground-coloured haze below it.
 pub const SKY_ZENITH: [f32; 3] = [0.16, 0.36, 0.68];
+/// Sky colour at the horizon: the bottom of the sky gradient, the colour distant
+/// terrain fades into and the clear colour.
 pub const SKY_HORIZON: [f32; 3] = [0.62, 0.76, 0.90];

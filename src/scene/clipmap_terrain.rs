@@ -13,11 +13,14 @@ use crate::tiles::ResidentNodes;
 /// pyramid's header, or the procedural source's bounds).
 #[derive(Clone, Debug, PartialEq)]
 pub struct TerrainSummary {
+    /// Largest delta of each level, metres, finest level first.
     pub delta_per_level: Vec<f64>,
+    /// Lowest and highest height of the data, metres.
     pub height_range: (f32, f32),
 }
 
 impl TerrainSummary {
+    /// The summary a pyramid file's header records.
     pub fn from_pyramid(info: &PyramidInfo) -> Self {
         TerrainSummary {
             delta_per_level: info.levels.iter().map(|level| level.delta_max as f64).collect(),
@@ -28,7 +31,9 @@ impl TerrainSummary {
 
 /// Borrows a clipmap for one frame.
 pub struct ClipmapTerrain<'a> {
+    /// The clipmap whose node atlas the tiles read.
     pub clipmap: &'a Clipmap,
+    /// Deltas and height range of the data behind it.
     pub summary: &'a TerrainSummary,
 }
 

@@ -37,13 +37,19 @@ pub const DEFAULT_TRANSFER_CAP: u32 = 4 * 64 * 64 * 12;
 /// Everything fixed for a run of the display.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SceneConfig {
+    /// Tiling parameters: grid size, view distance, morph range, tau, most tiles.
     pub lod: LodConfig,
     /// GPU vertex buffer for tile heights, bytes.
     pub buffer_bytes: u32,
+    /// Longest single upload, bytes; `None` uploads each frame's run in one transfer.
     pub transfer_cap: Option<u32>,
+    /// Frames a released tile's bytes stay out of reuse (0: reusable at once).
     pub frames_in_flight: u32,
+    /// Whether the earth's curvature lowers distant terrain (in culling and drawing).
     pub curvature: bool,
+    /// Terrain this many metres above the aircraft, or higher, is red.
     pub warning_above_m: f32,
+    /// Terrain less than this many metres below the aircraft is amber.
     pub caution_below_m: f32,
 }
 
@@ -61,12 +67,17 @@ impl Default for SceneConfig {
     }
 }
 
+/// Why a frame, or the scene itself, cannot be made.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
+    /// The camera is not valid.
     #[error(transparent)]
     Camera(#[from] CameraError),
+    /// The tiling configuration does not suit the terrain.
     #[error("tiling: {0}")]
     Lod(#[from] LodError),
+    /// The tile cache could not be built or could not take the frame's tiles, even
+    /// coarsened down to the root level.
     #[error("tiles: {0}")]
     Tiles(#[from] TileError),
 }
@@ -74,24 +85,36 @@ pub enum SceneError {
 /// CPU time of each stage of a frame, milliseconds.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct StageTimes {
+    /// Computing the rings and selecting tiles, every try of the frame together.
     pub select_ms: f64,
+    /// Updating the tile cache: releasing, allocating and making tiles.
     pub tiles_ms: f64,
+    /// Building the draw list.
     pub draw_list_ms: f64,
 }
 
 /// What a frame drew and what it cost.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct SceneStats {
+    /// Tiles in the draw list.
     pub tiles: usize,
+    /// Tiles dropped by the frustum in the frame's final selection.
     pub culled: usize,
+    /// Triangles of the tiles in the draw list, skirts included (each tile once).
     pub triangles: u64,
+    /// Bytes of the staging copy uploaded.
     pub bytes_uploaded: u64,
+    /// Transfers: one per run piece (dirty range).
     pub transfers: usize,
+    /// Tiles whose vertex data was made this frame.
     pub generated: usize,
+    /// Bytes held by resident tiles.
     pub allocator_used_bytes: u64,
+    /// End of the highest block not free: the buffer size this state needs, bytes.
     pub allocator_workspace_bytes: u32,
     /// Times the selection was coarsened because the buffer was full.
     pub coarsened: u32,
+    /// CPU time of each stage.
     pub cpu_ms: StageTimes,
 }
 
@@ -111,6 +134,7 @@ pub struct Scene {
 const NEAR_SHARE: f64 = 0.8;
 
 impl Scene {
+    /// Builds the scene for `terrain`: checks the tiling and makes the root level's tiles.
     pub fn new(config: SceneConfig, terrain: &dyn TerrainData) -> Result<Self, SceneError> {
         let layout = *terrain.layout();
         config.lod.validate(layout.node_size)?;
@@ -144,6 +168,7 @@ impl Scene {
         })
     }
 
+    /// The configuration the scene was built with.
     pub fn config(&self) -> &SceneConfig {
         &self.config
     }
@@ -158,6 +183,7 @@ impl Scene {
         (self.cache.staging(), self.cache.dirty_ranges())
     }
 
+    /// The rings of the last frame.
     pub fn ranges(&self) -> &LevelRanges {
         &self.ranges
     }

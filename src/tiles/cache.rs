@@ -29,6 +29,7 @@ use std::ops::Range;
 /// Sizes fixed when the cache is built.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct TileCacheConfig {
+    /// Cells per tile side; divides the node size.
     pub grid_size: u32,
     /// Bytes of the GPU vertex buffer (and its staging copy).
     pub capacity_bytes: u32,
@@ -36,13 +37,16 @@ pub struct TileCacheConfig {
     pub max_tiles: u32,
     /// Longest single transfer in bytes; `None` for one transfer per frame.
     pub transfer_cap: Option<u32>,
+    /// Frames a released tile's bytes stay out of reuse (0: reusable at once).
     pub frames_in_flight: u32,
 }
 
 /// A tile to draw: where its vertex data starts and what data made it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TileDraw {
+    /// The tile: its level and position.
     pub key: TileKey,
+    /// Where its vertex data starts in the GPU buffer and the staging copy, bytes.
     pub byte_offset: u32,
     /// Level of the node the heights came from (above `key.level` when only
     /// coarser data was resident: best available).
@@ -55,27 +59,55 @@ pub struct TileDraw {
 /// What one frame of the cache did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct TileFrameStats {
+    /// Tiles selected this frame.
     pub tiles: usize,
+    /// Tiles whose vertex data was made this frame: new ones and ones remade from finer data.
     pub generated: usize,
+    /// Tiles released this frame because the selection no longer uses them.
     pub released: usize,
+    /// Bytes of the staging copy uploaded this frame.
     pub bytes_uploaded: u64,
+    /// Transfers this frame: one per run piece (dirty range).
     pub transfers: usize,
+    /// Bytes held by resident tiles after the frame.
     pub allocator_used_bytes: u64,
+    /// End of the highest block not free after the frame: the buffer size this state needs, bytes.
     pub allocator_workspace_bytes: u32,
 }
 
+/// Why the tile cache cannot be built or cannot make a frame's tiles.
 #[derive(Debug, thiserror::Error)]
 pub enum TileError {
+    /// The allocator refused the configuration.
     #[error("tile cache configuration: {0}")]
     Config(#[from] ConfigError),
+    /// The tile grid size does not divide the node size.
     #[error("grid size {grid} does not divide the node size {node}")]
-    Grid { grid: u32, node: u32 },
+    Grid {
+        /// Cells per tile side.
+        grid: u32,
+        /// Cells per node side.
+        node: u32,
+    },
+    /// The root level alone has more tiles than the cache may hold.
     #[error("the root level needs {needed} tiles but the cache holds {max}")]
-    RootTooLarge { needed: usize, max: u32 },
+    RootTooLarge {
+        /// Tiles of the root level.
+        needed: usize,
+        /// Tiles the cache holds (`max_tiles`).
+        max: u32,
+    },
+    /// No node covering the tile, nor any of its ancestors, is resident.
     #[error("no resident node covers tile {0:?}: the root level must stay resident")]
     NoData(TileKey),
+    /// More tiles are selected (or would be resident) than the cache holds.
     #[error("{selected} tiles selected, the cache holds {max}")]
-    TooManyTiles { selected: usize, max: u32 },
+    TooManyTiles {
+        /// Tiles selected, or resident with the one that found no slot.
+        selected: usize,
+        /// Tiles the cache holds (`max_tiles`).
+        max: u32,
+    },
     /// The GPU buffer cannot take this frame's new tiles; select coarser tiles
     /// and call again (the tiles already resident are untouched).
     #[error("GPU buffer full: {0}")]
@@ -100,6 +132,8 @@ struct Job {
     source: NodeId,
 }
 
+/// The tiles resident in the GPU buffer: one allocator block each, keyed by [`TileKey`],
+/// with the level of data each was made from.
 pub struct TileCache {
     config: TileCacheConfig,
     allocator: ContiguousAllocator,
@@ -148,6 +182,7 @@ impl TileCache {
         Ok(cache)
     }
 
+    /// The sizes the cache was built with.
     pub fn config(&self) -> &TileCacheConfig {
         &self.config
     }
@@ -198,6 +233,7 @@ impl TileCache {
         self.allocator.staging()
     }
 
+    /// What the last update did.
     pub fn stats(&self) -> TileFrameStats {
         self.stats
     }

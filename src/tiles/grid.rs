@@ -14,22 +14,29 @@
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GridVertex {
+    /// Post column in the tile, 0..=grid_size from the west edge.
     pub i: u16,
+    /// Post row in the tile, 0..=grid_size from the south edge.
     pub j: u16,
+    /// 1 for a skirt vertex (lowered by the tile's skirt depth), else 0.
     pub skirt: u16,
+    /// Always 0; pads the vertex to 8 bytes.
     pub _pad: u16,
 }
 
 /// The shared mesh of one grid size.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TileGrid {
+    /// Cells per tile side (1..=256).
     pub grid_size: u32,
+    /// The `(g + 1)^2` posts row by row, then the skirt vertices of each edge.
     pub vertices: Vec<GridVertex>,
     /// Triangles, counter-clockwise seen from above.
     pub indices: Vec<u16>,
 }
 
 impl TileGrid {
+    /// Builds the shared mesh for tiles of `grid_size` cells a side (1..=256).
     pub fn new(grid_size: u32) -> Self {
         debug_assert!((1..=256).contains(&grid_size));
         let g = grid_size;

@@ -16,6 +16,7 @@ use crate::node::{NodeData, NodeId, NodeLayout};
 
 /// Nodes the tiles can read: whatever is resident in the node atlas.
 pub trait ResidentNodes {
+    /// Layout of the pyramid the nodes come from.
     fn layout(&self) -> &NodeLayout;
     /// The node's data if it is resident now.
     fn resident(&self, id: NodeId) -> Option<&NodeData>;

@@ -71,6 +71,8 @@ pub struct PostReader<'a> {
 }
 
 impl<'a> PostReader<'a> {
+    /// A reader for tile `key` from `node` (the tile's own node or an ancestor) and its
+    /// `data`.
     pub fn new(
         layout: &'a NodeLayout,
         key: TileKey,

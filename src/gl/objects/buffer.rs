@@ -85,6 +85,7 @@ impl Buffer {
         self.size
     }
 
+    /// Vertex attributes or indices: the target it binds to.
     pub fn target(&self) -> BufferTarget {
         self.target
     }

@@ -42,10 +42,12 @@ impl Renderbuffer {
         Ok(renderbuffer)
     }
 
+    /// Width and height of the storage, pixels.
     pub fn size(&self) -> UVec2 {
         self.size
     }
 
+    /// The GL internal format of the storage, such as GL_RGBA8.
     pub fn internal_format(&self) -> u32 {
         self.internal_format
     }
@@ -79,6 +81,7 @@ impl Framebuffer {
         &self.gl
     }
 
+    /// Creates a framebuffer with no attachments.
     #[allow(unsafe_code)]
     pub fn new(gl: &Rc<Gl>) -> Result<Framebuffer, GlError> {
         // SAFETY: creating a name needs only a current context.

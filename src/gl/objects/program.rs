@@ -49,6 +49,7 @@ impl Shader {
         Ok(shader)
     }
 
+    /// Vertex or fragment.
     pub fn stage(&self) -> ShaderStage {
         self.stage
     }
@@ -105,6 +106,7 @@ impl Program {
         Ok(program)
     }
 
+    /// The name the program was built with (its shaders are `name.vert` and `name.frag`).
     pub fn name(&self) -> &str {
         &self.name
     }

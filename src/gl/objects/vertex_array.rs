@@ -15,6 +15,7 @@ pub struct VertexArray {
 }
 
 impl VertexArray {
+    /// Creates a vertex array; refused on contexts without vertex array objects.
     #[allow(unsafe_code)]
     pub fn new(gl: &Rc<Gl>) -> Result<VertexArray, GlError> {
         if !gl.caps().vertex_array_objects {
@@ -30,6 +31,7 @@ impl VertexArray {
         Ok(VertexArray { gl: Rc::clone(gl), raw })
     }
 
+    /// Binds the vertex array (glBindVertexArray).
     #[allow(unsafe_code)]
     pub fn bind(&self) {
         // SAFETY: `raw` is a live vertex array of this context.

@@ -26,7 +26,9 @@ pub const CHUNK_CELLS: u32 = 128;
 /// It may reach past the data, where heights extend the edge.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TruthRegion {
+    /// The south-west post, in level-0 posts east and north of the data's south-west post.
     pub first: [i64; 2],
+    /// Posts east and north; at least 2 each for a mesh.
     pub posts: [u32; 2],
 }
 
@@ -54,16 +56,38 @@ impl TruthRegion {
     }
 }
 
+/// Why a truth mesh cannot be loaded.
 #[derive(Debug, thiserror::Error)]
 pub enum TruthError {
+    /// The region has fewer than 2 posts on a side.
     #[error("truth mesh: a region of {0:?} posts needs at least 2 posts a side")]
     Degenerate([u32; 2]),
+    /// The region, widened to whole chunks, holds more than [`MAX_TRUTH_POSTS`] posts.
     #[error("truth mesh: {posts} posts exceed the limit of {max}")]
-    TooLarge { posts: u64, max: u64 },
+    TooLarge {
+        /// Posts of the widened region.
+        posts: u64,
+        /// The limit, [`MAX_TRUTH_POSTS`].
+        max: u64,
+    },
+    /// The node source could not read a level-0 node.
     #[error("truth mesh: reading level-0 node {id:?}: {source}")]
-    Node { id: NodeId, source: NodeError },
+    Node {
+        /// The node that failed.
+        id: NodeId,
+        /// Why it failed.
+        source: NodeError,
+    },
+    /// A level-0 node holds an infinite height (NaN is a void, and allowed).
     #[error("truth mesh: level-0 node {id:?} has a non-finite height at post ({i}, {j})")]
-    NotFinite { id: NodeId, i: u32, j: u32 },
+    NotFinite {
+        /// The node holding it.
+        id: NodeId,
+        /// Post column inside the node (0..=node_size, border excluded).
+        i: u32,
+        /// Post row inside the node (0..=node_size, border excluded).
+        j: u32,
+    },
 }
 
 /// One chunk of [`CHUNK_CELLS`] cells a side, its vertices in
@@ -87,6 +111,7 @@ pub const CHUNK_TRIANGLES: u64 = 2 * CHUNK_CELLS as u64 * CHUNK_CELLS as u64;
 pub struct TruthMesh {
     /// The region drawn: the one asked for, widened to whole chunks.
     pub region: TruthRegion,
+    /// The chunks, row by row from the south-west.
     pub chunks: Vec<TruthChunk>,
 }
 
