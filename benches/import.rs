@@ -3,7 +3,17 @@
 //! per second and as a ratio to reading the same bytes raw from a file in the
 //! same run (the machine is shared and noisy; the ratio is what compares).
 //!
-//! `cargo bench --bench import [-- --quick]` prints a table and writes
+//! A second table measures opening against file size: `Pyramid::open` reads
+//! only the header, so its time should not grow with the file (the header
+//! itself grows by 20 bytes a node, about 0.1 % of the file); the first
+//! page-in of a node and a full `verify` are shown beside it. The pyramids,
+//! 0.4 MB to 1.06 GB (fewer sizes with `--quick`), are built once from the
+//! synthetic terrain into `target/bench/open-scale/` (about 20 s and 3 GB of
+//! memory for the largest) and reused by later runs; delete the folder to
+//! rebuild or to free its 1.5 GB. Timings are with the file in the page
+//! cache, best of the repeats.
+//!
+//! `cargo bench --bench import [-- --quick]` prints both tables and writes
 //! `target/bench/import.json` and `target/bench/import.svg`.
 
 mod support;
@@ -12,6 +22,7 @@ use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use ridgeline::node::{NodeData, NodeId, NodeSource};
 use ridgeline::pyramid::{self, BuildOptions, Pyramid, Silent};
 use support::{print_table, BenchArgs, Panel, Series};
 
@@ -38,6 +49,21 @@ struct Row {
     open_verify_over_raw: f64,
 }
 
+/// Opening one pyramid, best of the repeats.
+#[derive(serde::Serialize)]
+struct OpenRow {
+    /// Synthetic grid side.
+    size: u32,
+    pyramid_mb: f64,
+    nodes: u64,
+    /// Milliseconds to open (map, check the header and its checksum).
+    open_ms: f64,
+    /// Milliseconds to read (and check) one level-0 node right after opening.
+    first_page_in_ms: f64,
+    /// Milliseconds to check every node, what opening cost before.
+    verify_ms: f64,
+}
+
 fn main() {
     let quick = BenchArgs::parse().quick;
     let (sizes, repeats): (&[u32], usize) =
@@ -52,10 +78,24 @@ fn main() {
         if quick { " (quick)" } else { "" }
     );
     print_rows(&title, &rows);
-    let report =
-        serde_json::json!({ "bench": "import", "quick": quick, "threads": threads, "rows": rows });
+    // 13056 = 204 nodes of 64 cells: a 1.06 GB pyramid.
+    let (open_sizes, open_repeats): (&[u32], usize) =
+        if quick { (&[256, 4096, 13056], 3) } else { (&[256, 1024, 4096, 8192, 13056], 5) };
+    let open_dir = support::out_dir().join("open-scale");
+    let open_rows: Vec<OpenRow> =
+        open_sizes.iter().map(|&size| measure_open(size, open_repeats, &open_dir)).collect();
+    print_open_rows(quick, open_repeats, &open_rows);
+    let report = serde_json::json!({
+        "bench": "import",
+        "quick": quick,
+        "threads": threads,
+        "rows": rows,
+        "open_scale": open_rows,
+    });
     let json = support::write_json("import", &report);
-    let svg = support::write_svg("import", &panels(&rows));
+    let mut plots = Vec::from(panels(&rows));
+    plots.push(open_panel(&open_rows));
+    let svg = support::write_svg("import", &plots);
     println!("\nwrote {} and {}", json.display(), svg.display());
 }
 
@@ -83,7 +123,10 @@ fn measure(size: u32, repeats: usize, scratch: &Path) -> Row {
             pyramid::build(&grid, &BuildOptions::default(), &Silent).expect("build")
         });
         let write = timed(|| pyramid::write_atomic(&built, &path, &Silent).expect("write"));
-        let open = timed(|| drop(Pyramid::open(&path).expect("open")));
+        let open = timed(|| {
+            let pyramid = Pyramid::open(&path).expect("open");
+            pyramid.verify().expect("verify");
+        });
         for (best, now) in times.iter_mut().zip([raw_read, build, write, open]) {
             *best = (*best).min(now);
         }
@@ -108,6 +151,95 @@ fn measure(size: u32, repeats: usize, scratch: &Path) -> Row {
         write_over_raw: secs(write) / secs(raw_read),
         import_over_raw: (secs(build) + secs(write)) / secs(raw_read),
         open_verify_over_raw: secs(open) / secs(raw_read),
+    }
+}
+
+/// The pyramid of the synthetic grid of side `size` under `dir`, built and
+/// written unless an earlier run left it there.
+fn scale_pyramid(size: u32, dir: &Path) -> PathBuf {
+    let cache = dir.join(format!("size-{size}"));
+    let path = cache.join(pyramid::FILE_NAME);
+    if Pyramid::open(&path).is_ok() {
+        return path;
+    }
+    std::fs::create_dir_all(&cache).expect("open-scale dir");
+    eprintln!("building the {size} x {size} pyramid for the open-time table (kept for next time)");
+    let grid = pyramid::synthetic_grid(size).expect("bench sizes are valid");
+    let built = pyramid::build(&grid, &BuildOptions::default(), &Silent).expect("build");
+    drop(grid);
+    pyramid::write_atomic(&built, &path, &Silent).expect("write");
+    path
+}
+
+fn measure_open(size: u32, repeats: usize, dir: &Path) -> OpenRow {
+    let path = scale_pyramid(size, dir);
+    let mut best = [Duration::MAX; 3];
+    let mut nodes = 0;
+    for _ in 0..repeats {
+        let (open, pyramid) = timed_value(|| Pyramid::open(&path).expect("open"));
+        let layout = *pyramid.layout();
+        nodes = layout.node_count();
+        let [nx, ny] = layout.nodes_at(0);
+        let mut node = NodeData::with_capacity(&layout);
+        let page_in = timed(|| {
+            pyramid.read_node(NodeId::new(0, nx / 2, ny / 2), &mut node).expect("read");
+        });
+        let verify = timed(|| pyramid.verify().expect("verify"));
+        for (best, now) in best.iter_mut().zip([open, page_in, verify]) {
+            *best = (*best).min(now);
+        }
+    }
+    let ms = |d: Duration| d.as_secs_f64() * 1e3;
+    OpenRow {
+        size,
+        pyramid_mb: std::fs::metadata(&path).expect("pyramid size").len() as f64 / 1e6,
+        nodes,
+        open_ms: ms(best[0]),
+        first_page_in_ms: ms(best[1]),
+        verify_ms: ms(best[2]),
+    }
+}
+
+fn print_open_rows(quick: bool, repeats: usize, rows: &[OpenRow]) {
+    let title = format!(
+        "open time against file size, best of {repeats}, file in the page cache{}",
+        if quick { " (quick: three of the sizes)" } else { "" }
+    );
+    let header = ["size", "pyramid MB", "nodes", "open ms", "first page-in ms", "verify ms"];
+    let cells: Vec<Vec<String>> = rows
+        .iter()
+        .map(|r| {
+            vec![
+                r.size.to_string(),
+                format!("{:.1}", r.pyramid_mb),
+                r.nodes.to_string(),
+                format!("{:.3}", r.open_ms),
+                format!("{:.3}", r.first_page_in_ms),
+                format!("{:.1}", r.verify_ms),
+            ]
+        })
+        .collect();
+    print_table(&title, &header, &cells);
+    println!("  open checks the header only; each node is checked when paged in; verify checks them all (ridgeline info)");
+}
+
+/// Open, first page-in and full verification time against file size.
+fn open_panel(rows: &[OpenRow]) -> Panel {
+    let series = |label: &str, value: fn(&OpenRow) -> f64| Series {
+        label: label.to_string(),
+        points: rows.iter().map(|r| (r.pyramid_mb, value(r))).collect(),
+    };
+    Panel {
+        title: "opening against file size".into(),
+        x_label: "pyramid file (MB)".into(),
+        y_label: "milliseconds".into(),
+        log_x: true,
+        log_y: true,
+        series: vec![
+            series("open", |r| r.open_ms),
+            series("first page-in", |r| r.first_page_in_ms),
+            series("verify every node", |r| r.verify_ms),
+        ],
     }
 }
 

@@ -93,12 +93,15 @@ fn exact_height_interpolates_level0_on_its_triangles() {
     assert_eq!(pyramid.exact_height(f64::NAN, 0.0), None);
 }
 
-/// Opening `bytes` written as a pyramid file must fail with an error naming it.
+/// Opening `bytes` written as a pyramid file and verifying it (open checks
+/// the header, verify every node) must fail with an error naming it.
 fn assert_refused(dir: &std::path::Path, bytes: &[u8], what: &str) -> PyramidError {
     let path = dir.join("damaged.rlp");
     std::fs::write(&path, bytes).expect("write damaged copy");
-    let error =
-        Pyramid::open(&path).err().unwrap_or_else(|| panic!("{what}: a damaged file opened"));
+    let error = Pyramid::open(&path)
+        .and_then(|pyramid| pyramid.verify())
+        .err()
+        .unwrap_or_else(|| panic!("{what}: a damaged file opened and verified"));
     assert!(
         error.to_string().contains(&path.display().to_string()),
         "{what}: {error} does not name the file"
@@ -164,7 +167,7 @@ proptest! {
 
     /// CRC-32 catches every single-byte change, and every byte is covered.
     #[test]
-    fn any_flipped_byte_is_refused_on_open(position in 0.0f64..1.0, flip in 1u8..=255) {
+    fn any_flipped_byte_is_refused_by_open_and_verify(position in 0.0f64..1.0, flip in 1u8..=255) {
         let dir = fresh_dir("file-flip");
         let (_, path) = build_and_write(&random_grid(30, 20, 6), BuildOptions { node_size: 8, border: 2 }, &dir);
         let mut bytes = std::fs::read(&path).expect("read");

@@ -59,6 +59,7 @@ struct Georef {
 
 pub fn run(args: &InfoArgs) -> Result<()> {
     let pyramid = Pyramid::open(&args.cache)?;
+    pyramid.verify()?; // open checks the header only; info vouches for every node
     let summary = summarise(&pyramid);
     let text =
         if args.json { serde_json::to_string_pretty(&summary)? + "\n" } else { table(&summary) };

@@ -16,6 +16,14 @@
 //! The root level is loaded when the clipmap is built and pinned, so every
 //! lookup inside the data answers, from the finest resident ancestor when the
 //! node it would like is not there yet.
+//!
+//! A node whose read fails is never put in the atlas. An I/O error is
+//! retried with backoff; a node whose bytes fail their check, or that stays
+//! unreadable, is reported once on stderr (node and file), counted
+//! ([`Clipmap::corrupt_nodes`], [`Clipmap::unreadable_nodes`]) and never
+//! requested again, so the views answer from its finest resident ancestor
+//! for good. Queued loads no view wants any more are cancelled. See the
+//! loader module for the numbers.
 
 mod atlas;
 mod hash;
@@ -28,12 +36,12 @@ use std::sync::Arc;
 use glam::{DVec2, DVec3};
 
 pub use atlas::{NodeAtlas, SlotState};
-pub use loader::LoaderMode;
+pub use loader::{LoaderMode, READ_ATTEMPTS, RETRY_FIRST_DELAY_FRAMES};
 pub use quadtree::{ClippedQuadtree, Entry};
 
 use crate::node::{NodeData, NodeError, NodeId, NodeLayout, NodeSource};
-use hash::{node_map, node_set, NodeMap, NodeSet};
-use loader::{Loaded, Loader};
+use hash::{node_map, NodeMap};
+use loader::{Loaded, Loader, Outcome, Verdict};
 
 /// Settings shared by all views.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -141,8 +149,15 @@ pub struct UpdateStats {
     pub evicted: u32,
     /// Finished loads dropped: no longer wanted, or no slot free.
     pub discarded: u32,
-    /// Loads that failed this frame (see [`Clipmap::last_load_error`]).
+    /// Loads that failed this frame (see [`Clipmap::last_load_error`]);
+    /// an I/O error is retried later, any other failure gives the node up.
     pub failed: u32,
+    /// Nodes given up this frame: damaged, refused, or unreadable after
+    /// [`READ_ATTEMPTS`] reads. Each is reported once and stays missing.
+    pub given_up: u32,
+    /// Queued loads the loader skipped this frame because no view wanted
+    /// their node any more (0 when inline).
+    pub cancelled: u32,
     /// Requests still with the loader thread after the frame.
     pub in_flight: u32,
 }
@@ -165,9 +180,11 @@ pub struct Clipmap {
     /// This frame's union of wanted nodes, with the nearest view's distance.
     wanted: NodeMap<f64>,
     candidates: Vec<Candidate>,
-    /// Nodes whose load failed; never requested again.
-    failed: NodeSet,
     last_error: Option<NodeError>,
+    /// Nodes given up because their bytes failed their check.
+    corrupt_nodes: u64,
+    /// Nodes given up after [`READ_ATTEMPTS`] reads failed with I/O errors.
+    unreadable_nodes: u64,
     frame: u64,
 }
 
@@ -208,8 +225,9 @@ impl Clipmap {
             loader,
             wanted: node_map(0),
             candidates: Vec::new(),
-            failed: node_set(0),
             last_error: None,
+            corrupt_nodes: 0,
+            unreadable_nodes: 0,
             frame: 0,
         })
     }
@@ -256,6 +274,8 @@ impl Clipmap {
         self.frame += 1;
         let mut stats = UpdateStats { frame: self.frame, ..UpdateStats::default() };
         self.collect_wanted();
+        let wanted = &self.wanted;
+        self.loader.cancel_unwanted(|id| wanted.contains_key(&id));
         self.compare_with_atlas(&mut stats);
         self.load(&mut stats)?;
         self.atlas.sort_changes();
@@ -301,7 +321,7 @@ impl Clipmap {
                 Some(slot) => self.atlas.mark_used(slot, self.frame),
                 None => {
                     stats.missing += 1;
-                    if !self.loader.is_loading(id) && !self.failed.contains(&id) {
+                    if self.loader.may_request(id, self.frame) {
                         self.candidates.push(Candidate { id, distance_m });
                     }
                 }
@@ -346,27 +366,58 @@ impl Clipmap {
         Ok(())
     }
 
-    /// Copies a finished load into the atlas if it is still wanted.
+    /// Copies a finished load into the atlas if it is still wanted; a failed
+    /// one is retried later or given up (and reported once).
     fn apply(&mut self, loaded: Loaded, stats: &mut UpdateStats) {
         let Loaded { id, mut data, outcome } = loaded;
         match outcome {
-            Err(error) => {
+            Outcome::Cancelled => stats.cancelled += 1,
+            Outcome::Failed(error) => {
                 stats.failed += 1;
-                self.failed.insert(id);
+                let verdict = self.loader.failure(id, &error, self.frame);
+                if !matches!(verdict, Verdict::RetryAt { .. }) {
+                    stats.given_up += 1;
+                    self.report_given_up(id, &error, verdict);
+                }
                 self.last_error = Some(error);
             }
-            Ok(()) if self.wanted.contains_key(&id) => {
-                match self.atlas.insert(id, &mut data, SlotState::Used, self.frame) {
-                    Some(insertion) => {
-                        stats.applied += 1;
-                        stats.evicted += insertion.evicted.is_some() as u32;
+            Outcome::Read => {
+                self.loader.succeeded(id);
+                if !self.wanted.contains_key(&id) {
+                    stats.discarded += 1;
+                } else {
+                    match self.atlas.insert(id, &mut data, SlotState::Used, self.frame) {
+                        Some(insertion) => {
+                            stats.applied += 1;
+                            stats.evicted += insertion.evicted.is_some() as u32;
+                        }
+                        None => stats.discarded += 1,
                     }
-                    None => stats.discarded += 1,
                 }
             }
-            Ok(()) => stats.discarded += 1,
         }
         self.loader.recycle(data);
+    }
+
+    /// Counts a node given up and says so on stderr, once per node (a node
+    /// given up is never requested again).
+    fn report_given_up(&mut self, id: NodeId, error: &NodeError, verdict: Verdict) {
+        let fallback = "treated as missing; its coarser ancestor is drawn";
+        match verdict {
+            Verdict::Damaged => {
+                self.corrupt_nodes += 1;
+                eprintln!("ridgeline: {error}; {fallback}");
+            }
+            Verdict::GaveUp => {
+                self.unreadable_nodes += 1;
+                eprintln!(
+                    "ridgeline: node {id:?} unreadable after {READ_ATTEMPTS} attempts: {error}; \
+                     {fallback}"
+                );
+            }
+            Verdict::Refused => eprintln!("ridgeline: node {id:?}: {error}; {fallback}"),
+            Verdict::RetryAt { .. } => {}
+        }
     }
 
     /// The lookup of Kühnert eq. 4.10 and 4.11 in layer `lod` of a view:
@@ -461,6 +512,24 @@ impl Clipmap {
     /// The most recent failed load's error.
     pub fn last_load_error(&self) -> Option<&NodeError> {
         self.last_error.as_ref()
+    }
+
+    /// Nodes whose bytes failed their check when paged in, since the
+    /// clipmap was built: each was reported once and is drawn from its
+    /// coarser ancestor.
+    pub fn corrupt_nodes(&self) -> u64 {
+        self.corrupt_nodes
+    }
+
+    /// Nodes given up after [`READ_ATTEMPTS`] reads failed with I/O errors.
+    pub fn unreadable_nodes(&self) -> u64 {
+        self.unreadable_nodes
+    }
+
+    /// Whether `id` was given up (damaged, unreadable, or refused by the
+    /// source): it is never requested again.
+    pub fn has_given_up(&self, id: NodeId) -> bool {
+        self.loader.has_given_up(id)
     }
 }
 

@@ -30,11 +30,14 @@
 //!   split from its south-west to its north-east corner), in `f64`, stored
 //!   rounded up to `f32` so the stored bound is never below the true one.
 //!   Level 0 passes through every sample, so its delta is exactly 0.
-//! - **Verification on open**: [`Pyramid::open`] checks the header checksum
-//!   and every node's checksum (in parallel; CRC-32 runs at several GB/s) so a
-//!   damaged file is refused before anything is drawn; `read_node` checks the
-//!   node's checksum again, which costs microseconds and catches a file
-//!   changed in place after opening.
+//! - **Verification at page-in**: [`Pyramid::open`] checks the header and its
+//!   checksum (which covers the node table) and nothing else, so opening a
+//!   10 GB pyramid costs what opening a 1 MB one does; `read_node` checks
+//!   each node's checksum when the node is paged in (microseconds), which
+//!   also catches a file changed in place after opening. The clipmap treats a
+//!   node that fails as missing and draws its coarser ancestor.
+//!   [`Pyramid::verify`] checks every node at once (in parallel; CRC-32 runs
+//!   at several GB/s), as `ridgeline info` does.
 //!
 //! See [`format`] for the bytes on disk.
 
