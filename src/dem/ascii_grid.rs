@@ -10,7 +10,11 @@
 //!
 //! The format carries no coordinate system. A `.prj` sidecar whose WKT starts
 //! with `GEOGCS`/`GEOGCRS` makes the grid geographic, `PROJCS`/`PROJCRS`
-//! projected (code unknown); without a sidecar the grid is local metres.
+//! projected (code unknown); without a sidecar the grid is local metres,
+//! except that a grid whose numbers only make sense in degrees (|x| <= 180,
+//! |y| <= 90 over the whole grid and a cell size under 0.01) is refused with
+//! [`Problem::DegreesWithoutPrj`], which says how to add the sidecar: read as
+//! metres it would be a needle a few centimetres wide and kilometres tall.
 //!
 //! The file is read as a stream of tokens, so it is never held in memory.
 
@@ -21,6 +25,9 @@ use super::error::{ImportError, Problem};
 use super::raw::{check_dimensions, classify, file_len, non_finite, NoData, RawGrid};
 use crate::geo::{Crs, GeoRef};
 
+/// Cell size below which a grid without `.prj` whose corners fit in
+/// longitude and latitude ranges is taken to be in degrees and refused.
+const DEGREE_LIKE_CELL: f64 = 0.01;
 /// ESRI's nodata when the header declares none.
 const DEFAULT_NODATA: f64 = -9999.0;
 /// Longest token accepted: numbers are short, so a longer run of
@@ -49,8 +56,13 @@ pub fn read(path: &Path) -> Result<RawGrid, ImportError> {
             actual,
         }));
     }
-    let georef =
-        GeoRef { crs: sidecar_crs(path)?, origin: header.origin(), spacing: header.spacing };
+    let crs = sidecar_crs(path)?;
+    if crs == Crs::Local && header.looks_like_degrees() {
+        let [x, y] = header.lower_left;
+        let cell_size = header.spacing[0].max(header.spacing[1]);
+        return Err(fail(Problem::DegreesWithoutPrj { x, y, cell_size }));
+    }
+    let georef = GeoRef { crs, origin: header.origin(), spacing: header.spacing };
     let mut grid = RawGrid::voids(path, width, height, georef);
     let mut count = 0u64;
     // `token` already holds the first value (the header parser stopped at it).
@@ -167,6 +179,19 @@ impl Header {
             spacing,
             nodata,
         })
+    }
+
+    /// Whether the numbers only make sense in degrees: the whole grid lies
+    /// within |x| <= 180, |y| <= 90 and cells are under 0.01 (1 cm in metres,
+    /// about 1 km in degrees).
+    fn looks_like_degrees(&self) -> bool {
+        let [x, y] = self.lower_left;
+        let east = x + self.spacing[0] * self.ncols as f64;
+        let north = y + self.spacing[1] * self.nrows as f64;
+        let small = self.spacing.iter().all(|&s| s < DEGREE_LIKE_CELL);
+        small
+            && [x, east].iter().all(|v| v.abs() <= 180.0)
+            && [y, north].iter().all(|v| v.abs() <= 90.0)
     }
 
     /// The south-west post.

@@ -26,7 +26,7 @@ pub enum Problem {
     Io(#[from] std::io::Error),
     #[error("no input files")]
     NoInput,
-    #[error("unknown format: the extension is not .tif/.tiff/.hgt/.dt0/.dt1/.dt2/.asc and the start of the file matches no known magic")]
+    #[error("unknown format: the extension is not .tif/.tiff/.hgt/.dt0/.dt1/.dt2/.asc/.nc/.cdf and the start of the file matches no known magic")]
     UnknownFormat,
     #[error("wrong magic for {format}: expected {expected}, found {found:?}")]
     BadMagic { format: &'static str, expected: &'static str, found: String },
@@ -60,6 +60,10 @@ pub enum Problem {
     Tiff(#[from] tiff::TiffError),
     #[error("every sample is a void: there is nothing to fill the voids from")]
     AllVoids,
+    #[error("netCDF-3 header not understood: {0}")]
+    NetCdf(String),
+    #[error("the header's numbers look like degrees (corner {x}, {y}, cell size {cell_size}) but there is no .prj sidecar, so they would be read as metres; add a .prj beside the file whose WKT starts with GEOGCS (for example GEOGCS[\"WGS 84\",DATUM[\"WGS_1984\",SPHEROID[\"WGS 84\",6378137,298.257223563]],PRIMEM[\"Greenwich\",0],UNIT[\"degree\",0.0174532925199433]]), or reproject the grid to metres")]
+    DegreesWithoutPrj { x: f64, y: f64, cell_size: f64 },
     #[error("cannot join the mosaic: {0}")]
     Mosaic(String),
 }

@@ -1,6 +1,7 @@
 //! Which importer reads a file. The extension decides when it is known
 //! (case-insensitive): `.tif`/`.tiff` GeoTIFF, `.hgt` SRTM, `.dt0`/`.dt1`/
-//! `.dt2` DTED, `.asc` ESRI ASCII grid. Otherwise the first bytes decide:
+//! `.dt2` DTED, `.asc` ESRI ASCII grid, `.nc`/`.cdf` netCDF-3. Otherwise the
+//! first bytes decide (`CDF\x01`/`CDF\x02` netCDF-3):
 //! `II*\0`, `MM\0*` (or the BigTIFF forms) GeoTIFF; `UHL`, or the tape labels
 //! `VOL`/`HDR`, DTED; a first word `ncols` or `nrows` ASCII grid. SRTM tiles
 //! have no magic, so an `.hgt` file must be named so. A file whose extension
@@ -19,6 +20,7 @@ pub enum Format {
     Hgt,
     Dted,
     AsciiGrid,
+    NetCdf,
 }
 
 /// Picks the format of `path` by extension, else by magic.
@@ -37,6 +39,7 @@ fn by_extension(path: &Path) -> Option<Format> {
         "hgt" => Some(Format::Hgt),
         "dt0" | "dt1" | "dt2" => Some(Format::Dted),
         "asc" => Some(Format::AsciiGrid),
+        "nc" | "cdf" => Some(Format::NetCdf),
         _ => None,
     }
 }
@@ -44,6 +47,9 @@ fn by_extension(path: &Path) -> Option<Format> {
 fn by_magic(start: &[u8]) -> Option<Format> {
     if TIFF_MAGIC.iter().any(|m| start.starts_with(m)) {
         return Some(Format::GeoTiff);
+    }
+    if super::netcdf::MAGIC.iter().any(|m| start.starts_with(m)) {
+        return Some(Format::NetCdf);
     }
     if [b"UHL", b"VOL", b"HDR"].iter().any(|m| start.starts_with(*m)) {
         return Some(Format::Dted);

@@ -9,6 +9,7 @@
 //! | [`hgt`] | SRTM `.hgt` tiles |
 //! | [`dted`] | DTED levels 0, 1, 2 |
 //! | [`ascii_grid`] | ESRI ASCII grids |
+//! | [`netcdf`] | netCDF-3 classic grids (ETOPO5) |
 //! | [`raw`] | the pre-fill grid with voids and the checks importers share |
 //! | [`mosaic`] | joining several files on one lattice |
 //! | [`voids`] | the documented void fill |
@@ -26,6 +27,7 @@ pub mod geotiff;
 pub mod geotiff_georef;
 pub mod hgt;
 pub mod mosaic;
+pub mod netcdf;
 pub mod raw;
 pub mod voids;
 
@@ -63,6 +65,7 @@ pub fn read_raw(path: &Path) -> Result<RawGrid, ImportError> {
         Format::Hgt => hgt::read(path),
         Format::Dted => dted::read(path),
         Format::AsciiGrid => ascii_grid::read(path),
+        Format::NetCdf => netcdf::read(path),
     }
 }
 
