@@ -13,18 +13,34 @@ pub const DEFAULT_DATASET: &str = "srtm3_n39e040";
 /// 1111 to 3270 m; see assets/dem/README.md for source and licence).
 const DEFAULT_TIFF: &[u8] = include_bytes!("../assets/dem/srtm3_n39e040_1000.tif");
 
+/// Why a dataset cannot be opened or the built-in terrain cannot be built.
 #[derive(Debug, thiserror::Error)]
 pub enum DatasetError {
+    /// The built-in terrain's source could not be written to the cache.
     #[error("{path}: cannot write the built-in terrain: {source}")]
-    Write { path: PathBuf, source: std::io::Error },
+    Write {
+        /// The file being written.
+        path: PathBuf,
+        /// The I/O failure.
+        source: std::io::Error,
+    },
+    /// The built-in terrain's source failed to import.
     #[error(transparent)]
     Import(#[from] ImportError),
+    /// The built-in terrain's pyramid failed to build.
     #[error("building the built-in terrain: {0}")]
     Build(#[from] BuildError),
+    /// The pyramid file failed to open.
     #[error(transparent)]
     Pyramid(#[from] PyramidError),
+    /// No pyramid exists for a dataset name.
     #[error("dataset {name}: no pyramid at {path} (build one with `ridgeline import FILES --out {path}`)")]
-    Missing { name: String, path: PathBuf },
+    Missing {
+        /// The dataset name asked for.
+        name: String,
+        /// Where its pyramid was looked for.
+        path: PathBuf,
+    },
 }
 
 /// Opens the dataset `name` (a cache name under `cache_root`, or a path to a

@@ -25,6 +25,7 @@
 //! | [`procedural`] | a deterministic earth-sized `NodeSource` computed on demand, for scale tests |
 //! | [`clipmap`] | the chunked clipmap: node atlas, clipped quadtrees per view, loader, height queries |
 #![deny(unsafe_code)]
+#![warn(missing_docs)]
 
 pub mod accuracy;
 pub mod allocator;

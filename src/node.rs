@@ -14,12 +14,16 @@
 /// Names one node of the pyramid.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
 pub struct NodeId {
+    /// Level in the pyramid: 0 is the finest, each level above halves the posts.
     pub level: u8,
+    /// Column of the node at its level, from the west.
     pub x: u32,
+    /// Row of the node at its level, from the south.
     pub y: u32,
 }
 
 impl NodeId {
+    /// The node at column `x`, row `y` of `level`.
     pub fn new(level: u8, x: u32, y: u32) -> Self {
         NodeId { level, x, y }
     }
@@ -149,6 +153,7 @@ impl NodeLayout {
 /// A point located inside a node.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NodePoint {
+    /// The node containing the point.
     pub id: NodeId,
     /// Post coordinates east and north from the node's south-west centre
     /// post, each in `0..=node_size`.
@@ -176,8 +181,9 @@ pub fn cell_surface(h00: f64, h10: f64, h01: f64, h11: f64, fu: f64, fv: f64) ->
 pub struct NodeData {
     /// `stored_side^2` heights in metres, row 0 southern, border included.
     pub heights: Vec<f32>,
-    /// Lowest and highest height of the node's centre posts.
+    /// Lowest height of the node's centre posts.
     pub min: f32,
+    /// Highest height of the node's centre posts.
     pub max: f32,
     /// Ulrich's delta: the largest vertical distance, in metres, between the
     /// node's surface (posts joined as triangles, each cell split from its
@@ -218,6 +224,7 @@ impl NodeData {
 /// Anything that can produce nodes: the memory-mapped pyramid, the procedural
 /// earth. Called from the loader thread.
 pub trait NodeSource: Send + Sync {
+    /// The pyramid's geometry: levels, node size, border, post spacing.
     fn layout(&self) -> &NodeLayout;
     /// Writes node `id` into `out`, reusing its buffers.
     fn read_node(&self, id: NodeId, out: &mut NodeData) -> Result<(), NodeError>;
@@ -238,12 +245,36 @@ pub trait NodeSource: Send + Sync {
 /// Why a node could not be produced.
 #[derive(Debug, thiserror::Error)]
 pub enum NodeError {
+    /// The id names no node of the layout.
     #[error("node {id:?} is outside the pyramid")]
-    OutOfRange { id: NodeId },
+    OutOfRange {
+        /// The node asked for.
+        id: NodeId,
+    },
+    /// The node's bytes failed their check (checksum or range).
     #[error("{path}: node {id:?}: {problem}")]
-    Corrupt { path: std::path::PathBuf, id: NodeId, problem: String },
+    Corrupt {
+        /// The pyramid file.
+        path: std::path::PathBuf,
+        /// The node.
+        id: NodeId,
+        /// What the check found.
+        problem: String,
+    },
+    /// Reading the pyramid file failed.
     #[error("{path}: {source}")]
-    Io { path: std::path::PathBuf, source: std::io::Error },
+    Io {
+        /// The pyramid file.
+        path: std::path::PathBuf,
+        /// The I/O failure.
+        source: std::io::Error,
+    },
+    /// An exact height was asked outside the data's extent.
     #[error("point ({x_m} m, {y_m} m) is outside the data")]
-    OutsideData { x_m: f64, y_m: f64 },
+    OutsideData {
+        /// Metres east of the pyramid's origin.
+        x_m: f64,
+        /// Metres north of the pyramid's origin.
+        y_m: f64,
+    },
 }

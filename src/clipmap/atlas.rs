@@ -15,6 +15,7 @@ use crate::node::{NodeData, NodeId, NodeLayout};
 /// What a slot holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SlotState {
+    /// No node: free for the next load.
     Empty,
     /// A root-level node: resident for the atlas's whole life.
     Pinned,
@@ -75,10 +76,12 @@ impl NodeAtlas {
         }
     }
 
+    /// Slots in the atlas, resident or not.
     pub fn slot_count(&self) -> u32 {
         self.slots.len() as u32
     }
 
+    /// Slots holding a node (pinned, in use or unused).
     pub fn resident_count(&self) -> u32 {
         self.index.len() as u32
     }
@@ -88,22 +91,27 @@ impl NodeAtlas {
         self.free.len() as u32 + self.unused.len()
     }
 
+    /// The slot holding `id`, if it is resident.
     pub fn slot_of(&self, id: NodeId) -> Option<u32> {
         self.index.get(&id).copied()
     }
 
+    /// The node in `slot`, if any.
     pub fn node_in(&self, slot: u32) -> Option<NodeId> {
         self.slots[slot as usize].node
     }
 
+    /// The posts of the node in `slot` (stale when the slot is empty).
     pub fn data(&self, slot: u32) -> &NodeData {
         &self.slots[slot as usize].data
     }
 
+    /// Whether `slot` is empty, pinned, in use or unused.
     pub fn state(&self, slot: u32) -> SlotState {
         self.slots[slot as usize].state
     }
 
+    /// The last frame in which a view used `slot`.
     pub fn last_used(&self, slot: u32) -> u64 {
         self.slots[slot as usize].last_used
     }

@@ -55,7 +55,10 @@ pub enum LoaderMode {
     /// On the updating thread, at most `budget` per frame, in priority order.
     Inline,
     /// On a loader thread; `queue` requests may wait in its bounded queue.
-    Thread { queue: usize },
+    Thread {
+        /// Requests that may wait in the loader's bounded queue.
+        queue: usize,
+    },
 }
 
 /// What became of a request.

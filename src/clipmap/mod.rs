@@ -50,6 +50,7 @@ pub struct ClipmapConfig {
     pub atlas_slots: u32,
     /// Most finished loads copied into the atlas per frame.
     pub budget: u32,
+    /// Whether nodes are read inline or on a loader thread.
     pub loader: LoaderMode,
 }
 
@@ -82,24 +83,48 @@ pub struct ViewId(usize);
 /// Why a clipmap or a view cannot be built or updated.
 #[derive(Debug, thiserror::Error)]
 pub enum ClipmapError {
+    /// The source's layout has no levels.
     #[error("clipmap: the node source has no levels")]
     NoLevels,
+    /// The atlas is too small for the root level plus one node.
     #[error("clipmap: {slots} atlas slots cannot hold the {roots} root nodes and one more")]
-    TooFewSlots { slots: u32, roots: u64 },
+    TooFewSlots {
+        /// Slots asked for.
+        slots: u32,
+        /// Nodes at the root level.
+        roots: u64,
+    },
+    /// `budget` is zero.
     #[error("clipmap: the load budget must be at least one node per frame")]
     ZeroBudget,
+    /// The loader thread's queue length is zero.
     #[error("clipmap: the loader queue must hold at least one request")]
     ZeroQueue,
+    /// `node_count` is outside 4..=256.
     #[error("clipmap: node_count {0} must be between 4 and 256")]
     NodeCount(u32),
+    /// The view and load distances are not ordered or too large for the window.
     #[error("clipmap: need 0 < view_distance {view} <= load_distance {load} <= {max} for node_count {node_count}")]
-    Distances { view: f64, load: f64, max: f64, node_count: u32 },
+    Distances {
+        /// The `view_distance` asked for.
+        view: f64,
+        /// The `load_distance` asked for.
+        load: f64,
+        /// The largest `load_distance` the window supports.
+        max: f64,
+        /// The window's entries per side.
+        node_count: u32,
+    },
+    /// The viewer's position has a NaN or infinite coordinate.
     #[error("clipmap: viewer position {0} is not finite")]
     Position(DVec3),
+    /// A root-level node could not be read.
     #[error("clipmap: loading the root level: {0}")]
     Root(NodeError),
+    /// The loader thread could not be started.
     #[error("clipmap: starting the loader thread: {0}")]
     Spawn(std::io::Error),
+    /// The loader thread has gone away.
     #[error("clipmap: the loader thread stopped (the node source panicked)")]
     LoaderStopped,
 }
@@ -107,8 +132,10 @@ pub enum ClipmapError {
 /// Why a lookup has no answer.
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
 pub enum LookupError {
+    /// The point (metres east, north) lies outside the pyramid's extent.
     #[error("point ({0}, {1}) is outside the data")]
     OutsideData(f64, f64),
+    /// The point (metres east, north) lies outside the view's window.
     #[error("point ({0}, {1}) is outside the view's quadtree")]
     OutsideView(f64, f64),
 }
@@ -118,6 +145,7 @@ pub enum LookupError {
 pub struct NodeLookup {
     /// The atlas slot holding `node`.
     pub slot: u32,
+    /// The node whose posts answer the lookup.
     pub node: NodeId,
     /// Position inside the node, 0..=1 east and north (eq. 4.11).
     pub atlas_coords: DVec2,
@@ -126,16 +154,19 @@ pub struct NodeLookup {
 /// A height from the clipmap.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HeightSample {
+    /// The surface height at the point, bilinear in the answering node.
     pub height_m: f32,
     /// The answering node's `delta`: the full-resolution surface is within
     /// this many metres of `height_m`.
     pub error_bound_m: f32,
+    /// The node that answered.
     pub node: NodeId,
 }
 
 /// What one [`Clipmap::update`] did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct UpdateStats {
+    /// The clipmap frame this update made (1 for the first update).
     pub frame: u64,
     /// Nodes wanted by at least one view.
     pub wanted: u32,
@@ -478,18 +509,22 @@ impl Clipmap {
         self.source.exact_height(point.x, point.y)
     }
 
+    /// The source's node layout.
     pub fn layout(&self) -> &NodeLayout {
         &self.layout
     }
 
+    /// The settings the clipmap was made with.
     pub fn config(&self) -> ClipmapConfig {
         self.config
     }
 
+    /// The shared node atlas.
     pub fn atlas(&self) -> &NodeAtlas {
         &self.atlas
     }
 
+    /// The clipped quadtree of `view`.
     pub fn view(&self, view: ViewId) -> &ClippedQuadtree {
         &self.views[view.0]
     }

@@ -15,7 +15,9 @@ use crate::node::{NodeId, NodeLayout};
 /// One quadtree entry: Kühnert's `atlas_index` and `atlas_lod`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Entry {
+    /// The atlas slot of the best resident node for this entry.
     pub slot: u32,
+    /// The level of the node in `slot` (coarser than the entry's own level when it fell back).
     pub atlas_lod: u8,
 }
 
@@ -59,10 +61,12 @@ impl ClippedQuadtree {
         tree
     }
 
+    /// The view's window size and distances.
     pub fn config(&self) -> ViewConfig {
         self.config
     }
 
+    /// The viewer position of the last recentre, in metres.
     pub fn position(&self) -> DVec3 {
         self.position
     }

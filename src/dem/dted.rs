@@ -46,6 +46,7 @@ pub struct DtedHeader {
     pub interval_tenths: [u32; 2],
     /// Number of longitude lines (columns) and of points per line (rows).
     pub columns: u32,
+    /// Points per longitude line (rows).
     pub rows: u32,
 }
 

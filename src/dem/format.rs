@@ -16,10 +16,15 @@ use super::raw::read_prefix;
 /// The supported input formats.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Format {
+    /// GeoTIFF (.tif, .tiff): one band of heights with GeoKeys.
     GeoTiff,
+    /// SRTM .hgt: 1201² or 3601² big-endian i16, placed by its file name.
     Hgt,
+    /// DTED level 0, 1 or 2 (.dt0, .dt1, .dt2).
     Dted,
+    /// ESRI ASCII grid (.asc), with an optional .prj sidecar.
     AsciiGrid,
+    /// netCDF-3 classic (.nc, .cdf), a 2-D height variable on latitude and longitude.
     NetCdf,
 }
 

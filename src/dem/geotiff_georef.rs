@@ -39,6 +39,7 @@ const WGS84_LIKE: [u16; 2] = [4326, 4269];
 pub struct Placement {
     /// Rows of the file run north to south (the usual north-up raster).
     pub north_up: bool,
+    /// Rows in the file.
     pub height: u32,
 }
 

@@ -42,9 +42,13 @@ pub use raw::RawGrid;
 /// have been filled (and counted in `voids_filled`) before a grid exists.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ElevationGrid {
+    /// Posts per row, west to east.
     pub width: u32,
+    /// Rows, south to north.
     pub height: u32,
+    /// `width * height` heights in metres, row 0 southern.
     pub heights: Vec<f32>,
+    /// Where post (0, 0) is and how far apart the posts are.
     pub georef: GeoRef,
     /// Samples that were voids in the sources and were filled.
     pub voids_filled: u64,

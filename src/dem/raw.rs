@@ -23,9 +23,13 @@ pub const MAX_SAMPLES: u64 = 1 << 28;
 pub struct RawGrid {
     /// The file this came from (the first file of a mosaic).
     pub path: PathBuf,
+    /// Posts per row, west to east.
     pub width: u32,
+    /// Rows, south to north.
     pub height: u32,
+    /// `width * height` heights in metres, row 0 southern; NaN is a void.
     pub heights: Vec<f32>,
+    /// Where post (0, 0) is and how far apart the posts are.
     pub georef: GeoRef,
 }
 

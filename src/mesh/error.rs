@@ -8,13 +8,28 @@ pub enum MeshError {
     Side(u32),
     /// The heights do not fill the grid.
     #[error("grid has {found} heights, {expected} expected")]
-    Length { expected: usize, found: usize },
+    Length {
+        /// Posts in the grid.
+        expected: usize,
+        /// Heights given.
+        found: usize,
+    },
     /// A height is NaN or infinite.
     #[error("height at post ({i}, {j}) is not a finite number")]
-    NotFinite { i: u32, j: u32 },
+    NotFinite {
+        /// Post column.
+        i: u32,
+        /// Post row.
+        j: u32,
+    },
     /// A regular grid's stride does not fit the grid.
     #[error("stride {stride} does not divide the {side}-post grid into a power-of-two grid")]
-    Stride { side: u32, stride: u32 },
+    Stride {
+        /// Posts a side of the grid.
+        side: u32,
+        /// The stride asked for.
+        stride: u32,
+    },
     /// The forced edge step is not a power of two.
     #[error("edge step {0} is not a power of two")]
     EdgeStep(u32),
@@ -28,8 +43,16 @@ pub enum MeshError {
     NoBounds,
     /// A view's tau or K is not positive.
     #[error("view tau {tau} and K {k} must both be positive")]
-    View { tau: f64, k: f64 },
+    View {
+        /// Screen-space error in pixels.
+        tau: f64,
+        /// The projection's pixels per unit of angle.
+        k: f64,
+    },
     /// The mesh would need more vertices than 16-bit indices address.
     #[error("mesh needs {count} vertices, more than 16-bit indices address (65536)")]
-    TooManyVertices { count: usize },
+    TooManyVertices {
+        /// Vertices the mesh would need.
+        count: usize,
+    },
 }

@@ -6,16 +6,12 @@ use rayon::prelude::*;
 
 use super::delta::level_deltas;
 use super::error::BuildError;
-use super::format::{GridStats, LevelSummary, NodeSummary, PyramidInfo, MAX_LEVELS};
+use super::format::{GridStats, LevelSummary, NodeSummary, PyramidInfo};
+use super::limits::{check_levels, check_node};
 use super::progress::Progress;
 use super::raster::LevelRaster;
 use crate::dem::ElevationGrid;
 use crate::node::{NodeId, NodeLayout};
-
-/// Largest node size accepted (posts per side must stay a sane vertex count).
-pub const MAX_NODE_SIZE: u32 = 4096;
-/// Largest border accepted.
-pub const MAX_BORDER: u32 = 16;
 
 /// How to cut the grid into nodes (see the module notes in [`super`] for the
 /// defaults).
@@ -42,11 +38,13 @@ struct BuiltLevel {
 
 /// A whole pyramid in memory, ready for [`write_atomic`](super::write_atomic).
 pub struct BuiltPyramid {
+    /// The header's content: layout, georeference, statistics, level summaries.
     pub info: PyramidInfo,
     levels: Vec<BuiltLevel>,
 }
 
 impl BuiltPyramid {
+    /// The node layout the pyramid was built with.
     pub fn layout(&self) -> &NodeLayout {
         &self.info.layout
     }
@@ -111,11 +109,7 @@ fn check_input(
     options: &BuildOptions,
 ) -> Result<(NodeLayout, GridStats), BuildError> {
     let BuildOptions { node_size, border } = *options;
-    if !(1..=MAX_NODE_SIZE).contains(&node_size) || border > MAX_BORDER {
-        return Err(BuildError::InvalidOptions(format!(
-            "node size {node_size} must be 1..={MAX_NODE_SIZE} and border {border} at most {MAX_BORDER}"
-        )));
-    }
+    check_node(node_size, border).map_err(BuildError::InvalidOptions)?;
     let samples = [grid.width, grid.height];
     let expected = (grid.width as usize).checked_mul(grid.height as usize);
     if samples.contains(&0) || expected != Some(grid.heights.len()) {
@@ -135,11 +129,7 @@ fn check_input(
         )));
     }
     let levels = NodeLayout::levels_for(samples, node_size);
-    if levels > MAX_LEVELS {
-        return Err(BuildError::InvalidOptions(format!(
-            "{levels} levels exceed {MAX_LEVELS}; use larger nodes"
-        )));
-    }
+    check_levels(levels).map_err(BuildError::InvalidOptions)?;
     let layout = NodeLayout {
         levels,
         node_size,

@@ -5,8 +5,10 @@ use std::path::PathBuf;
 /// Why a grid could not be turned into a pyramid.
 #[derive(Debug, thiserror::Error)]
 pub enum BuildError {
+    /// The elevation grid cannot be tiled (empty, too large, non-finite heights).
     #[error("elevation grid: {0}")]
     InvalidGrid(String),
+    /// The node size or border is out of range.
     #[error("pyramid options: {0}")]
     InvalidOptions(String),
 }
@@ -15,16 +17,46 @@ pub enum BuildError {
 /// the file.
 #[derive(Debug, thiserror::Error)]
 pub enum PyramidError {
+    /// Reading, writing or renaming the file failed.
     #[error("{path}: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        /// The pyramid file.
+        path: PathBuf,
+        /// The I/O failure.
+        source: std::io::Error,
+    },
+    /// The file does not start with the pyramid magic.
     #[error("{path}: not a Ridgeline pyramid (bad magic); rebuild it with `ridgeline import`")]
-    NotAPyramid { path: PathBuf },
+    NotAPyramid {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The file was written by another format version.
     #[error("{path}: pyramid format version {found}, this build reads version {supported}; rebuild it with `ridgeline import`")]
-    Version { path: PathBuf, found: u32, supported: u32 },
+    Version {
+        /// The pyramid file.
+        path: PathBuf,
+        /// The file's version.
+        found: u32,
+        /// The version this build reads.
+        supported: u32,
+    },
+    /// The file ends before its header or node table says it should.
     #[error("{path}: truncated: {problem}")]
-    Truncated { path: PathBuf, problem: String },
+    Truncated {
+        /// The pyramid file.
+        path: PathBuf,
+        /// What was cut short.
+        problem: String,
+    },
+    /// The header or node table contradicts itself or fails its checksum.
     #[error("{path}: damaged: {problem}; rebuild it with `ridgeline import`")]
-    Corrupt { path: PathBuf, problem: String },
+    Corrupt {
+        /// The pyramid file.
+        path: PathBuf,
+        /// What was found.
+        problem: String,
+    },
 }
 
 impl PyramidError {

@@ -27,16 +27,17 @@
 
 use super::bytes::{Decoder, Encoder};
 use super::error::PyramidError;
+use super::limits::check_layout;
 use crate::geo::{Crs, GeoRef};
 use crate::node::NodeLayout;
 use std::path::Path;
 
+/// The first eight bytes of every pyramid file.
 pub const MAGIC: [u8; 8] = *b"RIDGEPYR";
+/// The format version this build writes and reads.
 pub const VERSION: u32 = 1;
 /// The pyramid's file inside a cache directory.
 pub const FILE_NAME: &str = "pyramid.rlp";
-/// Deepest pyramid a file may declare (2^31 samples per side at node size 1).
-pub const MAX_LEVELS: u8 = 32;
 const HEADER_ALIGN: u64 = 16;
 /// Bytes of the header before the level table.
 const FIXED_LEN: u64 = 132;
@@ -46,35 +47,48 @@ const NODE_ENTRY_LEN: u64 = 20;
 /// Heights over the whole grid and how many voids the importer filled.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct GridStats {
+    /// Lowest height of the grid, metres.
     pub height_min: f32,
+    /// Highest height of the grid, metres.
     pub height_max: f32,
+    /// Posts the importer filled because the source had voids there.
     pub voids_filled: u64,
 }
 
 /// One level at a glance.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct LevelSummary {
+    /// Nodes east and north at this level.
     pub nodes: [u32; 2],
     /// The largest delta of the level's nodes, metres.
     pub delta_max: f32,
+    /// Lowest height of the level's nodes, metres.
     pub height_min: f32,
+    /// Highest height of the level's nodes, metres.
     pub height_max: f32,
 }
 
 /// One node at a glance: see [`crate::node::NodeData`] for the meanings.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct NodeSummary {
+    /// Lowest height of the node's centre posts.
     pub min: f32,
+    /// Highest height of the node's centre posts.
     pub max: f32,
+    /// Ulrich's delta of the node, metres.
     pub delta: f32,
 }
 
 /// Everything the header says about a pyramid except the node table.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PyramidInfo {
+    /// Levels, node size, border and post spacing.
     pub layout: NodeLayout,
+    /// Where the grid lies on the earth.
     pub georef: GeoRef,
+    /// Heights and void counts over the whole grid.
     pub stats: GridStats,
+    /// One summary per level, finest first.
     pub levels: Vec<LevelSummary>,
 }
 
@@ -255,27 +269,6 @@ fn read_fixed(d: &mut Decoder) -> Option<Fixed> {
     let levels = u8::try_from(levels).unwrap_or(u8::MAX);
     let layout = NodeLayout { levels, node_size, border, posts: [samples_x, samples_y], spacing_m };
     Some(Fixed { header_len, file_len, layout, crs, georef, stats, node_count, record_len })
-}
-
-/// Why `layout` cannot be a pyramid this crate builds, if it cannot.
-pub(crate) fn check_layout(layout: &NodeLayout) -> Result<(), String> {
-    use super::build::{MAX_BORDER, MAX_NODE_SIZE};
-    if !(1..=MAX_NODE_SIZE).contains(&layout.node_size) || layout.border > MAX_BORDER {
-        return Err(format!(
-            "node size {} or border {} out of range",
-            layout.node_size, layout.border
-        ));
-    }
-    if layout.posts.contains(&0) || !(1..=MAX_LEVELS).contains(&layout.levels) {
-        return Err(format!("samples {:?} or levels {} out of range", layout.posts, layout.levels));
-    }
-    if layout.levels != NodeLayout::levels_for(layout.posts, layout.node_size) {
-        return Err(format!("{} levels do not end in one root node", layout.levels));
-    }
-    if !layout.spacing_m.iter().all(|s| s.is_finite() && *s > 0.0) {
-        return Err(format!("spacing {:?} m is not positive", layout.spacing_m));
-    }
-    Ok(())
 }
 
 fn read_levels(d: &mut Decoder, layout: &NodeLayout) -> Result<Vec<LevelSummary>, String> {

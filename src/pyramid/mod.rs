@@ -46,15 +46,17 @@ mod bytes;
 mod delta;
 mod error;
 pub mod format;
+mod limits;
 mod open;
 mod progress;
 mod raster;
 mod synthetic;
 mod write;
 
-pub use build::{build, BuildOptions, BuiltPyramid, MAX_BORDER, MAX_NODE_SIZE};
+pub use build::{build, BuildOptions, BuiltPyramid};
 pub use error::{BuildError, PyramidError};
 pub use format::{GridStats, LevelSummary, NodeSummary, PyramidInfo, FILE_NAME};
+pub use limits::{MAX_BORDER, MAX_LEVELS, MAX_NODE_SIZE};
 pub use open::Pyramid;
 pub use progress::{Progress, Silent};
 pub use synthetic::{synthetic_grid, MAX_SYNTHETIC_SIZE};
