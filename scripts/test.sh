@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Checks formatting and lints, then runs every Ridgeline test. On a fresh Debian machine (as root) it first
+# Checks formatting, lints and doc links, then runs every Ridgeline test. On a fresh Debian machine (as root) it first
 # installs the Mesa packages the headless GL tests need (scripts/mesa.sh).
 # `.ci/run` calls exactly this, as the README says. The last line totals the
 # tests of every test binary.
@@ -15,6 +15,7 @@ fi
 # Style first: formatting and lints are part of the suite.
 cargo fmt --check
 cargo clippy --locked --all-targets -- -D warnings
+RUSTDOCFLAGS='-D warnings' cargo doc --locked --no-deps --quiet
 
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT

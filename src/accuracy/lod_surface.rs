@@ -76,7 +76,7 @@ impl LodSurface {
     }
 
     /// Whether `(x_m, y_m)` lies on the edge of the drawn tile there (within
-    /// [`EDGE_TOLERANCE_POSTS`]), where skirts hang.
+    /// `EDGE_TOLERANCE_POSTS`), where skirts hang.
     pub fn on_tile_edge(&self, x_m: f64, y_m: f64) -> bool {
         let g = self.grid_size as f64;
         self.locate(x_m, y_m)

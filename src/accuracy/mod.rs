@@ -8,7 +8,7 @@
 //! counterpart is, at each pixel, the vertical distance between the two
 //! surfaces at the ground point that pixel shows, projected to the screen
 //! at that point: the on-screen length of the segment from one surface to the
-//! other. It is taken from both sides ([`pixel_error`]), at the ground point
+//! other. It is taken from both sides (`pixel_error`), at the ground point
 //! the LOD image shows and at the one the full-resolution image shows; the
 //! LOD surface there is read from a CPU mirror of the drawn tiles
 //! ([`LodSurface`], checked against the drawn points), except where the

@@ -165,7 +165,7 @@ pub struct HeightSample {
 
 /// What one [`Clipmap::update`] did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
-pub struct UpdateStats {
+pub struct ClipmapStats {
     /// The clipmap frame this update made (1 for the first update).
     pub frame: u64,
     /// Nodes wanted by at least one view.
@@ -301,9 +301,9 @@ impl Clipmap {
     }
 
     /// One frame of the four-step update (see the module docs).
-    pub fn update(&mut self) -> Result<UpdateStats, ClipmapError> {
+    pub fn update(&mut self) -> Result<ClipmapStats, ClipmapError> {
         self.frame += 1;
-        let mut stats = UpdateStats { frame: self.frame, ..UpdateStats::default() };
+        let mut stats = ClipmapStats { frame: self.frame, ..ClipmapStats::default() };
         self.collect_wanted();
         let wanted = &self.wanted;
         self.loader.cancel_unwanted(|id| wanted.contains_key(&id));
@@ -345,7 +345,7 @@ impl Clipmap {
 
     /// Step 2: marks resident wanted nodes used, releases the rest, lists
     /// the missing ones by priority.
-    fn compare_with_atlas(&mut self, stats: &mut UpdateStats) {
+    fn compare_with_atlas(&mut self, stats: &mut ClipmapStats) {
         self.candidates.clear();
         for (&id, &distance_m) in &self.wanted {
             match self.atlas.slot_of(id) {
@@ -371,7 +371,7 @@ impl Clipmap {
 
     /// Steps 2 (requests) and 3: loads missing nodes, at most as many as
     /// the atlas can take and, per frame, at most `budget` applied.
-    fn load(&mut self, stats: &mut UpdateStats) -> Result<(), ClipmapError> {
+    fn load(&mut self, stats: &mut ClipmapStats) -> Result<(), ClipmapError> {
         let room = self.atlas.available().saturating_sub(self.loader.in_flight()) as usize;
         if self.loader.is_threaded() {
             for index in 0..self.candidates.len().min(room) {
@@ -399,7 +399,7 @@ impl Clipmap {
 
     /// Copies a finished load into the atlas if it is still wanted; a failed
     /// one is retried later or given up (and reported once).
-    fn apply(&mut self, loaded: Loaded, stats: &mut UpdateStats) {
+    fn apply(&mut self, loaded: Loaded, stats: &mut ClipmapStats) {
         let Loaded { id, mut data, outcome } = loaded;
         match outcome {
             Outcome::Cancelled => stats.cancelled += 1,

@@ -12,13 +12,13 @@
 //!   level `l` is never drawn nearer than `delta_l * K / (tau * (1 - morph_range))`,
 //!   so even its morph toward the parent stays within `tau` pixels;
 //! - rings also grow fast enough that neighbours differ by at most one level
-//!   and the coarser one is unmorphed where they meet (see [`ranges`]).
+//!   and the coarser one is unmorphed where they meet (see [`rings`]).
 
 pub mod morph;
-pub mod ranges;
+pub mod rings;
 pub mod select;
 
-pub use ranges::LevelRanges;
+pub use rings::LevelRings;
 pub use select::{SelectedTile, TileSelector};
 
 /// Names one tile of the implicit quadtree. A tile of level `level` covers

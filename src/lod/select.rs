@@ -6,7 +6,7 @@
 //! When refining further would exceed `max_tiles`, the tile is kept whole:
 //! the view gets coarser, never a hole.
 
-use super::{LevelRanges, LodConfig, TileKey};
+use super::{LevelRings, LodConfig, TileKey};
 use crate::camera::{curvature_drop, Frustum};
 use glam::DVec3;
 
@@ -45,7 +45,7 @@ pub struct View<'a> {
     /// Frustum in camera-relative coordinates.
     pub frustum: &'a Frustum,
     /// The rings to select from.
-    pub ranges: &'a LevelRanges,
+    pub rings: &'a LevelRings,
     /// Apply the earth's curvature to bounding boxes.
     pub curvature: bool,
 }
@@ -77,7 +77,7 @@ impl TileSelector {
         self.selected.clear();
         self.stack.clear();
         self.culled = 0;
-        let root = (view.ranges.levels() - 1) as u8;
+        let root = (view.rings.levels() - 1) as u8;
         let [nx, ny] = tiles_at(terrain.posts(), self.config.grid_size, root);
         for y in (0..ny).rev() {
             for x in (0..nx).rev() {
@@ -91,7 +91,7 @@ impl TileSelector {
             };
             // Children replace this tile on the stack; keep room for the worst case.
             let room = self.selected.len() + self.stack.len() + 4 <= self.config.max_tiles;
-            if key.level > 0 && distance < view.ranges.split_distance(key.level) && room {
+            if key.level > 0 && distance < view.rings.split_distance(key.level) && room {
                 let [nx, ny] = tiles_at(terrain.posts(), self.config.grid_size, key.level - 1);
                 for child in key.children().into_iter().rev() {
                     if child.x < nx && child.y < ny {

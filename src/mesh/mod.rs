@@ -15,7 +15,7 @@
 //! |---|---|
 //! | [`rtin`] | the per-post error map, computed once, and `extract(max_error)` |
 //! | [`delta`] | the exact maximum vertical distance from a mesh to the level-0 posts under it; `height_on_mesh` |
-//! | [`view_refine`] | RTIN refinement for a camera: split while error > tau D / K |
+//! | [`mod@view_refine`] | RTIN refinement for a camera: split while error > tau D / K |
 //! | [`error`] | [`MeshError`]: why a grid or a mesh is refused |
 
 pub mod delta;

@@ -19,7 +19,7 @@ use std::time::Instant;
 use glam::DVec3;
 
 use crate::camera::Camera;
-use crate::clipmap::{Clipmap, ClipmapConfig, ClipmapError, LoaderMode, UpdateStats, ViewId};
+use crate::clipmap::{Clipmap, ClipmapConfig, ClipmapError, ClipmapStats, LoaderMode, ViewId};
 use crate::node::NodeSource;
 use crate::render::{CallStats, DrawList, FrameOutput, RenderBackend};
 use crate::scene::{ClipmapTerrain, Scene, SceneConfig, SceneError, SceneStats, TerrainSummary};
@@ -160,7 +160,7 @@ impl FramePipeline {
         })
     }
 
-    fn page(&mut self, camera: &Camera) -> Result<UpdateStats, PipelineError> {
+    fn page(&mut self, camera: &Camera) -> Result<ClipmapStats, PipelineError> {
         // Refused here, before a position that is not a number reaches the clipmap.
         camera.validate().map_err(SceneError::from)?;
         self.clipmap.set_view_position(self.view, camera.position)?;

@@ -4,7 +4,7 @@
 use super::PipelineConfig;
 use crate::camera::Camera;
 use crate::clipmap::ViewConfig;
-use crate::lod::LevelRanges;
+use crate::lod::LevelRings;
 use crate::node::NodeLayout;
 use crate::scene::{ring_inputs, SceneError, TerrainSummary};
 use glam::DVec3;
@@ -32,7 +32,7 @@ pub fn clipmap_view(
     let inputs =
         ring_inputs(layout, lod.grid_size, &summary.delta_per_level, height_range_m, &camera);
     let tile_size_m = inputs.tile_size_m;
-    let rings = LevelRanges::new(lod, inputs);
+    let rings = LevelRings::new(lod, inputs);
     let mut load_distance: f64 = 2.0;
     for level in 0..layout.levels.saturating_sub(1) {
         let node = layout.node_size_m(level);

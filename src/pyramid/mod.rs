@@ -1,4 +1,4 @@
-//! The node pyramid on disk: building it from an [`ElevationGrid`] (Kühnert
+//! The node pyramid on disk: building it from an [`ElevationGrid`](crate::dem::ElevationGrid) (Kühnert
 //! 4.5.6: split, downsample, stitch), measuring each node's geometric error
 //! (Ulrich's delta, section 10), writing it atomically, and opening it again as
 //! a memory-mapped, checksummed [`NodeSource`](crate::node::NodeSource)
@@ -39,7 +39,7 @@
 //!   [`Pyramid::verify`] checks every node at once (in parallel; CRC-32 runs
 //!   at several GB/s), as `ridgeline info` does.
 //!
-//! See [`format`] for the bytes on disk.
+//! See [`mod@format`] for the bytes on disk.
 
 mod build;
 mod bytes;

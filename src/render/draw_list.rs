@@ -9,7 +9,7 @@
 //! and every number stays small however far the camera is from the origin.
 
 use crate::camera::Camera;
-use crate::lod::{LevelRanges, TileKey};
+use crate::lod::{LevelRings, TileKey};
 use crate::tiles::{TileCoverage, TileDraw};
 use glam::{DVec2, Mat4, Vec3};
 
@@ -42,7 +42,7 @@ pub struct FrameUniforms {
 
 /// A 24-bit depth buffer resolves `d^2 / (near 2^24)` metres at distance `d`:
 /// with the near plane at a metre (flying low) that is 280 m at 68 km, and far
-/// ridges fight over pixels. Then the terrain is drawn in two depth ranges,
+/// ridges fight over pixels. Then the terrain is drawn in two depth slices,
 /// far first, the depth buffer cleared between: `[split, far]` and
 /// `[near, split]` with `split = sqrt(near far)`, each resolving the other's
 /// worst case far better (0.7 m at 68 km for a 1 m near plane and a 150 km
@@ -203,7 +203,7 @@ pub struct DrawList {
     pub grid_size: u32,
 }
 
-/// One of a frame's depth ranges ([`DepthSlices`]).
+/// One of a frame's depth slices ([`DepthSlices`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Slice {
     /// `[near, split]`, or the whole range when it is not cut.
@@ -264,14 +264,14 @@ impl DrawList {
         &mut self,
         frame: FrameUniforms,
         draws: &[TileDraw],
-        ranges: &LevelRanges,
+        rings: &LevelRings,
         geometry: TileGeometry<'_>,
     ) {
         self.uniforms = Some(frame);
         self.grid_size = geometry.grid_size;
         self.tiles.clear();
         for draw in draws {
-            self.tiles.push(tile_uniforms(draw, &frame.posts, ranges, &geometry));
+            self.tiles.push(tile_uniforms(draw, &frame.posts, rings, &geometry));
         }
         self.sort_front_to_back(geometry.grid_size);
     }
@@ -295,14 +295,14 @@ impl DrawList {
 fn tile_uniforms(
     draw: &TileDraw,
     posts: &PostFrame,
-    ranges: &LevelRanges,
+    rings: &LevelRings,
     geometry: &TileGeometry<'_>,
 ) -> TileUniforms {
     let key = draw.key;
     let step = 1i64 << key.level;
     let span = geometry.grid_size as i64 * step;
     let first_post = posts.number([key.x as i64 * span, key.y as i64 * span]);
-    let (start, end) = ranges.morph(key.level);
+    let (start, end) = rings.morph(key.level);
     let morph = if start.is_finite() { [start as f32, end as f32] } else { [f32::MAX, f32::MAX] };
     TileUniforms {
         key,

@@ -13,9 +13,9 @@ pub use clipmap_terrain::{ClipmapTerrain, TerrainSummary};
 pub use terrain::{PreloadedTerrain, TerrainData};
 
 use crate::camera::{Camera, CameraError, Frustum, EARTH_RADIUS_M};
-use crate::lod::ranges::RingInputs;
+use crate::lod::rings::RingInputs;
 use crate::lod::select::View;
-use crate::lod::{LevelRanges, LodConfig, LodError, TileSelector};
+use crate::lod::{LevelRings, LodConfig, LodError, TileSelector};
 use crate::node::NodeLayout;
 use crate::render::draw_list::TileGeometry;
 use crate::render::draw_list::{DepthSlices, PostFrame};
@@ -123,7 +123,7 @@ pub struct Scene {
     config: SceneConfig,
     selector: TileSelector,
     cache: TileCache,
-    ranges: LevelRanges,
+    rings: LevelRings,
     draw_list: DrawList,
     deltas: Vec<f64>,
     height_range_m: f64,
@@ -153,7 +153,7 @@ impl Scene {
             config,
             selector: TileSelector::new(config.lod),
             cache: TileCache::new(cache_config, terrain)?,
-            ranges: LevelRanges::new(
+            rings: LevelRings::new(
                 &config.lod,
                 RingInputs {
                     tile_size_m: 1.0,
@@ -178,14 +178,14 @@ impl Scene {
         &self.draw_list
     }
 
-    /// The ranges the GPU buffer must receive this frame, and the staging copy.
+    /// The byte ranges the GPU buffer must receive this frame, and the staging copy.
     pub fn uploads(&self) -> (&[u8], &[std::ops::Range<u32>]) {
         (self.cache.staging(), self.cache.dirty_ranges())
     }
 
     /// The rings of the last frame.
-    pub fn ranges(&self) -> &LevelRanges {
-        &self.ranges
+    pub fn rings(&self) -> &LevelRings {
+        &self.rings
     }
 
     /// Prepares one frame for `camera`.
@@ -207,11 +207,11 @@ impl Scene {
         loop {
             let start = Instant::now();
             let inputs = ring_inputs(&layout, grid_size, &self.deltas, self.height_range_m, camera);
-            self.ranges.update(&lod, inputs);
+            self.rings.update(&lod, inputs);
             let view = View {
                 eye: camera.position,
                 frustum: &frustum,
-                ranges: &self.ranges,
+                rings: &self.rings,
                 curvature: self.config.curvature,
             };
             let selected = self.selector.select(&view, terrain);
@@ -237,7 +237,7 @@ impl Scene {
         let geometry =
             TileGeometry { grid_size, spacing_m: layout.spacing_m, delta_per_level: &self.deltas };
         let draws = self.cache.draws();
-        self.draw_list.build(uniforms, draws, &self.ranges, geometry);
+        self.draw_list.build(uniforms, draws, &self.rings, geometry);
         report.cpu_ms.draw_list_ms = ms(start, Instant::now());
         let stats = self.cache.stats();
         report.tiles = self.draw_list.tiles.len();

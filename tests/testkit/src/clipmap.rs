@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use glam::{DVec2, DVec3};
 use ridgeline::clipmap::{
-    Clipmap, ClipmapConfig, Entry, LoaderMode, SlotState, UpdateStats, ViewConfig, ViewId,
+    Clipmap, ClipmapConfig, Entry, LoaderMode, SlotState, ClipmapStats, ViewConfig, ViewId,
 };
 use ridgeline::node::{NodeId, NodeSource};
 use ridgeline::procedural::{EarthParams, ProceduralEarth};
@@ -52,7 +52,7 @@ pub fn snapshot(clipmap: &Clipmap) -> Snapshot {
 pub fn check_frame(
     clipmap: &Clipmap,
     before: &Snapshot,
-    stats: &UpdateStats,
+    stats: &ClipmapStats,
 ) -> Result<(), String> {
     let atlas = clipmap.atlas();
     atlas.check()?;

@@ -19,7 +19,7 @@ use super::LodConfig;
 
 /// Per-level split and morph distances in metres, for levels `0..levels`.
 #[derive(Clone, Debug, PartialEq)]
-pub struct LevelRanges {
+pub struct LevelRings {
     split: Vec<f64>,
     morph_range: f64,
 }
@@ -37,15 +37,15 @@ pub struct RingInputs<'a> {
     pub perspective_scale: f64,
 }
 
-impl LevelRanges {
+impl LevelRings {
     /// The rings for `config` and `inputs`.
     pub fn new(config: &LodConfig, inputs: RingInputs<'_>) -> Self {
-        let mut ranges = LevelRanges {
+        let mut rings = LevelRings {
             split: Vec::with_capacity(inputs.delta_per_level.len() + 1),
             morph_range: 0.0,
         };
-        ranges.update(config, inputs);
-        ranges
+        rings.update(config, inputs);
+        rings
     }
 
     /// Recomputes the rings in place (no allocation once sized).
@@ -95,7 +95,7 @@ impl LevelRanges {
 mod tests {
     use super::*;
 
-    fn rings(deltas: &[f64], tau: f64) -> LevelRanges {
+    fn rings(deltas: &[f64], tau: f64) -> LevelRings {
         let config = LodConfig { tau_px: tau, ..LodConfig::default() };
         let inputs = RingInputs {
             tile_size_m: 1000.0,
@@ -103,7 +103,7 @@ mod tests {
             height_range_m: 2000.0,
             perspective_scale: 1000.0,
         };
-        LevelRanges::new(&config, inputs)
+        LevelRings::new(&config, inputs)
     }
 
     #[test]
