@@ -14,7 +14,7 @@
 
 use std::collections::HashMap;
 
-use super::rtin::{for_each_post, on_plane, Triangle};
+use super::rtin::{anti_diagonal_crossings, for_each_post, on_plane, Triangle};
 use super::{HeightGrid, Mesh};
 
 /// The largest `|mesh - post|` over every post of `grid` covered by `mesh`,
@@ -46,33 +46,6 @@ pub fn max_surface_distance(mesh: &Mesh, vertex_heights: &[f32], grid: &HeightGr
             let (p, q) = (p.map(u32::from), q.map(u32::from));
             worst = worst.max(anti_diagonal_crossings(grid, p, h[k], q, h[(k + 1) % 3]));
         }
-    }
-    worst
-}
-
-/// Along an edge `p`-`q`, when it runs north-west to south-east: the largest
-/// distance at the cell centres it passes, where the level-0 surface is the
-/// mean of the cell's south-west and north-east posts.
-pub(crate) fn anti_diagonal_crossings(
-    grid: &HeightGrid,
-    p: [u32; 2],
-    hp: f64,
-    q: [u32; 2],
-    hq: f64,
-) -> f64 {
-    let (dx, dy) = (q[0] as i32 - p[0] as i32, q[1] as i32 - p[1] as i32);
-    if dx == 0 || dx != -dy {
-        return 0.0;
-    }
-    // Walk west to east; the edge then falls one post south per step.
-    let ((w, hw), (_, he)) = if dx > 0 { ((p, hp), (q, hq)) } else { ((q, hq), (p, hp)) };
-    let n = dx.unsigned_abs();
-    let mut worst = 0.0f64;
-    for s in 0..n {
-        let (i, j) = (w[0] + s, w[1] - s - 1);
-        let level0 = (grid.at(i, j) as f64 + grid.at(i + 1, j + 1) as f64) / 2.0;
-        let t = (s as f64 + 0.5) / n as f64;
-        worst = worst.max((hw + t * (he - hw) - level0).abs());
     }
     worst
 }

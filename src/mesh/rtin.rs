@@ -15,7 +15,6 @@
 //! hypotenuse, (a) is the triangle's error over all its posts: Martini's
 //! errors add up down the hierarchy and its meshes exceed their threshold.
 
-use super::delta::anti_diagonal_crossings;
 use super::error::MeshError;
 use super::{cross, HeightGrid, Mesh, MAX_VERTICES};
 
@@ -394,6 +393,33 @@ pub(crate) fn round_up_to_f32(value: f64) -> f32 {
     } else {
         rounded
     }
+}
+
+/// Along an edge `p`-`q`, when it runs north-west to south-east: the largest
+/// distance at the cell centres it passes, where the level-0 surface is the
+/// mean of the cell's south-west and north-east posts.
+pub(crate) fn anti_diagonal_crossings(
+    grid: &HeightGrid,
+    p: [u32; 2],
+    hp: f64,
+    q: [u32; 2],
+    hq: f64,
+) -> f64 {
+    let (dx, dy) = (q[0] as i32 - p[0] as i32, q[1] as i32 - p[1] as i32);
+    if dx == 0 || dx != -dy {
+        return 0.0;
+    }
+    // Walk west to east; the edge then falls one post south per step.
+    let ((w, hw), (_, he)) = if dx > 0 { ((p, hp), (q, hq)) } else { ((q, hq), (p, hp)) };
+    let n = dx.unsigned_abs();
+    let mut worst = 0.0f64;
+    for s in 0..n {
+        let (i, j) = (w[0] + s, w[1] - s - 1);
+        let level0 = (grid.at(i, j) as f64 + grid.at(i + 1, j + 1) as f64) / 2.0;
+        let t = (s as f64 + 0.5) / n as f64;
+        worst = worst.max((hw + t * (he - hw) - level0).abs());
+    }
+    worst
 }
 
 #[cfg(test)]
