@@ -32,6 +32,13 @@ pub struct ViewRow {
     /// Share of all pixels where one image shows terrain and the other sky,
     /// or the LOD has no data at the ground point the truth shows.
     pub coverage_mismatch: f64,
+    /// Of the mismatch: pixels with terrain in the LOD image only.
+    pub lod_only: usize,
+    /// Of the mismatch: pixels with terrain in the truth image only.
+    pub truth_only: usize,
+    /// Of the mismatch: terrain pixels whose truth ground point a drawn tile
+    /// covers without data.
+    pub no_data: usize,
     /// Terrain pixels whose ground point no LOD tile covers.
     pub holes: usize,
     /// Terrain pixels showing a skirt, and the largest error off skirts.
@@ -211,6 +218,9 @@ fn measure_one(
         errors: ErrorSummary::of(&mut view_errors),
         coverage_mismatch: (errors.lod_only + errors.truth_only + errors.no_data) as f64
             / errors.errors_px.len().max(1) as f64,
+        lod_only: errors.lod_only,
+        truth_only: errors.truth_only,
+        no_data: errors.no_data,
         holes: errors.holes,
         skirt_pixels: errors.skirt_pixels,
         max_surface_px: errors.max_surface_px,

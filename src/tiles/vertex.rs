@@ -25,8 +25,8 @@ pub enum TileCoverage {
     /// Every post has data.
     #[default]
     Full,
-    /// Some posts have none: the tile is drawn with the program that drops
-    /// the triangles touching them.
+    /// Some posts have none, or a skirt faces no data: the tile is drawn
+    /// with the program that drops the triangles touching them.
     Partial,
     /// No post has data: nothing to draw.
     Empty,
@@ -176,16 +176,40 @@ pub fn fill_tile(
             vertex.target = nearest as f32;
         }
     }
-    let posts = ((g + 1) * (g + 1)) as usize;
-    for (k, (i, j)) in edge_posts(grid_size).enumerate() {
-        out[posts + k] = out[(i + j * grid_size + j) as usize];
-    }
-    match (with_data, without) {
-        (_, 0) => TileCoverage::Full,
+    let skirts_dropped = fill_skirts(reader, grid_size, out);
+    match (with_data, without + skirts_dropped) {
         (0, _) => TileCoverage::Empty,
+        (_, 0) => TileCoverage::Full,
         _ => TileCoverage::Partial,
     }
 }
+
+/// Copies the edge posts into the skirt vertices. A skirt hides cracks
+/// between two tiles of data; where the post across the edge has no data
+/// (the data end there, or a void begins) there is nothing to meet, and a
+/// skirt would hang as a curtain at the coverage edge: its vertex is marked
+/// [`NO_DATA`] (placed at the edge post's height) so its triangles are
+/// dropped like those of any post without data. Returns how many were.
+fn fill_skirts(reader: &PostReader<'_>, grid_size: u32, out: &mut [TileVertex]) -> usize {
+    let g = grid_size as i64;
+    let posts = ((g + 1) * (g + 1)) as usize;
+    let mut dropped = 0;
+    for (k, (i, j)) in edge_posts(grid_size).enumerate() {
+        let edge_post = out[(i + j * grid_size + j) as usize];
+        let [di, dj] = OUTWARD[k / (grid_size as usize + 1)];
+        let across = reader.post(i as i64 + di, j as i64 + dj);
+        out[posts + k] = if across.is_nan() && !is_no_data(edge_post.height) {
+            dropped += 1;
+            TileVertex { height: NO_DATA, target: edge_post.height, ..edge_post }
+        } else {
+            edge_post
+        };
+    }
+    dropped
+}
+
+/// The step across each edge, in [`edge_posts`] order (south, east, north, west).
+const OUTWARD: [[i64; 2]; 4] = [[0, -1], [1, 0], [0, 1], [-1, 0]];
 
 /// The slope between posts `step_m` apart: central where both neighbours
 /// have data, one-sided where one has, flat where neither has.
@@ -220,4 +244,71 @@ fn parent_surface(
 
 fn quantize(x: f64) -> i8 {
     (x * 127.0).round().clamp(-127.0, 127.0) as i8
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lod::TileKey;
+    use crate::node::{NodeData, NodeId, NodeLayout};
+    use crate::tiles::grid::{edge_posts, vertex_count};
+
+    /// One node of 8 cells whose data end at post `last` east: the tile is
+    /// the whole node at level 0.
+    fn tile_ending_at(last: u32) -> (Vec<TileVertex>, TileCoverage) {
+        let layout = NodeLayout {
+            levels: 1,
+            node_size: 8,
+            border: 2,
+            posts: [last + 1, 20],
+            spacing_m: [90.0, 90.0],
+        };
+        let side = layout.stored_side() as usize;
+        let data = NodeData {
+            heights: (0..side * side).map(|k| (k % side) as f32 * 10.0).collect(),
+            min: 0.0,
+            max: 120.0,
+            delta: 0.0,
+        };
+        let reader =
+            PostReader::new(&layout, TileKey::new(0, 0, 0), 8, NodeId::new(0, 0, 0), &data);
+        let mut out = vec![TileVertex::default(); vertex_count(8)];
+        let coverage = fill_tile(&reader, 8, layout.spacing_m, &mut out);
+        (out, coverage)
+    }
+
+    fn dropped_skirts(out: &[TileVertex]) -> Vec<(u32, u32)> {
+        let posts = 9 * 9;
+        edge_posts(8)
+            .enumerate()
+            .filter(|(k, _)| is_no_data(out[posts + k].height))
+            .map(|(_, p)| p)
+            .collect()
+    }
+
+    #[test]
+    fn skirts_facing_no_data_are_dropped_and_the_rest_kept() {
+        // Data on every side except past the south and west edges (the
+        // data's own edge there): only those skirts are dropped.
+        let (out, coverage) = tile_ending_at(20);
+        assert_eq!(coverage, TileCoverage::Partial, "a skirt faces no data");
+        let dropped = dropped_skirts(&out);
+        assert!(dropped.iter().all(|&(i, j)| i == 0 || j == 0), "{dropped:?}");
+        assert_eq!(dropped.len(), 2 * 9, "every south and west skirt vertex");
+        // A dropped skirt vertex stays at its post's height for the rasteriser.
+        let posts = 9 * 9;
+        for (k, (i, j)) in edge_posts(8).enumerate() {
+            let own = out[(i + 9 * j) as usize];
+            assert_eq!(out[posts + k].target, own.height, "skirt vertex {k} placed at its post");
+        }
+    }
+
+    #[test]
+    fn the_east_skirt_is_dropped_where_the_data_end_at_the_tile_edge() {
+        let (out, _) = tile_ending_at(8);
+        let dropped = dropped_skirts(&out);
+        assert!(dropped.contains(&(8, 4)), "east edge: {dropped:?}");
+        let (out, _) = tile_ending_at(9);
+        assert!(!dropped_skirts(&out).contains(&(8, 4)), "one more post east: the skirt stays");
+    }
 }

@@ -65,6 +65,26 @@ pub fn builtin_pyramid() -> Arc<Pyramid> {
     Arc::clone(pyramid)
 }
 
+/// The built-in SRTM tile alone, without any layer under it: a real tile
+/// whose data end at its edges (built once under [`target_tmp`]).
+pub fn srtm_tile_pyramid() -> Arc<Pyramid> {
+    static PYRAMID: OnceLock<Arc<Pyramid>> = OnceLock::new();
+    let pyramid = PYRAMID.get_or_init(|| {
+        let dir = target_tmp().join("srtm-tile");
+        if let Ok(pyramid) = Pyramid::open(&dir) {
+            return Arc::new(pyramid);
+        }
+        std::fs::create_dir_all(&dir).expect("srtm-tile cache directory");
+        let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/dem/srtm3_n39e040_1000.tif");
+        let grid = ridgeline::dem::import_file(&source).expect("the SRTM asset imports");
+        let built = ridgeline::pyramid::build(&grid, &Default::default(), &Silent).expect("build");
+        ridgeline::pyramid::write_atomic(&built, &dir.join(ridgeline::pyramid::FILE_NAME), &Silent)
+            .expect("write");
+        Arc::new(Pyramid::open(&dir).expect("open the srtm-tile pyramid"))
+    });
+    Arc::clone(pyramid)
+}
+
 /// A camera at `(x, y, altitude)` metres, heading and pitch in degrees, no
 /// roll, a 60 degree field of view, over `viewport` pixels.
 pub fn camera(

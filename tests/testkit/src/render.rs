@@ -13,9 +13,11 @@ use ridgeline::display::{DisplayConfig, DisplayError, DisplayParts};
 use ridgeline::gl::{GlBackend, GlesVersion};
 use ridgeline::lod::TileKey;
 use ridgeline::pipeline::FrameStats;
+use ridgeline::pyramid::Pyramid;
 use ridgeline::render::{DrawList, RenderBackend};
 use ridgeline::scene::TerrainSummary;
 use std::collections::BTreeSet;
+use std::sync::Arc;
 
 /// Small enough that llvmpipe draws a frame in milliseconds, large enough to
 /// see every level of detail (Ulrich's bound is in pixels of this viewport).
@@ -59,7 +61,14 @@ pub fn config(backend: GlBackend, version: GlesVersion) -> DisplayConfig {
 }
 
 pub fn open(config: &DisplayConfig) -> Result<DisplayParts, DisplayError> {
-    let pyramid = builtin_pyramid();
+    open_over(config, builtin_pyramid())
+}
+
+/// A display over `pyramid`.
+pub fn open_over(
+    config: &DisplayConfig,
+    pyramid: Arc<Pyramid>,
+) -> Result<DisplayParts, DisplayError> {
     let summary = TerrainSummary::from_pyramid(pyramid.info());
     DisplayParts::open(config, pyramid, summary)
 }
