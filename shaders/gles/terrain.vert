@@ -9,12 +9,12 @@
 // u_morph.x to 1 at u_morph.y with the vertex's distance to the camera,
 // measured with its unmorphed height.
 
-attribute vec3 a_grid;    // post i, post j, skirt flag (shared by all tiles)
+attribute vec3 a_grid;    // post i, post j, skirt edge 1..4 or 0 (shared by all tiles)
 attribute vec2 a_height;  // this level's height, the parent level's height
 attribute vec4 a_normal;  // normal xy at this level, at the parent level
 
 uniform mat4 u_view_projection;
-uniform vec4 u_tile;      // south-west post numbered from the anchor (xy), level-0 posts per cell (z), unused
+uniform vec4 u_tile;      // south-west post numbered from the anchor (xy), level-0 posts per cell (z), skirt edges (w: bit k-1 for edge k)
 uniform vec4 u_posts;     // level-0 post spacing (xy), camera minus anchor post (zw), metres
 uniform vec4 u_morph;     // morph start, morph end, skirt depth, unused
 uniform vec4 u_frame;     // camera altitude, 1 / (2 R) or 0 for a flat earth, unused, unused
@@ -38,7 +38,10 @@ void main() {
     float morph = clamp((distance - u_morph.x) / (u_morph.y - u_morph.x), 0.0, 1.0);
     float height = mix(own, a_height.y, morph);
     float drop = dot(position, position) * u_frame.y;
-    float z = height - a_grid.z * u_morph.z - altitude - drop;
+    // Edge k hangs its skirt when bit k-1 of u_tile.w is set (an integer
+    // below 16, exact in any float).
+    float hangs = a_grid.z > 0.5 ? mod(floor(u_tile.w / exp2(a_grid.z - 1.0)), 2.0) : 0.0;
+    float z = height - hangs * u_morph.z - altitude - drop;
     vec2 n = mix(a_normal.xy, a_normal.zw, morph);
     v_normal = vec3(n, sqrt(max(1.0 - dot(n, n), 0.0)));
     v_relative_height = height - altitude;

@@ -298,7 +298,7 @@ impl TerrainPass {
         // vertices from `offset`.
         unsafe {
             let [x, y] = tile.first_post;
-            calls.uniform_4(at.tile.as_ref(), [x, y, tile.post_step, 0.0]);
+            calls.uniform_4(at.tile.as_ref(), [x, y, tile.post_step, tile.skirt_edges as f32]);
             let [start, end] = tile.morph;
             calls.uniform_4(at.morph.as_ref(), [start, end, tile.skirt_depth, 0.0]);
             calls.attribute_pointer(HEIGHT, 2, glow::FLOAT, false, VERTEX_STRIDE, offset);

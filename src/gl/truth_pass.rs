@@ -116,13 +116,19 @@ impl TruthPass {
                 post_step: 1.0,
                 morph: NO_MORPH,
                 skirt_depth: 0.0,
+                skirt_edges: 0,
                 byte_offset: chunk.byte_offset,
                 voids: chunk.voids,
             })
             .collect();
         let indices_per_tile = grid::index_count(CHUNK_CELLS) as u32;
-        let mut list =
-            DrawList { uniforms: Some(*frame), tiles, indices_per_tile, grid_size: CHUNK_CELLS };
+        let mut list = DrawList {
+            uniforms: Some(*frame),
+            tiles,
+            indices_per_tile,
+            grid_size: CHUNK_CELLS,
+            drawn: Vec::new(),
+        };
         // As the display does: a fair brute force gets early z too.
         list.sort_front_to_back(CHUNK_CELLS);
         self.terrain.draw(&list, output)

@@ -171,6 +171,9 @@ pub struct TileUniforms {
     pub morph: [f32; 2],
     /// How far skirt vertices hang below the edge, metres.
     pub skirt_depth: f32,
+    /// Which edges hang a skirt: bit 0 south, 1 east, 2 north, 3 west (the
+    /// order of [`crate::tiles::grid::edge_posts`]). See [`skirt_edges`].
+    pub skirt_edges: u8,
     /// Where the tile's vertices start in the height buffer, bytes.
     pub byte_offset: u32,
     /// Some posts have no data: drawn by the program that drops the
@@ -201,6 +204,9 @@ pub struct DrawList {
     pub indices_per_tile: u32,
     /// Cells per tile side.
     pub grid_size: u32,
+    /// The frame's tiles and the level their heights came from, sorted by
+    /// tile: what [`skirt_edges`] looks neighbours up in.
+    pub drawn: Vec<(TileKey, u8)>,
 }
 
 /// One of a frame's depth slices ([`DepthSlices`]).
@@ -231,6 +237,7 @@ impl DrawList {
             tiles: Vec::with_capacity(tiles),
             indices_per_tile: 0,
             grid_size: 0,
+            drawn: Vec::with_capacity(tiles),
         }
     }
 
@@ -270,8 +277,13 @@ impl DrawList {
         self.uniforms = Some(frame);
         self.grid_size = geometry.grid_size;
         self.tiles.clear();
+        self.drawn.clear();
+        self.drawn.extend(draws.iter().map(|draw| (draw.key, draw.source_level)));
+        self.drawn.sort_unstable_by_key(|&(key, _)| key);
         for draw in draws {
-            self.tiles.push(tile_uniforms(draw, &frame.posts, rings, &geometry));
+            let mut tile = tile_uniforms(draw, &frame.posts, rings, &geometry);
+            tile.skirt_edges = skirt_edges(draw, &self.drawn);
+            self.tiles.push(tile);
         }
         self.sort_front_to_back(geometry.grid_size);
     }
@@ -310,9 +322,46 @@ fn tile_uniforms(
         post_step: step as f32,
         morph,
         skirt_depth: skirt_depth(draw, geometry.delta_per_level),
+        skirt_edges: ALL_EDGES,
         byte_offset: draw.byte_offset,
         voids: draw.coverage != TileCoverage::Full,
     }
+}
+
+/// Every edge hangs a skirt.
+pub const ALL_EDGES: u8 = 0b1111;
+
+/// The edges of `draw` that need a skirt, given the frame's tiles `drawn`
+/// (sorted by key, with their source levels). Skirts hide the cracks where
+/// two surfaces meet that do not share their edge posts: a neighbour of
+/// another level, or one whose heights came from another level's node (best
+/// available). A neighbour of the same level with heights from the same
+/// level shares every edge post bit for bit, and morphs them alike, so that
+/// edge is watertight without one. Leaving those skirts out is what keeps
+/// them from showing where nothing hides them: beneath the last strip of
+/// data, seen from beyond the data's edge. Edges whose neighbour is not in
+/// the frame (culled, past the data, or split finer) keep their skirt.
+pub fn skirt_edges(draw: &TileDraw, drawn: &[(TileKey, u8)]) -> u8 {
+    let TileKey { level, x, y } = draw.key;
+    let neighbours = [
+        y.checked_sub(1).map(|y| (x, y)),
+        x.checked_add(1).map(|x| (x, y)),
+        y.checked_add(1).map(|y| (x, y)),
+        x.checked_sub(1).map(|x| (x, y)),
+    ];
+    let mut edges = 0;
+    for (bit, neighbour) in neighbours.into_iter().enumerate() {
+        let watertight = neighbour.is_some_and(|(x, y)| {
+            let key = TileKey::new(level, x, y);
+            drawn
+                .binary_search_by_key(&key, |&(key, _)| key)
+                .is_ok_and(|at| drawn[at].1 == draw.source_level)
+        });
+        if !watertight {
+            edges |= 1 << bit;
+        }
+    }
+    edges
 }
 
 /// Skirts must reach below any surface a neighbour may show along the edge:
@@ -337,6 +386,7 @@ mod tests {
             post_step: 1.0,
             morph: [0.0, 1.0],
             skirt_depth: 1.0,
+            skirt_edges: ALL_EDGES,
             byte_offset: 0,
             voids: false,
         }

@@ -4,13 +4,15 @@
 //!
 //! Vertex numbering: the `(g + 1)^2` posts row by row from the south-west
 //! corner (`i + j * (g + 1)`), then the skirt: for each edge (south, east,
-//! north, west) the `g + 1` posts along it, repeated with the skirt flag set so
-//! the shader lowers them by the tile's skirt depth (Ulrich section 11).
+//! north, west) the `g + 1` posts along it, repeated with their edge's number
+//! (1 to 4) as skirt flag, so the shader lowers them by the tile's skirt
+//! depth where that edge hangs a skirt (Ulrich section 11).
 //! Cells are split from their south-west to their north-east corner, the same
 //! diagonal the pyramid's delta is measured on.
 
-/// One shared vertex: its post coordinates in the tile and whether it is a
-/// skirt vertex (0 or 1), as `u16` so grids may have up to 256 cells a side.
+/// One shared vertex: its post coordinates in the tile and, for a skirt
+/// vertex, its edge (1 south, 2 east, 3 north, 4 west; 0 for a post), as
+/// `u16` so grids may have up to 256 cells a side.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GridVertex {
@@ -18,7 +20,8 @@ pub struct GridVertex {
     pub i: u16,
     /// Post row in the tile, 0..=grid_size from the south edge.
     pub j: u16,
-    /// 1 for a skirt vertex (lowered by the tile's skirt depth), else 0.
+    /// The edge of a skirt vertex, 1 to 4 (lowered by the tile's skirt
+    /// depth when that edge hangs a skirt), or 0.
     pub skirt: u16,
     /// Always 0; pads the vertex to 8 bytes.
     pub _pad: u16,
@@ -46,8 +49,9 @@ impl TileGrid {
                 vertices.push(GridVertex { i: i as u16, j: j as u16, skirt: 0, _pad: 0 });
             }
         }
-        for (i, j) in edge_posts(g) {
-            vertices.push(GridVertex { i: i as u16, j: j as u16, skirt: 1, _pad: 0 });
+        for (k, (i, j)) in edge_posts(g).enumerate() {
+            let edge = (k as u32 / (g + 1) + 1) as u16;
+            vertices.push(GridVertex { i: i as u16, j: j as u16, skirt: edge, _pad: 0 });
         }
         let mut indices = Vec::with_capacity(index_count(g));
         let post = |i: u32, j: u32| (i + j * (g + 1)) as u16;
@@ -142,6 +146,11 @@ mod tests {
         assert_eq!(skirt.len(), 36);
         assert!(skirt
             .iter()
-            .all(|v| v.skirt == 1 && (v.i == 0 || v.j == 0 || v.i == 8 || v.j == 8)));
+            .all(|v| (1..=4).contains(&v.skirt) && (v.i == 0 || v.j == 0 || v.i == 8 || v.j == 8)));
+        // Each skirt vertex names the edge it hangs from.
+        for v in skirt {
+            let on = [v.j == 0, v.i == 8, v.j == 8, v.i == 0];
+            assert!(on[v.skirt as usize - 1], "{v:?}");
+        }
     }
 }
