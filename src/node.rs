@@ -219,6 +219,15 @@ impl NodeData {
 /// earth. Called from the loader thread.
 pub trait NodeSource: Send + Sync {
     fn layout(&self) -> &NodeLayout;
+
+    /// Whether node `id` is stored. An absent node (a layered pyramid
+    /// stores fine levels only where fine data are) means "no finer data
+    /// here": the clipmap never requests it and draws its deepest present
+    /// ancestor. The default: every node of the layout is present.
+    fn has_node(&self, id: NodeId) -> bool {
+        self.layout().contains(id)
+    }
+
     /// Writes node `id` into `out`, reusing its buffers.
     fn read_node(&self, id: NodeId, out: &mut NodeData) -> Result<(), NodeError>;
 
@@ -240,6 +249,8 @@ pub trait NodeSource: Send + Sync {
 pub enum NodeError {
     #[error("node {id:?} is outside the pyramid")]
     OutOfRange { id: NodeId },
+    #[error("node {id:?} is absent: no data of its resolution there")]
+    Absent { id: NodeId },
     #[error("{path}: node {id:?}: {problem}")]
     Corrupt { path: std::path::PathBuf, id: NodeId, problem: String },
     #[error("{path}: {source}")]

@@ -4,14 +4,12 @@
 //! infinite values, absurd sizes), each refused with an error naming the file.
 //! Also the ESRI ASCII grid in degrees without a `.prj`.
 
-mod dem_support;
-
 use std::path::Path;
 
-use dem_support::*;
 use netcdf3::{DataSet, FileWriter, Version};
 use ridgeline::dem::{read_raw, Problem};
 use ridgeline::geo::Crs;
+use testkit::dem::*;
 
 /// Writes a classic netCDF-3 grid `ROSE(lat, lon)`, south row first, with
 /// coordinates `lat0 + j * step` and `lon0 + i * step` (plus `drift`).
