@@ -360,3 +360,42 @@ fn a_version_1_pyramid_is_refused_with_a_rebuild_hint() {
     assert!(message.contains("version 1") && message.contains("rebuild"), "{message}");
     assert!(message.contains(&path.display().to_string()), "{message}");
 }
+
+#[test]
+fn the_clipmap_never_asks_for_absent_nodes_and_answers_from_the_best_data() {
+    use glam::{DVec2, DVec3};
+    use ridgeline::clipmap::{Clipmap, ClipmapConfig, LoaderMode, ViewConfig};
+    let pyramid = std::sync::Arc::new(open(&[coarse(terrain), fine(terrain)], "clipmap"));
+    let config = ClipmapConfig { atlas_slots: 400, budget: 8, loader: LoaderMode::Inline };
+    let mut clipmap = Clipmap::new(pyramid.clone(), config).expect("a clipmap");
+    let view_config = ViewConfig { node_count: 8, view_distance: 2.0, load_distance: 2.5 };
+    // Over the coarse layer next to the fine one: views want level 0 there.
+    let (x, y) = local(&pyramid, FINE_ORIGIN[0] - 1500.0, FINE_ORIGIN[1] + 9000.0);
+    let view = clipmap.add_view(view_config, DVec3::new(x, y, 2000.0)).expect("a view");
+    let mut settled = false;
+    for _ in 0..500 {
+        let stats = clipmap.update().expect("update");
+        assert_eq!((stats.failed, stats.given_up), (0, 0), "{stats:?}");
+        if stats.missing == 0 && stats.in_flight == 0 {
+            settled = true;
+            break;
+        }
+    }
+    assert!(settled, "the clipmap never settled");
+    let layout = *pyramid.layout();
+    let [nx, ny] = layout.nodes_at(0);
+    for id in (0..ny).flat_map(|y| (0..nx).map(move |x| NodeId::new(0, x, y))) {
+        assert!(pyramid.has_node(id) || !clipmap.is_wanted(id), "{id:?} is absent but wanted");
+    }
+    assert!(clipmap.last_load_error().is_none());
+    for (dx, dy) in [(0.0, 0.0), (2500.0, 0.0), (-800.0, 300.0)] {
+        let point = DVec2::new(x + dx, y + dy);
+        let sample = clipmap.height_at(view, point).expect("a height");
+        let exact = NodeSource::exact_height(&*pyramid, point.x, point.y).expect("inside");
+        assert!(
+            (sample.height_m - exact).abs() <= 1e-3,
+            "at {point}: {} against the best data {exact}",
+            sample.height_m
+        );
+    }
+}
