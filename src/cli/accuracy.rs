@@ -55,15 +55,18 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
     let grid_size = config.scene.lod.grid_size;
     let mut display = DisplayParts::open(&config, Arc::clone(&source), summary)
         .context("opening a headless display")?;
-    let region = TruthRegion::covering_tiles(&layout, grid_size);
-    let mesh = TruthMesh::load(source.as_ref(), region)
-        .with_context(|| format!("{dataset_name}: the full-resolution mesh"))?;
-    let truth = TruthPass::new(display.context.gl(), &mesh)
-        .context("uploading the full-resolution mesh")?;
     let views: Vec<(f64, Camera)> = path
         .frame_times(args.views.max(1))
         .map(|t| (t, path.sample(t).camera(args.view.fov, [args.view.size.x, args.view.size.y])))
         .collect();
+    // The full-resolution mesh around the flight: all of a single tile, a
+    // window of a layered pyramid's level 0 (which spans its whole base).
+    let centre = truth_centre(&views, layout.spacing_m);
+    let region = TruthRegion::covering_tiles(&layout, grid_size).around(centre, TRUTH_SIDE);
+    let mesh = TruthMesh::load(source.as_ref(), region)
+        .with_context(|| format!("{dataset_name}: the full-resolution mesh"))?;
+    let truth = TruthPass::new(display.context.gl(), &mesh)
+        .context("uploading the full-resolution mesh")?;
     let exact = |x: f64, y: f64| pyramid.exact_height(x, y);
     let run = measure_flight(&mut display, &truth, &exact, layout.spacing_m, &views)
         .context("measuring the views")?;
@@ -103,6 +106,26 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
         bail!("measured p99.9 error {:.3} px exceeds tau {} px", run.summary.p999_px, run.tau_px);
     }
     Ok(())
+}
+
+/// Posts per side of the truth mesh's window: the most whose chunks stay
+/// within [`ridgeline::gl::MAX_TRUTH_POSTS`].
+const TRUTH_SIDE: u32 = 31 * ridgeline::gl::CHUNK_CELLS + 1;
+
+/// The level-0 post at the middle of the views' positions.
+fn truth_centre(views: &[(f64, Camera)], spacing_m: [f64; 2]) -> [i64; 2] {
+    let (mut low, mut high) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for (_, camera) in views {
+        let p = [camera.position.x, camera.position.y];
+        for a in 0..2 {
+            low[a] = low[a].min(p[a]);
+            high[a] = high[a].max(p[a]);
+        }
+    }
+    [0, 1].map(|a| {
+        let middle = if low[a] <= high[a] { 0.5 * (low[a] + high[a]) } else { 0.0 };
+        (middle / spacing_m[a]).round() as i64
+    })
 }
 
 fn check_args(args: &AccuracyArgs) -> Result<()> {

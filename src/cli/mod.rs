@@ -7,7 +7,7 @@ use std::path::Path;
 
 use anyhow::Result;
 use glam::UVec2;
-use ridgeline::flight::{builtin_approach, FlightPath};
+use ridgeline::flight::{builtin_approach_over, FlightPath};
 use ridgeline::node::NodeSource as _;
 use ridgeline::pyramid::Pyramid;
 
@@ -105,7 +105,9 @@ fn flight_path(path: Option<&Path>, pyramid: &Pyramid) -> Result<FlightPath> {
         Some(file) => Ok(FlightPath::read(file, &pyramid.info().georef, layout.posts)?),
         None => {
             let height = |x: f64, y: f64| pyramid.exact_height(x, y).unwrap_or(0.0);
-            Ok(builtin_approach(layout.extent_m(), &height))
+            // Over the finest layer, where the best data are.
+            let (origin, extent) = pyramid.finest_area_m();
+            Ok(builtin_approach_over(origin, extent, &height))
         }
     }
 }

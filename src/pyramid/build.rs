@@ -297,7 +297,8 @@ fn place_layers<'a>(
             let native = (ratio.max(1.0).log2().floor() as u8).min(levels - 1);
             let weights = (rank > 0)
                 .then(|| blend_weights(grid, grid.georef.spacing_m([grid.width, grid.height])));
-            PlacedLayer { grid, offset, scale, exact, native, weights }
+            let last = posts.map(|p| p as i64 - 1);
+            PlacedLayer { grid, offset, scale, exact, native, last, weights }
         })
         .collect();
     Ok((layout, georef, Composite { layers: placed }))

@@ -9,6 +9,13 @@
 //!   not exceed the layer's own (`floor(log2(layer spacing / level-0
 //!   spacing))`, the smaller of the two axes): its posts are at most twice as
 //!   dense as the data, and no data are lost.
+//! - **A layer's surface** is its native level's: the layer sampled at the
+//!   native level's posts (its own posts joined as south-west to north-east
+//!   triangles), those posts joined as the same triangles. Every finer
+//!   level's post outside finer layers therefore lies on the surface the
+//!   native level's nodes draw, so where a finer node is absent its coarser
+//!   ancestor draws exactly the same surface: no crack where the level
+//!   changes.
 //! - **Composite**: layers are applied coarsest first; each layer's height
 //!   (its own posts joined as south-west to north-east triangles) replaces
 //!   the height so far by a weight `w` rising from 0 at the layer's edge or
@@ -41,6 +48,9 @@ pub(crate) struct PlacedLayer<'a> {
     pub exact: Option<[i64; 2]>,
     /// The coarsest level whose posts are at least as dense as the layer's.
     pub native: u8,
+    /// The last level-0 post of the pyramid, east and north (positions
+    /// past it take its place, as nodes' posts do).
+    pub last: [i64; 2],
     /// Blend weight per post of the layer, when a coarser layer may lie under it.
     pub weights: Option<Vec<f32>>,
 }
@@ -52,10 +62,34 @@ impl PlacedLayer<'_> {
         [0, 1].map(|a| [self.offset[a], self.offset[a] + (size[a] - 1) as f64 * self.scale[a]])
     }
 
-    /// The layer's height at level-0 post `(i, j)`, NaN outside the layer
-    /// or where a corner of its cell has no data.
+    /// The layer's surface at level-0 post `(i, j)`: its native level's
+    /// posts joined as triangles; NaN outside the layer or where a corner
+    /// has no data.
     pub fn height(&self, i: i64, j: i64) -> f32 {
-        self.sample(i, j, &self.grid.heights)
+        if self.native == 0 {
+            return self.sample(i, j, &self.grid.heights);
+        }
+        let step = 1i64 << self.native;
+        let (k, m) = (i.div_euclid(step) * step, j.div_euclid(step) * step);
+        let (fu, fv) = ((i - k) as f64 / step as f64, (j - m) as f64 / step as f64);
+        let post = |x: i64, y: i64| {
+            self.sample(x.clamp(0, self.last[0]), y.clamp(0, self.last[1]), &self.grid.heights)
+                as f64
+        };
+        // On a post or a cell edge, only the posts there count (a corner
+        // without data elsewhere must not void it).
+        let h00 = post(k, m);
+        let surface = match (fu == 0.0, fv == 0.0) {
+            (true, true) => h00,
+            (true, false) => h00 + fv * (post(k, m + step) - h00),
+            (false, true) => h00 + fu * (post(k + step, m) - h00),
+            (false, false) => {
+                let (h10, h01, h11) =
+                    (post(k + step, m), post(k, m + step), post(k + step, m + step));
+                cell_surface(h00, h10, h01, h11, fu, fv)
+            }
+        };
+        surface as f32
     }
 
     /// The blend weight at level-0 post `(i, j)` (1 without a weight raster).
@@ -84,7 +118,10 @@ impl PlacedLayer<'_> {
         }
         let u = (i as f64 - self.offset[0]) / self.scale[0];
         let v = (j as f64 - self.offset[1]) / self.scale[1];
-        let (Some((p, fu)), Some((q, fv))) = (cell(u, w), cell(v, h)) else {
+        // Level-0 posts within half a level-0 cell of the layer's edge take
+        // the edge: lattices that are half a cell apart still meet.
+        let slack = [0.5 / self.scale[0], 0.5 / self.scale[1]];
+        let (Some((p, fu)), Some((q, fv))) = (cell(u, w, slack[0]), cell(v, h, slack[1])) else {
             return f32::NAN;
         };
         let at = |p: i64, q: i64| values[(q * w + p) as usize] as f64;
@@ -103,10 +140,11 @@ impl PlacedLayer<'_> {
 }
 
 /// The cell holding `position` (in posts of a line of `count` posts) and
-/// the fraction across it; `None` outside the line.
-fn cell(position: f64, count: i64) -> Option<(i64, f64)> {
+/// the fraction across it; `None` farther than `slack` posts outside the line.
+fn cell(position: f64, count: i64, slack: f64) -> Option<(i64, f64)> {
     let last = (count - 1) as f64;
-    if !(position >= -ON_POST && position <= last + ON_POST) {
+    let slack = slack.max(ON_POST);
+    if !(position >= -slack && position <= last + slack) {
         return None;
     }
     let position = position.clamp(0.0, last);

@@ -40,10 +40,12 @@ pub const SENTINEL_RGBA: [u8; 4] = [255, 0, 255, 255];
 pub const TOLERANCE: compare::Tolerance =
     compare::Tolerance { channel_threshold: 16, max_share_over: 0.0002, max_mean: 0.1 };
 
-/// Terrain height under `(x, y)`; the views stay inside the data.
+/// Terrain height under `(x, y)` metres from the built-in SRTM tile's
+/// south-west post ([`crate::builtin_origin`]); the views stay inside the data.
 pub fn ground(x: f64, y: f64) -> f64 {
+    let origin = crate::builtin_origin();
     builtin_pyramid()
-        .exact_height(x, y)
+        .exact_height(origin.x + x, origin.y + y)
         .unwrap_or_else(|| panic!("({x}, {y}) is outside the terrain")) as f64
 }
 
@@ -64,9 +66,11 @@ pub fn open(config: &DisplayConfig) -> Result<DisplayParts, DisplayError> {
     DisplayParts::open(config, pyramid, summary)
 }
 
-/// A camera over the render tests' viewport ([`SIZE`]).
+/// A camera over the render tests' viewport ([`SIZE`]) at `(x, y)` metres
+/// from the built-in SRTM tile's south-west post ([`crate::builtin_origin`]).
 pub fn camera(x: f64, y: f64, altitude: f64, heading_deg: f64, pitch_deg: f64) -> Camera {
-    crate::camera([SIZE.x, SIZE.y], x, y, altitude, heading_deg, pitch_deg)
+    let origin = crate::builtin_origin();
+    crate::camera([SIZE.x, SIZE.y], origin.x + x, origin.y + y, altitude, heading_deg, pitch_deg)
 }
 
 /// A named fixed view over the built-in terrain (local metres, degrees).
@@ -127,8 +131,9 @@ pub fn redraw(display: &mut DisplayParts, alter: impl FnOnce(&mut DrawList)) -> 
     display.context.read_pixels().expect("read back")
 }
 
-/// The data rectangle less `margin_m` on every side, and the lowest height,
-/// for [`coverage::terrain_guaranteed`].
+/// The data rectangle (the whole base: terrain reaches every corner of it)
+/// less `margin_m` on every side, and the lowest height, for
+/// [`coverage::terrain_guaranteed`].
 pub fn terrain_bounds(margin_m: f64) -> coverage::TerrainBounds {
     let pyramid = builtin_pyramid();
     let layout = *ridgeline::node::NodeSource::layout(&*pyramid);
