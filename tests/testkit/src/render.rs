@@ -92,11 +92,9 @@ impl View {
 
 /// The golden views: a medium one, a low one among ridges higher than the
 /// aircraft (amber and red terrain-awareness bands), a high one looking
-/// steeply down. All look across the data, away from its near edges. Where
-/// the aircraft is above every ridge the skyline is the data's far edge,
-/// hazed at 50 to 65 km: the medium view's few rows of sky just above it and
-/// about one row in the low view would show terrain beyond the data in the
-/// world; the high view shows no sky.
+/// steeply down, all over the built-in SRTM tile (positions relative to its
+/// south-west post) and looking across it. Beyond the tile the ETOPO5 base
+/// carries the terrain to the horizon: no view shows an edge of the data.
 pub const VIEWS: [View; 3] = [
     View {
         name: "medium",
