@@ -23,11 +23,12 @@ fn measure(tau_px: f64) -> AccuracyRun {
     let mut display = open(&config).expect("headless EGL display");
     let pyramid = builtin_pyramid();
     let layout = *pyramid.layout();
-    let region = TruthRegion::covering_tiles(&layout, config.scene.lod.grid_size);
-    let mesh = TruthMesh::load(pyramid.as_ref(), region).expect("truth mesh");
-    let truth = TruthPass::new(display.context.gl(), &mesh).expect("truth pass");
     let views: Vec<(f64, Camera)> =
         VIEWS.iter().enumerate().map(|(k, v)| (k as f64, v.camera())).collect();
+    let positions = views.iter().map(|(_, c)| [c.position.x, c.position.y]);
+    let region = TruthRegion::around_positions(&layout, config.scene.lod.grid_size, positions);
+    let mesh = TruthMesh::load(pyramid.as_ref(), region).expect("truth mesh");
+    let truth = TruthPass::new(display.context.gl(), &mesh).expect("truth pass");
     let source = Arc::clone(&pyramid);
     let exact = move |x: f64, y: f64| source.exact_height(x, y);
     measure_flight(&mut display, &truth, &exact, layout.spacing_m, &views).expect("measured")

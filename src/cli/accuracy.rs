@@ -61,8 +61,8 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
         .collect();
     // The full-resolution mesh around the flight: all of a single tile, a
     // window of a layered pyramid's level 0 (which spans its whole base).
-    let centre = truth_centre(&views, layout.spacing_m);
-    let region = TruthRegion::covering_tiles(&layout, grid_size).around(centre, TRUTH_SIDE);
+    let positions = views.iter().map(|(_, c)| [c.position.x, c.position.y]);
+    let region = TruthRegion::around_positions(&layout, grid_size, positions);
     let mesh = TruthMesh::load(source.as_ref(), region)
         .with_context(|| format!("{dataset_name}: the full-resolution mesh"))?;
     let truth = TruthPass::new(display.context.gl(), &mesh)
@@ -106,26 +106,6 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
         bail!("measured p99.9 error {:.3} px exceeds tau {} px", run.summary.p999_px, run.tau_px);
     }
     Ok(())
-}
-
-/// Posts per side of the truth mesh's window: the most whose chunks stay
-/// within [`ridgeline::gl::MAX_TRUTH_POSTS`].
-const TRUTH_SIDE: u32 = 31 * ridgeline::gl::CHUNK_CELLS + 1;
-
-/// The level-0 post at the middle of the views' positions.
-fn truth_centre(views: &[(f64, Camera)], spacing_m: [f64; 2]) -> [i64; 2] {
-    let (mut low, mut high) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for (_, camera) in views {
-        let p = [camera.position.x, camera.position.y];
-        for a in 0..2 {
-            low[a] = low[a].min(p[a]);
-            high[a] = high[a].max(p[a]);
-        }
-    }
-    [0, 1].map(|a| {
-        let middle = if low[a] <= high[a] { 0.5 * (low[a] + high[a]) } else { 0.0 };
-        (middle / spacing_m[a]).round() as i64
-    })
 }
 
 fn check_args(args: &AccuracyArgs) -> Result<()> {

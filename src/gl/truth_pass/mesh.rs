@@ -22,6 +22,9 @@ pub const MAX_TRUTH_POSTS: u64 = 1 << 24;
 /// Cells per chunk side: the largest power of two whose tile grid,
 /// skirts included, numbers its vertices in `u16`.
 pub const CHUNK_CELLS: u32 = 128;
+/// Posts per side of the largest square of whole chunks within
+/// [`MAX_TRUTH_POSTS`].
+pub const MAX_TRUTH_SIDE: u32 = 31 * CHUNK_CELLS + 1;
 
 /// A rectangle of level-0 posts: `posts` of them east and north from `first`.
 /// It may reach past the data, where heights extend the edge.
@@ -47,6 +50,30 @@ impl TruthRegion {
             first: [0, 0],
             posts: tiles.map(|t| t.saturating_mul(grid_size).saturating_add(1)),
         }
+    }
+
+    /// What the level-0 tiles cover ([`TruthRegion::covering_tiles`]),
+    /// within a window of [`MAX_TRUTH_SIDE`] posts a side centred on the
+    /// middle of `positions` (local metres): all of a single tile, the part
+    /// of a layered pyramid's level 0 (which spans its whole base) around a
+    /// flight.
+    pub fn around_positions(
+        layout: &NodeLayout,
+        grid_size: u32,
+        positions: impl IntoIterator<Item = [f64; 2]>,
+    ) -> Self {
+        let (mut low, mut high) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for p in positions {
+            for a in 0..2 {
+                low[a] = low[a].min(p[a]);
+                high[a] = high[a].max(p[a]);
+            }
+        }
+        let centre = [0, 1].map(|a| {
+            let middle = if low[a] <= high[a] { 0.5 * (low[a] + high[a]) } else { 0.0 };
+            (middle / layout.spacing_m[a]).round() as i64
+        });
+        Self::covering_tiles(layout, grid_size).around(centre, MAX_TRUTH_SIDE)
     }
 
     /// The part of this region inside a square of `side` posts centred on
