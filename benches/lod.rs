@@ -29,7 +29,7 @@ use ridgeline::clipmap::LoaderMode;
 use ridgeline::dataset;
 use ridgeline::display::measure::{measure_flight, AccuracyRun};
 use ridgeline::display::{DisplayConfig, DisplayParts};
-use ridgeline::flight::{builtin_approach, FlightPath};
+use ridgeline::flight::{default_flight, FlightPath};
 use ridgeline::gl::{
     BaselineFrameStats, ChunkedBaseline, GlBackend, TruthMesh, TruthPass, TruthRegion,
 };
@@ -176,8 +176,7 @@ fn main() {
     let pyramid =
         Arc::new(dataset::open(None, Path::new("cache"), &Silent).expect("the built-in terrain"));
     let layout = *pyramid.layout();
-    let path =
-        builtin_approach(layout.extent_m(), &|x, y| pyramid.exact_height(x, y).unwrap_or(0.0));
+    let path = default_flight(&pyramid);
     let views: Vec<(f64, Camera)> =
         path.frame_times(view_count).map(|t| (t, camera_at(&path, t))).collect();
     let source: Arc<dyn NodeSource> = pyramid.clone();

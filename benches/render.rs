@@ -30,7 +30,7 @@ use ridgeline::camera::Camera;
 use ridgeline::dataset;
 use ridgeline::display::measure::draw_truth;
 use ridgeline::display::{DisplayConfig, DisplayParts};
-use ridgeline::flight::{builtin_approach, FlightPath};
+use ridgeline::flight::{default_flight, FlightPath};
 use ridgeline::gl::{GlBackend, TruthFrameStats, TruthMesh, TruthPass, TruthRegion};
 use ridgeline::node::NodeSource;
 use ridgeline::pipeline::FrameStats;
@@ -89,8 +89,7 @@ fn main() {
     let tau_px = tau_arg();
     let pyramid = dataset::open(None, Path::new("cache"), &Silent).expect("the built-in terrain");
     let layout = *pyramid.layout();
-    let path =
-        builtin_approach(layout.extent_m(), &|x, y| pyramid.exact_height(x, y).unwrap_or(0.0));
+    let path = default_flight(&pyramid);
     let summary = TerrainSummary::from_pyramid(pyramid.info());
     let source: Arc<dyn NodeSource> = Arc::new(pyramid);
     let mut config = DisplayConfig::new(GlBackend::Egl, SIZE);

@@ -21,9 +21,8 @@ use glutin::context::{ContextApi, ContextAttributesBuilder, Version};
 use glutin::prelude::*;
 use ridgeline::camera::Camera;
 use ridgeline::clipmap::LoaderMode;
-use ridgeline::flight::builtin_approach;
+use ridgeline::flight::default_flight;
 use ridgeline::gl::{Gl, GlRenderer, GlesVersion};
-use ridgeline::node::NodeSource;
 use ridgeline::pipeline::{FramePipeline, PipelineConfig};
 use ridgeline::pyramid::Silent;
 use ridgeline::scene::TerrainSummary;
@@ -56,9 +55,7 @@ pub fn run(out: &Path, cache: &Path, frames: u32) -> Result<PathBuf, Error> {
         PipelineConfig { loader: LoaderMode::Inline, ..PipelineConfig::new([WIDTH, HEIGHT]) };
     let mut pipeline = FramePipeline::new(&config, pyramid.clone(), summary)?;
     let mut renderer = GlRenderer::new(&gl, config.scene.lod.grid_size, config.scene.buffer_bytes)?;
-    let layout = *pyramid.layout();
-    let path =
-        builtin_approach(layout.extent_m(), &|x, y| pyramid.exact_height(x, y).unwrap_or(0.0));
+    let path = default_flight(&pyramid);
     // 3. The application's loop: bind its target, ask for a frame, go on.
     for t in path.frame_times(frames) {
         let camera: Camera = path.sample(t).camera(60.0, [WIDTH, HEIGHT]);

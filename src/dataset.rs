@@ -1,17 +1,31 @@
 //! Which terrain a run uses: a pyramid in the cache named on the command line,
-//! or the built-in default, a real SRTM tile compiled into the binary and
-//! built into `cache/` on first use (and rebuilt if the cache was damaged).
+//! or the built-in default, a real SRTM tile over a regional ETOPO5 base,
+//! both compiled into the binary and built into `cache/` on first use as one
+//! layered pyramid (and rebuilt if the cache was damaged or is of an older
+//! format).
+//!
+//! The base is ETOPO5 relief, land and sea floor. A synthetic-vision
+//! display shows the sea as its surface, so the base's heights below 0 m
+//! (the Black Sea floor, to -2173 m) are raised to 0 m, sea level; the SRTM
+//! tile is kept as it is.
 
 use crate::dem::{self, ImportError};
 use crate::pyramid::{self, BuildError, BuildOptions, Progress, Pyramid, PyramidError, FILE_NAME};
 use std::path::{Path, PathBuf};
 
 /// The built-in terrain's cache name.
-pub const DEFAULT_DATASET: &str = "srtm3_n39e040";
+pub const DEFAULT_DATASET: &str = "srtm3_n39e040_etopo5";
 
 /// SRTM 3" around Erzincan and Tercan, eastern Turkey (1000 x 1000 posts,
 /// 1111 to 3270 m; see assets/dem/README.md for source and licence).
 const DEFAULT_TIFF: &[u8] = include_bytes!("../assets/dem/srtm3_n39e040_1000.tif");
+
+/// ETOPO5 5' relief, 37-44 E, 37-42.5 N, the base under the SRTM tile
+/// (see assets/dem/README.md).
+const DEFAULT_BASE: &[u8] = include_bytes!("../assets/dem/etopo5_e37_e44_n37_n42.nc");
+
+/// Heights of the base below this are raised to it: the sea's surface.
+pub const SEA_SURFACE_M: f32 = 0.0;
 
 /// Why a dataset cannot be opened or the built-in terrain cannot be built.
 #[derive(Debug, thiserror::Error)]
@@ -84,14 +98,19 @@ fn build_default(dir: &Path, progress: &dyn Progress) -> Result<(), DatasetError
         move |source| DatasetError::Write { path, source }
     };
     std::fs::create_dir_all(dir).map_err(write_error(dir))?;
-    // The importer reads files; the source goes beside the pyramid, written
-    // under a temporary name and renamed so a crash never leaves half of it.
-    let source = dir.join("source.tif");
-    let partial = dir.join(format!("source.tif.tmp-{}", std::process::id()));
-    std::fs::write(&partial, DEFAULT_TIFF).map_err(write_error(&partial))?;
-    std::fs::rename(&partial, &source).map_err(write_error(&source))?;
-    let grid = dem::import_file(&source)?;
-    let built = pyramid::build(&grid, &BuildOptions::default(), progress)?;
+    // The importers read files; the sources go beside the pyramid, written
+    // under a temporary name and renamed so a crash never leaves half of one.
+    let write_source = |name: &str, bytes: &[u8]| -> Result<PathBuf, DatasetError> {
+        let source = dir.join(name);
+        let partial = dir.join(format!("{name}.tmp-{}", std::process::id()));
+        std::fs::write(&partial, bytes).map_err(write_error(&partial))?;
+        std::fs::rename(&partial, &source).map_err(write_error(&source))?;
+        Ok(source)
+    };
+    let tile = dem::import_file(&write_source("source.tif", DEFAULT_TIFF)?)?;
+    let mut base = dem::import_file(&write_source("base.nc", DEFAULT_BASE)?)?;
+    base.heights.iter_mut().filter(|h| **h < SEA_SURFACE_M).for_each(|h| *h = SEA_SURFACE_M);
+    let built = pyramid::build_layers(&[tile, base], &BuildOptions::default(), progress)?;
     pyramid::write_atomic(&built, &dir.join(FILE_NAME), progress)?;
     Ok(())
 }

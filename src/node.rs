@@ -226,6 +226,15 @@ impl NodeData {
 pub trait NodeSource: Send + Sync {
     /// The pyramid's geometry: levels, node size, border, post spacing.
     fn layout(&self) -> &NodeLayout;
+
+    /// Whether node `id` is stored. An absent node (a layered pyramid
+    /// stores fine levels only where fine data are) means "no finer data
+    /// here": the clipmap never requests it and draws its deepest present
+    /// ancestor. The default: every node of the layout is present.
+    fn has_node(&self, id: NodeId) -> bool {
+        self.layout().contains(id)
+    }
+
     /// Writes node `id` into `out`, reusing its buffers.
     fn read_node(&self, id: NodeId, out: &mut NodeData) -> Result<(), NodeError>;
 
@@ -248,6 +257,13 @@ pub enum NodeError {
     /// The id names no node of the layout.
     #[error("node {id:?} is outside the pyramid")]
     OutOfRange {
+        /// The node asked for.
+        id: NodeId,
+    },
+    /// The file stores no such node: no data of its resolution there (its
+    /// deepest present ancestor serves).
+    #[error("node {id:?} is absent: no data of its resolution there")]
+    Absent {
         /// The node asked for.
         id: NodeId,
     },

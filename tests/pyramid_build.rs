@@ -12,9 +12,16 @@ fn bad_grids_and_options_are_refused_with_a_reason() {
     let refuse = |grid: &ridgeline::dem::ElevationGrid, options: BuildOptions| {
         build(grid, &options, &Silent).err().expect("refused").to_string()
     };
+    let mut infinite = grid.clone();
+    infinite.heights[3 * 20 + 7] = f32::INFINITY;
+    assert!(refuse(&infinite, BuildOptions::default()).contains("(7, 3)"));
+    // NaN is no-data, not an error; a grid without any data is.
     let mut nan = grid.clone();
     nan.heights[3 * 20 + 7] = f32::NAN;
-    assert!(refuse(&nan, BuildOptions::default()).contains("(7, 3)"));
+    assert!(build(&nan, &BuildOptions::default(), &Silent).is_ok());
+    let mut none = grid.clone();
+    none.heights.iter_mut().for_each(|h| *h = f32::NAN);
+    assert!(refuse(&none, BuildOptions::default()).contains("no post has data"));
     let mut short = grid.clone();
     short.heights.pop();
     assert!(refuse(&short, BuildOptions::default()).contains("199 heights"));

@@ -108,3 +108,63 @@ fn importing_a_missing_file_names_it() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("no/such/tile.hgt"));
     assert!(!cache.join(FILE_NAME).exists());
 }
+
+/// A partial SRTM tile (its last 200 columns and southern 200 rows void)
+/// over a 30" base imported as two layers: `info --json` counts the void
+/// posts filled from the base, and the tile's interpolated and no-data
+/// posts, separately; a file in another coordinate system is refused,
+/// named.
+#[test]
+fn layered_import_counts_void_posts_by_what_became_of_them() {
+    let dir = fresh_dir("cli-layers");
+    let side = 1201usize;
+    let large = |i: usize, j: usize| i >= side - 200 || j < 200;
+    let small = |i: usize, j: usize| (500..502).contains(&i) && (600..602).contains(&j);
+    let heights: Vec<i16> = (0..side * side)
+        .map(|k| (k % side, k / side))
+        .map(|(i, j)| if large(i, j) || small(i, j) { -32768 } else { 1500 + (i % 97) as i16 })
+        .collect();
+    let hgt = dir.join("N39E040.hgt");
+    testkit::dem::write_hgt(&hgt, side, &heights);
+    let voids = heights.iter().filter(|&&h| h == -32768).count() as u64;
+    // The base: 30" posts over 39.5..41.5 E, 38.5..40.5 N, 1200 m.
+    let base = dir.join("base.asc");
+    let header =
+        "NCOLS 241\nNROWS 241\nXLLCENTER 39.5\nYLLCENTER 38.5\nCELLSIZE 0.008333333333333333\n";
+    let rows: Vec<Vec<String>> = (0..241).map(|_| vec!["1200".to_string(); 241]).collect();
+    testkit::dem::write_ascii(&base, header, &rows);
+    std::fs::write(dir.join("base.prj"), "GEOGCS[\"WGS 84\",DATUM[\"WGS_1984\"]]").unwrap();
+    let cache = dir.join("cache");
+    let hgt_arg = hgt.to_str().expect("a UTF-8 path");
+    let base_arg = base.to_str().expect("a UTF-8 path");
+    let imported = ridgeline(&["import", hgt_arg, base_arg, "--out"], &cache);
+    assert!(imported.status.success(), "{}", String::from_utf8_lossy(&imported.stderr));
+    let info = ridgeline(&["info", "--json"], &cache);
+    assert!(info.status.success(), "{}", String::from_utf8_lossy(&info.stderr));
+    let json: serde_json::Value = serde_json::from_slice(&info.stdout).expect("JSON");
+    assert_eq!(json["format_version"], 2);
+    assert_eq!(json["layers"], 2);
+    assert_eq!(json["posts_interpolated"], 4, "the 2 x 2 void");
+    assert_eq!(json["posts_from_layer"], voids - 4);
+    assert_eq!(json["posts_no_data"], 0);
+    let present = json["nodes_present"].as_u64().expect("a count");
+    assert!(present < json["node_count"].as_u64().expect("a count"), "level 0 is sparse");
+    // Alone, the tile's large voids are no data.
+    let alone = dir.join("alone");
+    let imported = ridgeline(&["import", hgt_arg, "--out"], &alone);
+    assert!(imported.status.success(), "{}", String::from_utf8_lossy(&imported.stderr));
+    let info = ridgeline(&["info", "--json"], &alone);
+    let json: serde_json::Value = serde_json::from_slice(&info.stdout).expect("JSON");
+    assert_eq!(json["posts_no_data"], voids - 4);
+    assert_eq!(json["posts_from_layer"], 0);
+    // A base in metres (no .prj: a local grid) cannot go under degrees.
+    let metres = dir.join("metres.asc");
+    let header = "NCOLS 3\nNROWS 3\nXLLCENTER 1000\nYLLCENTER 1000\nCELLSIZE 500\n";
+    let rows: Vec<Vec<String>> = (0..3).map(|_| vec!["10".to_string(); 3]).collect();
+    testkit::dem::write_ascii(&metres, header, &rows);
+    let metres_arg = metres.to_str().expect("a UTF-8 path");
+    let refused = ridgeline(&["import", hgt_arg, metres_arg, "--out"], &dir.join("refused"));
+    assert!(!refused.status.success());
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(stderr.contains("metres.asc") && stderr.contains("coordinate system"), "{stderr}");
+}

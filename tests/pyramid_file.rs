@@ -132,10 +132,10 @@ fn truncated_empty_foreign_and_newer_files_are_refused() {
         PyramidError::NotAPyramid { .. }
     ));
     let mut newer = good.clone();
-    newer[8] = 2;
+    newer[8] = 3;
     assert!(matches!(
         assert_refused(&dir, &newer, "newer"),
-        PyramidError::Version { found: 2, .. }
+        PyramidError::Version { found: 3, .. }
     ));
     let missing = Pyramid::open(dir.join("missing")).err().expect("missing file");
     assert!(matches!(missing, PyramidError::Io { .. }) && missing.to_string().contains("missing"));

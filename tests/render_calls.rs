@@ -6,9 +6,8 @@
 //! `render::cost` fails this test.
 
 use ridgeline::display::{DisplayConfig, DisplayParts};
-use ridgeline::flight::builtin_approach;
+use ridgeline::flight::default_flight;
 use ridgeline::gl::{GlBackend, GlesVersion};
-use ridgeline::node::NodeSource;
 use ridgeline::pipeline::FramePipeline;
 use ridgeline::render::{CallStats, NullBackend};
 use ridgeline::scene::TerrainSummary;
@@ -26,9 +25,7 @@ fn fly_both(config: &DisplayConfig) -> (CallStats, u32) {
     let mut null_pipeline =
         FramePipeline::new(&config.pipeline(), pyramid.clone(), summary).expect("pipeline");
     let mut null = NullBackend::new(config.scene.buffer_bytes, gl.renderer.cost_model());
-    let layout = *pyramid.layout();
-    let path =
-        builtin_approach(layout.extent_m(), &|x, y| pyramid.exact_height(x, y).unwrap_or(0.0));
+    let path = default_flight(&pyramid);
     let (mut total, mut sliced) = (CallStats::default(), 0);
     for (k, t) in path.frame_times(FRAMES).enumerate() {
         let camera = path.sample(t).camera(60.0, [SIZE.x, SIZE.y]);

@@ -6,7 +6,9 @@
 //! ground point the truth shows is missing from the LOD.
 //!
 //! The tile is the built-in SRTM tile alone ([`testkit::srtm_tile_pyramid`]),
-//! about 71 km east-west by 93 km north-south.
+//! about 71 km east-west by 93 km north-south. The same views over the
+//! built-in terrain, where the tile lies in its ETOPO5 base, cross the seam
+//! between the two layers instead.
 
 use std::sync::Arc;
 
@@ -14,16 +16,21 @@ use ridgeline::camera::Camera;
 use ridgeline::display::measure::{measure_flight, AccuracyRun};
 use ridgeline::gl::{GlBackend, GlesVersion, TruthMesh, TruthPass, TruthRegion};
 use ridgeline::node::NodeSource;
+use ridgeline::pyramid::Pyramid;
 use testkit::compare::save_evidence;
 use testkit::gl::take_turn;
-use testkit::render::{camera, config, open_over};
-use testkit::srtm_tile_pyramid;
+use testkit::render::{config, open_over, SIZE};
+use testkit::{builtin_pyramid, srtm_tile_pyramid};
 
-/// Views at the tile's edges: looking out from inside, looking back in from
-/// outside, along an edge, across a corner, and low over the last ridges.
-fn edge_views(extent: [f64; 2]) -> Vec<(f64, Camera)> {
+/// Views at the edges of the tile whose south-west post is at `origin`
+/// (local metres): looking out from inside, looking back in from outside,
+/// along an edge, across a corner, and low over the last ridges.
+fn edge_views(origin: [f64; 2], extent: [f64; 2]) -> Vec<(f64, Camera)> {
     let [east, north] = extent;
     let mid = north / 2.0;
+    let camera = |x: f64, y: f64, altitude: f64, heading: f64, pitch: f64| {
+        testkit::camera([SIZE.x, SIZE.y], origin[0] + x, origin[1] + y, altitude, heading, pitch)
+    };
     [
         camera(east - 3_000.0, mid, 4_000.0, 90.0, -30.0),
         camera(east + 8_000.0, mid, 4_500.0, 270.0, -10.0),
@@ -38,20 +45,22 @@ fn edge_views(extent: [f64; 2]) -> Vec<(f64, Camera)> {
     .collect()
 }
 
-fn measure(tau_px: f64) -> AccuracyRun {
+/// Measures `edge_views` of the tile at `tile` (origin and extent, local
+/// metres) over `pyramid` at `tau_px`.
+fn measure(pyramid: Arc<Pyramid>, tile: ([f64; 2], [f64; 2]), tau_px: f64) -> AccuracyRun {
     let _turn = take_turn();
     let mut config = config(GlBackend::Egl, GlesVersion::Es3);
     config.scene.lod.tau_px = tau_px;
     // As in render_accuracy: one tile of view distance, so Ulrich's bound
     // sets the rings at this small viewport.
     config.scene.lod.view_distance = 1.0;
-    let pyramid = srtm_tile_pyramid();
     let mut display = open_over(&config, pyramid.clone()).expect("headless EGL display");
     let layout = *NodeSource::layout(&*pyramid);
-    let region = TruthRegion::covering_tiles(&layout, config.scene.lod.grid_size);
+    let views = edge_views(tile.0, tile.1);
+    let positions = views.iter().map(|(_, c)| [c.position.x, c.position.y]);
+    let region = TruthRegion::around_positions(&layout, config.scene.lod.grid_size, positions);
     let mesh = TruthMesh::load(pyramid.as_ref(), region).expect("truth mesh");
     let truth = TruthPass::new(display.context.gl(), &mesh).expect("truth pass");
-    let views = edge_views(layout.extent_m());
     let source = Arc::clone(&pyramid);
     let exact = move |x: f64, y: f64| source.exact_height(x, y);
     measure_flight(&mut display, &truth, &exact, layout.spacing_m, &views).expect("measured")
@@ -59,8 +68,28 @@ fn measure(tau_px: f64) -> AccuracyRun {
 
 #[test]
 fn a_tile_flown_past_its_edge_holds_tau_with_matching_coverage() {
-    for tau_px in [1.0, 4.0] {
-        let run = measure(tau_px);
+    let pyramid = srtm_tile_pyramid();
+    let tile = ([0.0, 0.0], NodeSource::layout(&*pyramid).extent_m());
+    // At tau 4 the coarse tiles along the tile's east and north edges end
+    // at their level's last post before the data's last post (999 is on no
+    // coarser lattice), leaving up to 2^level - 1 posts of data undrawn far
+    // away: 0.037 % of pixels measured, against the issue's 0.01 %.
+    check("edges", pyramid, tile, [1e-4, 5e-4]);
+}
+
+#[test]
+fn a_flight_across_the_seam_with_the_base_holds_tau_with_matching_coverage() {
+    let pyramid = builtin_pyramid();
+    let tile = pyramid.finest_area_m();
+    check("seam", pyramid, tile, [1e-4, 1e-4]);
+}
+
+/// The accuracy tool's promises on the edge views at tau 1 and 4, with the
+/// largest share of pixels allowed a coverage mismatch at each.
+fn check(name: &str, pyramid: Arc<Pyramid>, tile: ([f64; 2], [f64; 2]), mismatch: [f64; 2]) {
+    for (tau_px, mismatch) in [1.0, 4.0].into_iter().zip(mismatch) {
+        let run = measure(pyramid.clone(), tile, tau_px);
+        println!("{name}:");
         let s = &run.summary;
         println!(
             "tau {tau_px}: p99.9 {:.4} px, max {:.3} px, coverage mismatch {:.5} %, holes {}, {} terrain pixels",
@@ -72,7 +101,7 @@ fn a_tile_flown_past_its_edge_holds_tau_with_matching_coverage() {
         );
         for view in &run.views {
             println!(
-                "  view {}: p99.9 {:.4} max {:.3} px, mismatch {:.4} % (lod only {}, truth only {}, no data {}), holes {}, skirt pixels {}, max surface {:.3} px, tiles per level {:?}",
+                "  view {}: p99.9 {:.4} max {:.3} px, mismatch {:.4} % (lod only {}, truth only {}, no data {}), silhouette {}, holes {}, skirt pixels {}, max surface {:.3} px, tiles per level {:?}",
                 view.t,
                 view.errors.p999_px,
                 view.errors.max_px,
@@ -80,6 +109,7 @@ fn a_tile_flown_past_its_edge_holds_tau_with_matching_coverage() {
                 view.lod_only,
                 view.truth_only,
                 view.no_data,
+                view.silhouette,
                 view.holes,
                 view.skirt_pixels,
                 view.max_surface_px,
@@ -87,7 +117,7 @@ fn a_tile_flown_past_its_edge_holds_tau_with_matching_coverage() {
             );
         }
         if let Some(worst) = &run.worst {
-            let name = format!("edges-tau{tau_px}-view{}", worst.index);
+            let name = format!("{name}-tau{tau_px}-view{}", worst.index);
             println!("  worst view: {}", save_evidence(&worst.heat_map, &format!("{name}-heat")));
             println!("  its picture: {}", save_evidence(&worst.picture, &format!("{name}-lod")));
         }
@@ -96,13 +126,10 @@ fn a_tile_flown_past_its_edge_holds_tau_with_matching_coverage() {
         // At every pixel off skirts: no curtain, no shelf (the issue measured
         // 521 px here before posts without data stopped being drawn).
         assert!(run.max_surface_px <= tau_px, "tau {tau_px}: max {} px", run.max_surface_px);
-        // Measured at this 256x144 size: 0.1 % to 0.35 % of a view's pixels,
-        // one-pixel steps along the edge line where the two renders' edges,
-        // equal within the sub-pixel error, fall on either side of a pixel
-        // centre; and at most one hole pixel. The issue's 0.01 % is not met
-        // here (see the issue note); this bounds it where render_accuracy does.
+        // Terrain drawn where the other render has no surface (silhouettes
+        // moved by the surface's error are measured as error above instead).
         assert!(
-            run.coverage_mismatch < 0.005,
+            run.coverage_mismatch <= mismatch,
             "tau {tau_px}: {:.4} % of pixels show terrain in one render only",
             run.coverage_mismatch * 100.0
         );

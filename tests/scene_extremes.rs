@@ -11,7 +11,7 @@ use ridgeline::node::NodeSource;
 use ridgeline::pyramid::{self, BuildOptions, Pyramid, Silent};
 use ridgeline::scene::{SceneConfig, TerrainSummary};
 use std::sync::Arc;
-use testkit::scene::{camera, fly, null_backend, pipeline_over, worst_edge_disagreement};
+use testkit::scene::{fly, null_backend, pipeline_over, worst_edge_disagreement, VIEWPORT};
 
 const SIDE: u32 = 513;
 const SPACING: f64 = 30.0;
@@ -64,7 +64,8 @@ fn extreme_terrain_draws_without_cracks() {
         let (mut worst, mut draw_calls): (f64, u64) = (0.0, 0);
         for k in 0..12 {
             let t = k as f64 / 11.0;
-            let cam = camera(
+            let cam = testkit::camera(
+                VIEWPORT,
                 0.1 * extent + 0.7 * extent * t,
                 0.2 * extent + 0.5 * extent * t,
                 top as f64 + 300.0,

@@ -28,8 +28,9 @@ pub fn heat_map(
     RgbaImage::from_fn(lod.size.x, lod.size.y, |x, y| {
         let k = y as usize * lod.size.x as usize + x as usize;
         let colour = match (lod.point(k).is_some(), truth.point(k).is_some()) {
-            (true, true) => ramp(errors_px[k] as f64 / tau_px),
             (false, false) => HEAT_SKY,
+            // Both, or a silhouette pixel whose error was measured.
+            _ if !errors_px[k].is_nan() => ramp(errors_px[k] as f64 / tau_px),
             _ => HEAT_MISMATCH,
         };
         Rgba(colour)

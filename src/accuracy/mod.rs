@@ -19,6 +19,14 @@
 //! rays a millimetre of height moves the hit point kilometres, which is no
 //! error of the surface.
 //!
+//! **Coverage.** Where only one image shows terrain, the pixel is a
+//! *silhouette* when the other surface exists at the ground point shown (a
+//! ridge drawn a little higher passes the other ray over it): its error is
+//! measured there as above, so a silhouette moved by more than tau counts
+//! against the bound. It is a *coverage mismatch* when the other surface has
+//! nothing there: terrain drawn past the data's edge, or data not drawn.
+//! Coverage mismatches are reported as a share of all pixels.
+//!
 //! | file | owns |
 //! |---|---|
 //! | `positions` | [`PositionImage`]: a camera-relative surface point per pixel, read back from the GPU |

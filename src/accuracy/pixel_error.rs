@@ -1,6 +1,14 @@
 //! [`measure_view`]: the per-pixel screen-space geometric error of one view,
-//! and where the LOD and full-resolution images disagree on terrain versus
-//! sky. The module doc of [`crate::accuracy`] says what is measured and why.
+//! and where the LOD and full-resolution images disagree on coverage. The
+//! module doc of [`crate::accuracy`] says what is measured and why.
+//!
+//! A pixel with terrain in one image only is one of two things:
+//! - a *silhouette* pixel: the other surface exists at that ground point but
+//!   lies lower there, so the ray passes over it (a ridge against the sky
+//!   drawn a pixel higher). That is the surface's error, and it is measured
+//!   at the pixel like any other;
+//! - a *coverage mismatch*: one render draws terrain over ground the other
+//!   has no surface for (past the data's edge, or a hole).
 
 use glam::{DMat4, DVec2, DVec3, DVec4, Vec3};
 use rayon::prelude::*;
@@ -93,9 +101,15 @@ pub struct ViewErrors {
     pub errors_px: Vec<f32>,
     /// Pixels where both show terrain (and the error was measured).
     pub terrain_pixels: usize,
-    /// Terrain in the LOD image, sky in the truth, and the reverse.
+    /// Pixels with terrain in one image only where the other surface exists
+    /// at the ground point shown: a silhouette moved by the surface's error,
+    /// which is measured there (in `errors_px`).
+    pub silhouette: usize,
+    /// Terrain in the LOD image only, over ground without data: a coverage
+    /// mismatch.
     pub lod_only: usize,
-    /// Terrain pixels in the truth image that are sky in the LOD image.
+    /// Terrain in the truth image only, over ground no drawn tile covers
+    /// with data: a coverage mismatch.
     pub truth_only: usize,
     /// Terrain pixels whose full-resolution ground point no drawn tile
     /// covers (a hole in the LOD surface; their error is the LOD side's).
@@ -118,6 +132,7 @@ pub struct ViewErrors {
 #[derive(Clone, Copy, Default)]
 struct Counts {
     terrain: usize,
+    silhouette: usize,
     lod_only: usize,
     truth_only: usize,
     holes: usize,
@@ -126,11 +141,25 @@ struct Counts {
     max_surface: f64,
 }
 
+impl Counts {
+    /// A silhouette pixel with error `px`, written to its `error`.
+    fn silhouette(&mut self, error: &mut f32, px: f64, skirt: bool) {
+        self.silhouette += 1;
+        *error = px as f32;
+        if skirt {
+            self.skirt += 1;
+        } else {
+            self.max_surface = self.max_surface.max(px);
+        }
+    }
+}
+
 impl std::ops::Add for Counts {
     type Output = Counts;
     fn add(self, o: Counts) -> Counts {
         Counts {
             terrain: self.terrain + o.terrain,
+            silhouette: self.silhouette + o.silhouette,
             lod_only: self.lod_only + o.lod_only,
             truth_only: self.truth_only + o.truth_only,
             holes: self.holes + o.holes,
@@ -192,10 +221,18 @@ pub fn measure_view(
                         }
                     }
                     (Some(p), None) => {
-                        counts.lod_only += 1;
-                        *mirror = pixel.at_lod_point(p).mirror_m;
+                        let lod_side = pixel.at_lod_point(p);
+                        *mirror = lod_side.mirror_m;
+                        if lod_side.over_data {
+                            counts.silhouette(error, lod_side.error_px, lod_side.skirt);
+                        } else {
+                            counts.lod_only += 1;
+                        }
                     }
-                    (None, Some(_)) => counts.truth_only += 1,
+                    (None, Some(t)) => match pixel.at_truth_point(t) {
+                        TruthSide::Error(px) => counts.silhouette(error, px, false),
+                        TruthSide::Hole | TruthSide::NoData => counts.truth_only += 1,
+                    },
                     (None, None) => {}
                 }
             }
@@ -203,6 +240,7 @@ pub fn measure_view(
         })
         .reduce(Counts::default, |a, b| a + b);
     out.terrain_pixels = counts.terrain;
+    out.silhouette = counts.silhouette;
     out.lod_only = counts.lod_only;
     out.truth_only = counts.truth_only;
     out.holes = counts.holes;
@@ -227,6 +265,8 @@ struct LodSide {
     mirror_m: f32,
     /// The pixel shows a skirt.
     skirt: bool,
+    /// The full-resolution surface has data at the ground point.
+    over_data: bool,
 }
 
 impl Pixel<'_> {
@@ -251,7 +291,7 @@ impl Pixel<'_> {
         let truth = (self.exact)(ground.x, ground.y).map(|h| self.geometry.drawn_truth(ground, h));
         let error_px = truth.map_or(0.0, |h| self.geometry.projected_vertical(p, h - shown));
         let mirror_m = mirror.map_or(f64::NAN, |m| (m - drawn).abs()) as f32;
-        LodSide { error_px, mirror_m, skirt }
+        LodSide { error_px, mirror_m, skirt, over_data: truth.is_some() }
     }
 
     /// At the point the full-resolution mesh shows: the LOD surface there
@@ -324,21 +364,29 @@ mod tests {
         assert!((geometry.projected_vertical(behind, 10.0) - expected).abs() < 1e-9);
     }
 
-    /// One pixel where the LOD drew 10 m above a flat sea at 2 km, and the
-    /// truth shows the sea there: the LOD side's error is Ulrich's; with no
-    /// tile under the truth's point that pixel is also a hole. A pixel of
-    /// terrain in one image only is a coverage mismatch.
+    /// Pixel 0: the LOD drew 10 m above a flat sea at 2 km, and the truth
+    /// shows the sea there: the LOD side's error is Ulrich's; with no tile
+    /// under the truth's point that pixel is also a hole. Pixel 1: the LOD
+    /// shows terrain 5 m above the sea at 2.2 km where the truth's ray
+    /// passed over it: a silhouette, measured. Pixel 2: the LOD shows
+    /// terrain past the data's edge (y beyond 7500 m): a coverage mismatch.
+    /// Pixel 3: the truth shows terrain no tile covers: a coverage mismatch.
     #[test]
     fn errors_holes_and_mismatches_of_synthetic_images() {
         let (camera, geometry) = geometry();
-        let image = |points: [Option<[f32; 3]>; 2]| PositionImage {
-            size: UVec2::new(2, 1),
+        let image = |points: [Option<[f32; 3]>; 4]| PositionImage {
+            size: UVec2::new(4, 1),
             texels: points.iter().map(|p| p.map_or([0.0; 4], |[x, y, z]| [x, y, z, 1.0])).collect(),
         };
-        let lod = image([Some([0.0, 2000.0, -990.0]), Some([0.0, 3000.0, -1000.0])]);
-        let truth = image([Some([0.0, 2000.0, -1000.0]), None]);
+        let lod = image([
+            Some([0.0, 2000.0, -990.0]),
+            Some([0.0, 2200.0, -995.0]),
+            Some([0.0, 3000.0, -1000.0]),
+            None,
+        ]);
+        let truth = image([Some([0.0, 2000.0, -1000.0]), None, None, Some([0.0, 2000.0, -1000.0])]);
         let surface = LodSurface::new(&DrawList::default(), 32, [90.0, 90.0], DVec2::ZERO);
-        let sea = |_: f64, _: f64| Some(0.0f32);
+        let sea = |_: f64, y: f64| (y < 7500.0).then_some(0.0f32);
         let mut out = ViewErrors::default();
         measure_view(&geometry, &lod, &truth, &surface, &[], &sea, &mut out);
         let expected = 10.0 * camera.perspective_scale() / 2000.0;
@@ -347,7 +395,10 @@ mod tests {
             "{} vs {expected}",
             out.errors_px[0]
         );
-        assert!(out.errors_px[1].is_nan());
-        assert_eq!((out.terrain_pixels, out.lod_only, out.truth_only, out.holes), (1, 1, 0, 1));
+        let silhouette = 5.0 * camera.perspective_scale() / 2200.0;
+        assert!((out.errors_px[1] as f64 - silhouette).abs() < 1e-3, "{}", out.errors_px[1]);
+        assert!(out.errors_px[2].is_nan() && out.errors_px[3].is_nan());
+        let counts = (out.terrain_pixels, out.silhouette, out.lod_only, out.truth_only, out.holes);
+        assert_eq!(counts, (1, 1, 1, 1, 1));
     }
 }

@@ -55,15 +55,18 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
     let grid_size = config.scene.lod.grid_size;
     let mut display = DisplayParts::open(&config, Arc::clone(&source), summary)
         .context("opening a headless display")?;
-    let region = TruthRegion::covering_tiles(&layout, grid_size);
-    let mesh = TruthMesh::load(source.as_ref(), region)
-        .with_context(|| format!("{dataset_name}: the full-resolution mesh"))?;
-    let truth = TruthPass::new(display.context.gl(), &mesh)
-        .context("uploading the full-resolution mesh")?;
     let views: Vec<(f64, Camera)> = path
         .frame_times(args.views.max(1))
         .map(|t| (t, path.sample(t).camera(args.view.fov, [args.view.size.x, args.view.size.y])))
         .collect();
+    // The full-resolution mesh around the flight: all of a single tile, a
+    // window of a layered pyramid's level 0 (which spans its whole base).
+    let positions = views.iter().map(|(_, c)| [c.position.x, c.position.y]);
+    let region = TruthRegion::around_positions(&layout, grid_size, positions);
+    let mesh = TruthMesh::load(source.as_ref(), region)
+        .with_context(|| format!("{dataset_name}: the full-resolution mesh"))?;
+    let truth = TruthPass::new(display.context.gl(), &mesh)
+        .context("uploading the full-resolution mesh")?;
     let exact = |x: f64, y: f64| pyramid.exact_height(x, y);
     let run = measure_flight(&mut display, &truth, &exact, layout.spacing_m, &views)
         .context("measuring the views")?;
@@ -184,9 +187,11 @@ fn print_tables(run: &AccuracyRun) -> Result<()> {
     )?;
     writeln!(
         out,
-        "  coverage mismatch {:.4}% of pixels, {} holes",
+        "  coverage mismatch {:.4}% of pixels, {} holes; {} silhouette pixels (terrain in one \
+         render only, over ground both cover) measured as error",
         100.0 * run.coverage_mismatch,
-        run.holes
+        run.holes,
+        run.views.iter().map(|v| v.silhouette).sum::<usize>()
     )?;
     let ratio =
         mean(run, |v| v.triangles_truth as f64) / mean(run, |v| v.triangles_lod as f64).max(1.0);

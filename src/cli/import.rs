@@ -1,19 +1,22 @@
-//! `ridgeline import FILES... --out cache/NAME`: reads the elevation files into
-//! one grid, builds the node pyramid on every core with a progress bar, and
-//! writes `cache/NAME/pyramid.rlp` atomically.
+//! `ridgeline import FILES... --out cache/NAME`: reads the elevation files
+//! into layers (files of one spacing form one layer, a mosaic), builds one
+//! node pyramid over all of them on every core with a progress bar (finer
+//! layers win, see `ridgeline::pyramid::layers`), and writes
+//! `cache/NAME/pyramid.rlp` atomically.
 
 use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use ridgeline::dem::ElevationGrid;
 use ridgeline::pyramid::{self, BuildOptions, FILE_NAME, MAX_SYNTHETIC_SIZE};
 
 use super::progress::Bar;
 
 #[derive(clap::Args)]
 pub struct ImportArgs {
-    /// Elevation files (GeoTIFF, SRTM .hgt, DTED, ESRI ASCII grid), mosaicked into one grid.
+    /// Elevation files (GeoTIFF, SRTM .hgt, DTED, ESRI ASCII grid, netCDF-3):
+    /// files of one spacing are mosaicked into a layer, layers of different
+    /// spacings are stacked, finer over coarser.
     #[arg(required_unless_present = "synthetic")]
     pub files: Vec<PathBuf>,
     /// Cache directory to build, for example cache/alps; an existing pyramid
@@ -34,35 +37,34 @@ pub struct ImportArgs {
 
 pub fn run(args: &ImportArgs) -> Result<()> {
     let started = Instant::now();
-    let grid = match args.synthetic {
-        Some(size) => pyramid::synthetic_grid(size).with_context(|| {
+    let layers = match args.synthetic {
+        Some(size) => vec![pyramid::synthetic_grid(size).with_context(|| {
             format!("--synthetic {size}: the size must be 1..={MAX_SYNTHETIC_SIZE}")
-        })?,
-        None => read_dem_files(&args.files)?,
+        })?],
+        None => ridgeline::dem::import_layers(&args.files)?,
     };
     let options = BuildOptions { node_size: args.node_size, border: args.border };
     let bar = Bar::new();
-    let built = pyramid::build(&grid, &options, &bar).context("building the node pyramid")?;
-    let input_bytes = grid.heights.len() * 4;
-    drop(grid);
+    let built =
+        pyramid::build_layers(&layers, &options, &bar).context("building the node pyramid")?;
+    let input_bytes: usize = layers.iter().map(|l| l.heights.len() * 4).sum();
+    drop(layers);
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("{}: cannot create the cache", args.out.display()))?;
     let path = args.out.join(FILE_NAME);
     pyramid::write_atomic(&built, &path, &bar)?;
     bar.finish();
     let layout = built.layout();
+    let present: u64 = built.info.levels.iter().map(|l| l.present).sum();
     println!(
-        "ridgeline import: wrote {} ({} levels, {} nodes, {:.1} MB of heights in) in {:.1} s",
+        "ridgeline import: wrote {} ({} layers, {} levels, {} of {} nodes stored, {:.1} MB of heights in) in {:.1} s",
         path.display(),
+        built.info.layers,
         layout.levels,
+        present,
         layout.node_count(),
         input_bytes as f64 / 1e6,
         started.elapsed().as_secs_f64()
     );
     Ok(())
-}
-
-/// Reads the elevation files into one grid (mosaicked, voids filled).
-fn read_dem_files(files: &[PathBuf]) -> Result<ElevationGrid> {
-    Ok(ridgeline::dem::import_files(files)?)
 }

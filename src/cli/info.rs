@@ -26,6 +26,10 @@ struct Summary<'a> {
     node_size: u32,
     border: u32,
     node_count: u64,
+    /// Nodes stored; the others are absent (no data of their resolution).
+    nodes_present: u64,
+    /// Layers (files of one spacing) the pyramid was built from.
+    layers: u32,
     /// Level-0 samples, east and north.
     samples: [u32; 2],
     spacing_m: [f64; 2],
@@ -35,7 +39,14 @@ struct Summary<'a> {
     delta_per_level: Vec<f32>,
     height_min: f32,
     height_max: f32,
+    /// Void posts interpolated from their neighbours (small voids).
     voids_filled: u64,
+    /// The same count under the name.
+    posts_interpolated: u64,
+    /// Void posts of a layer filled from a coarser layer (large voids).
+    posts_from_layer: u64,
+    /// Void posts no layer covers: no data, not drawn.
+    posts_no_data: u64,
     level_details: &'a [LevelSummary],
 }
 
@@ -79,6 +90,8 @@ fn summarise(pyramid: &Pyramid) -> Summary<'_> {
         node_size: layout.node_size,
         border: layout.border,
         node_count: layout.node_count(),
+        nodes_present: info.levels.iter().map(|l| l.present).sum(),
+        layers: info.layers,
         samples: layout.posts,
         spacing_m: layout.spacing_m,
         extent: Extent { east_m: extent(0), north_m: extent(1) },
@@ -95,6 +108,9 @@ fn summarise(pyramid: &Pyramid) -> Summary<'_> {
         height_min: info.stats.height_min,
         height_max: info.stats.height_max,
         voids_filled: info.stats.voids_filled,
+        posts_interpolated: info.stats.voids_filled,
+        posts_from_layer: info.stats.posts_from_layer,
+        posts_no_data: info.stats.posts_no_data,
         level_details: &info.levels,
     }
 }
@@ -129,25 +145,30 @@ fn table(s: &Summary) -> String {
     line!(out, "georef    {}", describe_georef(&s.georef));
     line!(
         out,
-        "nodes     {} cells + {} border posts, {} levels, {} nodes",
+        "nodes     {} cells + {} border posts, {} levels, {} of {} nodes stored, {} layers",
         s.node_size,
         s.border,
         s.levels,
-        s.node_count
+        s.nodes_present,
+        s.node_count,
+        s.layers
     );
     line!(
         out,
-        "heights   {:.1} .. {:.1} m, {} voids filled",
+        "heights   {:.1} .. {:.1} m; void posts: {} interpolated, {} from a coarser layer, {} no data",
         s.height_min,
         s.height_max,
-        s.voids_filled
+        s.posts_interpolated,
+        s.posts_from_layer,
+        s.posts_no_data
     );
-    line!(out, "level  nodes        delta max (m)  heights (m)");
+    line!(out, "level  nodes        stored  delta max (m)  heights (m)");
     for (lod, level) in s.level_details.iter().enumerate() {
         let nodes = format!("{} x {}", level.nodes[0], level.nodes[1]);
         line!(
             out,
-            "{lod:>5}  {nodes:<11}  {:>13.3}  {:.1} .. {:.1}",
+            "{lod:>5}  {nodes:<11}  {:>6}  {:>13.3}  {:.1} .. {:.1}",
+            level.present,
             level.delta_max,
             level.height_min,
             level.height_max

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use anyhow::Result;
 use glam::UVec2;
-use ridgeline::flight::{builtin_approach, FlightPath};
+use ridgeline::flight::{default_flight, FlightPath};
 use ridgeline::node::NodeSource as _;
 use ridgeline::pyramid::Pyramid;
 
@@ -103,9 +103,6 @@ fn flight_path(path: Option<&Path>, pyramid: &Pyramid) -> Result<FlightPath> {
     let layout = *pyramid.layout();
     match path {
         Some(file) => Ok(FlightPath::read(file, &pyramid.info().georef, layout.posts)?),
-        None => {
-            let height = |x: f64, y: f64| pyramid.exact_height(x, y).unwrap_or(0.0);
-            Ok(builtin_approach(layout.extent_m(), &height))
-        }
+        None => Ok(default_flight(pyramid)),
     }
 }

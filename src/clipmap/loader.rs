@@ -274,7 +274,9 @@ impl Loader {
                 }
             }
             NodeError::Corrupt { .. } => Verdict::Damaged,
-            NodeError::OutOfRange { .. } | NodeError::OutsideData { .. } => Verdict::Refused,
+            NodeError::OutOfRange { .. }
+            | NodeError::OutsideData { .. }
+            | NodeError::Absent { .. } => Verdict::Refused,
         };
         match verdict {
             Verdict::RetryAt { frame, failures } => {

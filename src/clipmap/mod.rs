@@ -328,8 +328,12 @@ impl Clipmap {
             view.set_ground(ground);
             view.recenter(&self.layout);
             let wanted = &mut self.wanted;
+            let source = &self.source;
             view.collect_wanted(&self.layout, |id, distance| {
-                wanted.entry(id).and_modify(|d| *d = d.min(distance)).or_insert(distance);
+                // An absent node means no finer data here: its ancestor serves.
+                if source.has_node(id) {
+                    wanted.entry(id).and_modify(|d| *d = d.min(distance)).or_insert(distance);
+                }
             });
         }
     }
@@ -340,7 +344,13 @@ impl Clipmap {
         let p = self.views[view.0].position();
         let [ex, ey] = self.layout.extent_m();
         let (x, y) = (p.x.clamp(0.0, ex), p.y.clamp(0.0, ey));
-        self.height_at(view, DVec2::new(x, y)).map_or(0.0, |s| s.height_m as f64)
+        let height = self.height_at(view, DVec2::new(x, y)).map_or(0.0, |s| s.height_m as f64);
+        // No data under the view: sea level, as far as distances go.
+        if height.is_finite() {
+            height
+        } else {
+            0.0
+        }
     }
 
     /// Step 2: marks resident wanted nodes used, releases the rest, lists
@@ -446,6 +456,7 @@ impl Clipmap {
                      {fallback}"
                 );
             }
+            Verdict::Refused if matches!(error, NodeError::Absent { .. }) => {}
             Verdict::Refused => eprintln!("ridgeline: node {id:?}: {error}; {fallback}"),
             Verdict::RetryAt { .. } => {}
         }

@@ -38,19 +38,20 @@ pub use raw::RawGrid;
 /// A regular grid of heights in metres with its georeference.
 ///
 /// `heights[j * width + i]` is sample `(i, j)`; row 0 is the southern row
-/// (see [`crate::geo`] for the conventions). Every height is finite: voids
-/// have been filled (and counted in `voids_filled`) before a grid exists.
+/// (see [`crate::geo`] for the conventions). Every height is finite or NaN:
+/// small voids have been interpolated (and counted in `voids_filled`), NaN
+/// marks a post of a large void, which has no data (see [`voids`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ElevationGrid {
     /// Posts per row, west to east.
     pub width: u32,
     /// Rows, south to north.
     pub height: u32,
-    /// `width * height` heights in metres, row 0 southern.
+    /// `width * height` heights in metres, row 0 southern; NaN: no data.
     pub heights: Vec<f32>,
     /// Where post (0, 0) is and how far apart the posts are.
     pub georef: GeoRef,
-    /// Samples that were voids in the sources and were filled.
+    /// Samples that were voids in the sources and were interpolated.
     pub voids_filled: u64,
 }
 
@@ -73,17 +74,56 @@ pub fn read_raw(path: &Path) -> Result<RawGrid, ImportError> {
     }
 }
 
-/// Imports one file and fills its voids.
+/// Imports one file and fills its small voids (large ones stay NaN, see
+/// [`voids`]).
 pub fn import_file(path: &Path) -> Result<ElevationGrid, ImportError> {
-    voids::fill(read_raw(path)?)
+    voids::fill_small(read_raw(path)?)
 }
 
-/// Imports several files (any mix of formats) as one mosaic and fills its
-/// voids, including the gaps between files. See [`mosaic`] for the rules.
+/// Imports several files (any mix of formats) of one lattice as one mosaic
+/// and fills its small voids, including small gaps between files. See
+/// [`mosaic`] for the rules.
 pub fn import_files(paths: &[PathBuf]) -> Result<ElevationGrid, ImportError> {
     if paths.is_empty() {
         return Err(ImportError::new(Path::new(""), Problem::NoInput));
     }
     let grids = paths.iter().map(|p| read_raw(p)).collect::<Result<Vec<_>, _>>()?;
-    voids::fill(mosaic::mosaic(grids)?)
+    voids::fill_small(mosaic::mosaic(grids)?)
+}
+
+/// Imports files of different resolutions as layers for
+/// [`crate::pyramid::build_layers`]: files of one spacing form one layer
+/// (a mosaic, see [`mosaic`]), small voids are filled per layer. All files
+/// must share one coordinate system; the error names the first file that
+/// does not. Layers come back in the order their first file was given.
+pub fn import_layers(paths: &[PathBuf]) -> Result<Vec<ElevationGrid>, ImportError> {
+    if paths.is_empty() {
+        return Err(ImportError::new(Path::new(""), Problem::NoInput));
+    }
+    let mut groups: Vec<Vec<RawGrid>> = Vec::new();
+    for path in paths {
+        let grid = read_raw(path)?;
+        if let Some(first) = groups.first().and_then(|g| g.first()) {
+            if first.georef.crs != grid.georef.crs {
+                let why = format!(
+                    "its coordinate system {:?} differs from {:?} of {}; layers must share one \
+                     (reproject one of them)",
+                    grid.georef.crs,
+                    first.georef.crs,
+                    first.path.display()
+                );
+                return Err(ImportError::new(path, Problem::Mosaic(why)));
+            }
+        }
+        let same_spacing = |g: &Vec<RawGrid>| {
+            let s = g[0].georef.spacing;
+            (0..2)
+                .all(|a| (grid.georef.spacing[a] - s[a]).abs() / s[a] <= mosaic::SPACING_TOLERANCE)
+        };
+        match groups.iter_mut().find(|g| same_spacing(g)) {
+            Some(group) => group.push(grid),
+            None => groups.push(vec![grid]),
+        }
+    }
+    groups.into_iter().map(|g| voids::fill_small(mosaic::mosaic(g)?)).collect()
 }

@@ -19,10 +19,135 @@
 //! always suffice). A grid with no valid sample at all is an error.
 //!
 //! Cost: O(n + v log v) for n samples and v voids, with 24 bytes per void.
+//!
+//! # Small and large voids
+//! [`fill`] fills every void. The importers use [`fill_small`], which fills
+//! only *small* voids: a void (4-connected region of void posts) every post
+//! of which lies within [`SMALL_VOID_RADIUS`] posts (chessboard distance)
+//! of a valid post, so at most 8 posts across. Larger voids, such as the
+//! missing rows and columns of a partial SRTM tile, are left NaN: no data,
+//! never drawn, unless a coarser layer covers them in a layered pyramid
+//! (see [`crate::pyramid::layers`]). A terrain-awareness display must not
+//! show terrain it invented.
+
+use std::collections::VecDeque;
 
 use super::error::{ImportError, Problem};
 use super::raw::RawGrid;
 use super::ElevationGrid;
+
+/// A void whose every post lies within this many posts of valid data is
+/// small and interpolated; larger voids stay no-data.
+pub const SMALL_VOID_RADIUS: u32 = 4;
+
+/// Fills the small voids of `raw` (see the module notes) and leaves the
+/// large ones NaN; `voids_filled` counts the filled posts.
+pub fn fill_small(mut raw: RawGrid) -> Result<ElevationGrid, ImportError> {
+    raw.debug_check();
+    if raw.void_count() == raw.heights.len() as u64 {
+        return Err(ImportError::new(&raw.path, Problem::AllVoids));
+    }
+    let large = large_voids(&raw.heights, raw.width as usize, raw.height as usize);
+    // Large-void posts are set aside (infinite, so no pass visits them; no
+    // small void touches them, so none reads them) and put back afterwards.
+    for &k in &large {
+        raw.heights[k] = f32::INFINITY;
+    }
+    let small = raw.void_count();
+    let (width, height) = (raw.width as usize, raw.height as usize);
+    let mut passes = 0;
+    while fill_pass(&mut raw.heights, width, height) > 0 {
+        passes += 1;
+        if passes >= 2 {
+            break;
+        }
+    }
+    for &k in &large {
+        raw.heights[k] = f32::NAN;
+    }
+    let RawGrid { width, height, heights, georef, .. } = raw;
+    Ok(ElevationGrid { width, height, heights, georef, voids_filled: small })
+}
+
+/// The posts of every large void: chessboard distance to the nearest valid
+/// post above [`SMALL_VOID_RADIUS`] somewhere in its 4-connected region.
+fn large_voids(heights: &[f32], width: usize, height: usize) -> Vec<usize> {
+    let far = u32::MAX / 2;
+    let mut distance: Vec<u32> = heights.iter().map(|h| if h.is_nan() { far } else { 0 }).collect();
+    for j in 0..height {
+        for i in 0..width {
+            let k = j * width + i;
+            let mut d = distance[k];
+            if i > 0 {
+                d = d.min(distance[k - 1] + 1);
+            }
+            if j > 0 {
+                d = d.min(distance[k - width] + 1);
+                if i > 0 {
+                    d = d.min(distance[k - width - 1] + 1);
+                }
+                if i + 1 < width {
+                    d = d.min(distance[k - width + 1] + 1);
+                }
+            }
+            distance[k] = d;
+        }
+    }
+    for j in (0..height).rev() {
+        for i in (0..width).rev() {
+            let k = j * width + i;
+            let mut d = distance[k];
+            if i + 1 < width {
+                d = d.min(distance[k + 1] + 1);
+            }
+            if j + 1 < height {
+                d = d.min(distance[k + width] + 1);
+                if i + 1 < width {
+                    d = d.min(distance[k + width + 1] + 1);
+                }
+                if i > 0 {
+                    d = d.min(distance[k + width - 1] + 1);
+                }
+            }
+            distance[k] = d;
+        }
+    }
+    // Regions holding a post too far from data are large, whole.
+    let mut seen = vec![false; heights.len()];
+    let mut large = Vec::new();
+    let mut queue = VecDeque::new();
+    for start in 0..heights.len() {
+        if seen[start] || distance[start] <= SMALL_VOID_RADIUS {
+            continue;
+        }
+        seen[start] = true;
+        queue.push_back(start);
+        while let Some(k) = queue.pop_front() {
+            large.push(k);
+            let (i, j) = (k % width, k / width);
+            let mut visit = |n: usize| {
+                if !seen[n] && heights[n].is_nan() {
+                    seen[n] = true;
+                    queue.push_back(n);
+                }
+            };
+            if i > 0 {
+                visit(k - 1);
+            }
+            if i + 1 < width {
+                visit(k + 1);
+            }
+            if j > 0 {
+                visit(k - width);
+            }
+            if j + 1 < height {
+                visit(k + width);
+            }
+        }
+    }
+    large.sort_unstable();
+    large
+}
 
 /// Fills every void of `raw` and returns the finished grid.
 pub fn fill(mut raw: RawGrid) -> Result<ElevationGrid, ImportError> {

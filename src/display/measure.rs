@@ -29,12 +29,16 @@ pub struct ViewRow {
     /// Percentiles of this view's per-pixel error, pixels.
     #[serde(flatten)]
     pub errors: ErrorSummary,
-    /// Share of all pixels where one image shows terrain and the other sky,
-    /// or the LOD has no data at the ground point the truth shows.
+    /// Share of all pixels where one image shows terrain over ground the
+    /// other has no surface for (see [`crate::accuracy`]'s coverage notes).
     pub coverage_mismatch: f64,
-    /// Of the mismatch: pixels with terrain in the LOD image only.
+    /// Pixels with terrain in one image only over ground both surfaces
+    /// cover: silhouettes moved by the surface's error, measured there.
+    pub silhouette: usize,
+    /// Of the mismatch: terrain in the LOD image only, over ground without data.
     pub lod_only: usize,
-    /// Of the mismatch: pixels with terrain in the truth image only.
+    /// Of the mismatch: terrain in the truth image only, over ground no drawn
+    /// tile covers with data.
     pub truth_only: usize,
     /// Of the mismatch: terrain pixels whose truth ground point a drawn tile
     /// covers without data.
@@ -82,7 +86,8 @@ pub struct AccuracyRun {
     pub tau_px: f64,
     /// Over every terrain pixel of every view.
     pub summary: ErrorSummary,
-    /// Share of all pixels of all views.
+    /// Share of all pixels of all views where one image shows terrain over
+    /// ground the other has no surface for.
     pub coverage_mismatch: f64,
     /// Terrain pixels of all views whose ground point no LOD tile covers.
     pub holes: usize,
@@ -218,6 +223,7 @@ fn measure_one(
         errors: ErrorSummary::of(&mut view_errors),
         coverage_mismatch: (errors.lod_only + errors.truth_only + errors.no_data) as f64
             / errors.errors_px.len().max(1) as f64,
+        silhouette: errors.silhouette,
         lod_only: errors.lod_only,
         truth_only: errors.truth_only,
         no_data: errors.no_data,

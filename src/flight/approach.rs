@@ -75,9 +75,22 @@ const GRAVITY: f64 = 9.80665;
 /// terrain height at local `(x, y)` is `height_at(x, y)` (non-finite heights
 /// are ignored). Deterministic: the same inputs give the same path.
 pub fn builtin_approach(extent_m: [f64; 2], height_at: &dyn Fn(f64, f64) -> f32) -> FlightPath {
+    builtin_approach_over([0.0, 0.0], extent_m, height_at)
+}
+
+/// [`builtin_approach`] over the rectangle `extent_m` metres wide whose
+/// south-west corner is at local `origin_m`: a layered pyramid's finest
+/// layer, where the best data are, inside a larger base.
+pub fn builtin_approach_over(
+    origin_m: [f64; 2],
+    extent_m: [f64; 2],
+    height_at: &dyn Fn(f64, f64) -> f32,
+) -> FlightPath {
     let extent =
         DVec2::from(extent_m.map(|e| if e.is_finite() { e.clamp(0.0, MAX_EXTENT_M) } else { 0.0 }));
-    let track = Track::new(extent);
+    let origin =
+        DVec2::from(origin_m.map(|o| if o.is_finite() { o.clamp(0.0, MAX_EXTENT_M) } else { 0.0 }));
+    let track = Track::new(origin, extent);
     let speed = (track.length / APPROACH_SECONDS).min(MAX_GROUND_SPEED);
     let rows = (APPROACH_SECONDS / ROW_INTERVAL_S).round() as usize + 1;
     let times: Vec<f64> = (0..rows).map(|k| k as f64 * ROW_INTERVAL_S).collect();
@@ -101,6 +114,15 @@ pub fn builtin_approach(extent_m: [f64; 2], height_at: &dyn Fn(f64, f64) -> f32)
         .expect("the built-in approach keeps every value inside the path rules")
 }
 
+/// The flight `ridgeline fly` flies when given no path: the built-in approach
+/// over `pyramid`'s finest layer, where the best data are, shaped to the
+/// best data's heights (no data counts as 0 m).
+pub fn default_flight(pyramid: &crate::pyramid::Pyramid) -> FlightPath {
+    let height = |x: f64, y: f64| pyramid.exact_height(x, y).unwrap_or(0.0);
+    let (origin, extent) = pyramid.finest_area_m();
+    builtin_approach_over(origin, extent, &height)
+}
+
 /// [`builtin_approach`] as CSV text with a comment describing it, to copy and edit.
 pub fn builtin_approach_csv(extent_m: [f64; 2], height_at: &dyn Fn(f64, f64) -> f32) -> String {
     let path = builtin_approach(extent_m, height_at);
@@ -122,8 +144,8 @@ struct Track {
 }
 
 impl Track {
-    fn new(extent: DVec2) -> Self {
-        let control = TRACK.map(|fraction| DVec2::from(fraction) * extent);
+    fn new(origin: DVec2, extent: DVec2) -> Self {
+        let control = TRACK.map(|fraction| origin + DVec2::from(fraction) * extent);
         let mut track = Track { control, cumulative: vec![0.0], length: 0.0 };
         for i in 1..=TRACK_PIECES {
             let step = track.point(i as f64 / TRACK_PIECES as f64)

@@ -19,7 +19,7 @@ pub mod geographic;
 pub mod path;
 pub mod pose;
 
-pub use approach::{builtin_approach, builtin_approach_csv};
+pub use approach::{builtin_approach, builtin_approach_csv, builtin_approach_over, default_flight};
 pub use columns::{Column, ValueProblem};
 pub use csv::{PathError, PathProblem};
 pub use geographic::{geographic_to_local, local_to_geographic, Equirectangular, LatLon};

@@ -55,6 +55,6 @@ pub use smoke::{SmokePass, SMOKE_TRIANGLE};
 pub use terrain_pass::TerrainOutput;
 pub use truth_pass::{
     TruthChunk, TruthError, TruthFrameStats, TruthMesh, TruthPass, TruthRegion, CHUNK_CELLS,
-    CHUNK_TRIANGLES, MAX_TRUTH_POSTS,
+    CHUNK_TRIANGLES, MAX_TRUTH_POSTS, MAX_TRUTH_SIDE,
 };
 pub use window::WindowEvents;

@@ -15,6 +15,7 @@ mod mesh;
 
 pub use mesh::{
     TruthChunk, TruthError, TruthMesh, TruthRegion, CHUNK_CELLS, CHUNK_TRIANGLES, MAX_TRUTH_POSTS,
+    MAX_TRUTH_SIDE,
 };
 
 use std::rc::Rc;

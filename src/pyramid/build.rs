@@ -1,17 +1,23 @@
-//! Building the pyramid in memory from an elevation grid: level by level,
-//! downsample the level raster, cut it into nodes with their borders, and
-//! measure each node's delta against the full-resolution grid.
+//! Building the pyramid in memory from one or more layers of elevation data:
+//! level by level, the nodes that data of that resolution reach are cut out
+//! of the composite surface (see [`super::layers`]), border included, and
+//! each node's delta is measured against the best data under it.
 
 use rayon::prelude::*;
 
-use super::delta::level_deltas;
+use super::built::{BuiltLevel, BuiltPyramid};
+use super::delta::node_delta;
 use super::error::BuildError;
-use super::format::{GridStats, LevelSummary, NodeSummary, PyramidInfo};
-use super::limits::{check_levels, check_node};
+use super::format::{GridStats, LevelSummary, NodeSummary, PostWindow, PyramidInfo};
+use super::layers::{blend_weights, Composite, PlacedLayer};
+use super::limits::{check_levels, check_node, MAX_POSTS_PER_SIDE};
 use super::progress::Progress;
-use super::raster::LevelRaster;
 use crate::dem::ElevationGrid;
+use crate::geo::GeoRef;
 use crate::node::{NodeId, NodeLayout};
+
+/// Relative slack when comparing spacings and lattice positions.
+const LATTICE_SLACK: f64 = 1e-6;
 
 /// How to cut the grid into nodes (see the module notes in [`super`] for the
 /// defaults).
@@ -29,190 +35,386 @@ impl Default for BuildOptions {
     }
 }
 
-/// One level's nodes in memory.
-struct BuiltLevel {
-    /// Node `n`'s stored posts are `heights[n * side^2..(n + 1) * side^2]`.
-    heights: Vec<f32>,
-    summaries: Vec<NodeSummary>,
-}
-
-/// A whole pyramid in memory, ready for [`write_atomic`](super::write_atomic).
-pub struct BuiltPyramid {
-    /// The header's content: layout, georeference, statistics, level summaries.
-    pub info: PyramidInfo,
-    levels: Vec<BuiltLevel>,
-}
-
-impl BuiltPyramid {
-    /// The node layout the pyramid was built with.
-    pub fn layout(&self) -> &NodeLayout {
-        &self.info.layout
-    }
-
-    /// The stored posts (border included) and summary of node `id`.
-    pub fn node(&self, id: NodeId) -> Option<(&[f32], NodeSummary)> {
-        if !self.info.layout.contains(id) {
-            return None;
-        }
-        let level = &self.levels[id.level as usize];
-        let index = id.y as usize * self.info.layout.nodes_at(id.level)[0] as usize + id.x as usize;
-        let posts = self.info.layout.stored_side() as usize;
-        let posts = posts * posts;
-        Some((&level.heights[index * posts..(index + 1) * posts], level.summaries[index]))
-    }
-
-    /// Every node's posts and summary in file order (finest level first).
-    pub(crate) fn levels(&self) -> impl Iterator<Item = (&[f32], &[NodeSummary])> {
-        self.levels.iter().map(|l| (l.heights.as_slice(), l.summaries.as_slice()))
-    }
-
-    /// Summaries of all nodes in file order.
-    pub fn node_summaries(&self) -> Vec<NodeSummary> {
-        self.levels.iter().flat_map(|l| l.summaries.iter().copied()).collect()
-    }
-}
-
-/// Builds the pyramid of `grid`, using every core rayon offers.
+/// Builds the pyramid of one grid (NaN heights are no-data), using every
+/// core rayon offers.
 pub fn build(
     grid: &ElevationGrid,
     options: &BuildOptions,
     progress: &dyn Progress,
 ) -> Result<BuiltPyramid, BuildError> {
-    let (layout, stats) = check_input(grid, options)?;
-    let mut levels = Vec::with_capacity(layout.levels as usize);
-    let mut summaries = Vec::with_capacity(layout.levels as usize);
-    let mut raster = LevelRaster::finest(grid);
-    for lod in 0..layout.levels {
-        if lod > 0 {
-            raster = raster.downsample();
-        }
-        let nodes = layout.nodes_at(lod);
-        progress.phase(&format!("level {lod}: split"), layout.nodes_at_count(lod));
-        let (heights, mut node_summaries) = split_level(&raster, &layout, progress);
-        progress.phase(&format!("level {lod}: delta"), grid.height as u64);
-        let deltas = level_deltas(grid, &raster, nodes, layout.span(lod), progress);
-        node_summaries.iter_mut().zip(deltas).for_each(|(s, delta)| s.delta = delta);
-        debug_assert_eq!(
-            heights.len(),
-            node_summaries.len() * (layout.stored_side() as usize).pow(2)
-        );
-        summaries.push(summarise_level(nodes, &node_summaries));
-        levels.push(BuiltLevel { heights, summaries: node_summaries });
+    build_layers(std::slice::from_ref(grid), options, progress)
+}
+
+/// Builds one pyramid from `layers` of any resolutions, extents and
+/// lattices in one coordinate system: finer data win where they exist, each
+/// level holds nodes only where data at least as coarse as the level are
+/// (see [`super::layers`] for the lattice, the native level of a layer and
+/// the blend). Where several layers share a spacing, the first given wins.
+pub fn build_layers(
+    layers: &[ElevationGrid],
+    options: &BuildOptions,
+    progress: &dyn Progress,
+) -> Result<BuiltPyramid, BuildError> {
+    check_options(options)?;
+    for (k, layer) in layers.iter().enumerate() {
+        check_layer(k, layer)?;
     }
-    let info = PyramidInfo { layout, georef: grid.georef, stats, levels: summaries };
+    let (layout, georef, composite) = place_layers(layers, options)?;
+    let finest = composite
+        .layers
+        .iter()
+        .filter_map(|l| l.exact.map(|first| (first, l.grid)))
+        .min_by(|a, b| spacing_area(a.1).total_cmp(&spacing_area(b.1)))
+        .map(|(first, grid)| PostWindow {
+            first: first.map(|f| f.max(0) as u32),
+            posts: [grid.width, grid.height],
+        })
+        .unwrap_or_default();
+    let mut levels: Vec<BuiltLevel> = Vec::with_capacity(layout.levels as usize);
+    for lod in 0..layout.levels {
+        let candidates = candidates(&layout, &composite, lod, levels.last());
+        progress.phase(&format!("level {lod}: nodes"), candidates.len() as u64);
+        levels.push(cut_level(&layout, &composite, lod, &candidates, progress));
+    }
+    let mut summaries = Vec::with_capacity(levels.len());
+    for lod in 0..layout.levels {
+        let present = levels[lod as usize].summaries.len();
+        progress.phase(&format!("level {lod}: delta"), present as u64);
+        let deltas: Vec<f32> = if lod == 0 {
+            // Level 0 passes through every post of the best data.
+            vec![0.0; present]
+        } else {
+            let level = &levels[lod as usize];
+            let ids = present_ids(&layout, lod, level);
+            ids.par_iter()
+                .map(|&id| {
+                    let delta = node_delta(&levels, &layout, id);
+                    progress.advance(1);
+                    delta
+                })
+                .collect()
+        };
+        let level = &mut levels[lod as usize];
+        level.summaries.iter_mut().zip(deltas).for_each(|(s, delta)| s.delta = delta);
+        summaries.push(summarise_level(layout.nodes_at(lod), level));
+    }
+    let stats = grid_stats(&summaries, &composite)?;
+    let layer_count = layers.len() as u32;
+    let info =
+        PyramidInfo { layout, georef, stats, layers: layer_count, finest, levels: summaries };
     Ok(BuiltPyramid { info, levels })
 }
 
-/// The layout for `grid` and its height statistics, or why it cannot be built.
-fn check_input(
-    grid: &ElevationGrid,
-    options: &BuildOptions,
-) -> Result<(NodeLayout, GridStats), BuildError> {
+fn check_options(options: &BuildOptions) -> Result<(), BuildError> {
     let BuildOptions { node_size, border } = *options;
     check_node(node_size, border).map_err(BuildError::InvalidOptions)?;
+    Ok(())
+}
+
+/// Why layer `k` cannot be built, if it cannot.
+fn check_layer(k: usize, grid: &ElevationGrid) -> Result<(), BuildError> {
+    let fail = |why: String| Err(BuildError::InvalidGrid(format!("layer {}: {why}", k + 1)));
     let samples = [grid.width, grid.height];
     let expected = (grid.width as usize).checked_mul(grid.height as usize);
     if samples.contains(&0) || expected != Some(grid.heights.len()) {
-        return Err(BuildError::InvalidGrid(format!(
-            "{samples:?} samples but {} heights",
-            grid.heights.len()
-        )));
+        return fail(format!("{samples:?} samples but {} heights", grid.heights.len()));
     }
     if let Some(problem) = grid.georef.problem(samples) {
-        return Err(BuildError::InvalidGrid(problem));
+        return fail(problem);
     }
-    if let Some(index) = grid.heights.par_iter().position_any(|h| !h.is_finite()) {
+    if let Some(index) = grid.heights.par_iter().position_any(|h| h.is_infinite()) {
         let (i, j) = (index % grid.width as usize, index / grid.width as usize);
+        return fail(format!("height at sample ({i}, {j}) is {}", grid.heights[index]));
+    }
+    if grid.heights.par_iter().all(|h| h.is_nan()) {
+        return fail("no post has data".into());
+    }
+    Ok(())
+}
+
+fn spacing_area(grid: &ElevationGrid) -> f64 {
+    grid.georef.spacing[0] * grid.georef.spacing[1]
+}
+
+/// The level-0 lattice over the union of `layers`, its layout and
+/// georeference, and the layers placed on it, coarsest first.
+fn place_layers<'a>(
+    layers: &'a [ElevationGrid],
+    options: &BuildOptions,
+) -> Result<(NodeLayout, GeoRef, Composite<'a>), BuildError> {
+    let Some(first) = layers.first() else {
+        return Err(BuildError::InvalidGrid("no layer to build".into()));
+    };
+    let crs = first.georef.crs;
+    if let Some((k, other)) = layers.iter().enumerate().find(|(_, l)| l.georef.crs != crs) {
         return Err(BuildError::InvalidGrid(format!(
-            "height at sample ({i}, {j}) is {}",
-            grid.heights[index]
+            "layer {} is in {:?} but layer 1 in {crs:?}: all layers must share one coordinate system",
+            k + 1,
+            other.georef.crs
         )));
     }
-    let levels = NodeLayout::levels_for(samples, node_size);
+    let finest = layers
+        .iter()
+        .enumerate()
+        .min_by(|a, b| spacing_area(a.1).total_cmp(&spacing_area(b.1)).then(a.0.cmp(&b.0)))
+        .map(|(_, l)| l)
+        .expect("at least one layer");
+    let spacing = finest.georef.spacing;
+    let mut low = [f64::INFINITY; 2];
+    let mut high = [f64::NEG_INFINITY; 2];
+    for layer in layers {
+        let size = [layer.width, layer.height];
+        for a in 0..2 {
+            low[a] = low[a].min(layer.georef.origin[a]);
+            let last = layer.georef.origin[a] + (size[a] - 1) as f64 * layer.georef.spacing[a];
+            high[a] = high[a].max(last);
+        }
+    }
+    let mut origin = [0.0; 2];
+    let mut posts = [0u32; 2];
+    for a in 0..2 {
+        let before = ((finest.georef.origin[a] - low[a]) / spacing[a] - LATTICE_SLACK).ceil();
+        origin[a] = finest.georef.origin[a] - before.max(0.0) * spacing[a];
+        let count = ((high[a] - origin[a]) / spacing[a] + LATTICE_SLACK).floor() + 1.0;
+        if !(count >= 1.0 && count <= MAX_POSTS_PER_SIDE as f64) {
+            return Err(BuildError::InvalidGrid(format!(
+                "the layers span {count} posts of the finest spacing {spacing:?}; at most \
+                 {MAX_POSTS_PER_SIDE} per side"
+            )));
+        }
+        posts[a] = count as u32;
+    }
+    let georef = GeoRef { crs, origin, spacing };
+    if let Some(problem) = georef.problem(posts) {
+        return Err(BuildError::InvalidGrid(problem));
+    }
+    let levels = NodeLayout::levels_for(posts, options.node_size);
     check_levels(levels).map_err(BuildError::InvalidOptions)?;
     let layout = NodeLayout {
         levels,
-        node_size,
-        border,
-        posts: samples,
-        spacing_m: grid.georef.spacing_m(samples),
+        node_size: options.node_size,
+        border: options.border,
+        posts,
+        spacing_m: georef.spacing_m(posts),
     };
-    let (height_min, height_max) = min_max(&grid.heights);
-    Ok((layout, GridStats { height_min, height_max, voids_filled: grid.voids_filled }))
-}
-
-fn min_max(heights: &[f32]) -> (f32, f32) {
-    heights
-        .par_iter()
-        .fold(|| (f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &h| (lo.min(h), hi.max(h)))
-        .reduce(|| (f32::INFINITY, f32::NEG_INFINITY), |a, b| (a.0.min(b.0), a.1.max(b.1)))
-}
-
-/// Cuts level `raster.level` into its nodes, border included (Kühnert's split
-/// and stitch), in parallel; summaries carry min and max, delta comes later.
-fn split_level(
-    raster: &LevelRaster,
-    layout: &NodeLayout,
-    progress: &dyn Progress,
-) -> (Vec<f32>, Vec<NodeSummary>) {
-    let [nodes_x, nodes_y] = layout.nodes_at(raster.level);
-    let side = layout.stored_side() as usize;
-    let mut heights = vec![0.0f32; nodes_x as usize * nodes_y as usize * side * side];
-    let summaries = heights
-        .par_chunks_mut(side * side)
+    // Coarsest first; among equal spacings the first given last, so it wins.
+    let mut order: Vec<usize> = (0..layers.len()).collect();
+    order.sort_by(|&a, &b| {
+        spacing_area(&layers[b]).total_cmp(&spacing_area(&layers[a])).then(b.cmp(&a))
+    });
+    let placed = order
+        .iter()
         .enumerate()
-        .map(|(n, posts)| {
-            let (x, y) = (n as u32 % nodes_x, n as u32 / nodes_x);
-            let summary = cut_node(raster, layout, x, y, posts);
-            progress.advance(1);
-            summary
+        .map(|(rank, &k)| {
+            let grid = &layers[k];
+            let offset = [0, 1].map(|a| (grid.georef.origin[a] - origin[a]) / spacing[a]);
+            let scale = [0, 1].map(|a| grid.georef.spacing[a] / spacing[a]);
+            let on_lattice = (0..2).all(|a| {
+                (scale[a] - 1.0).abs() < LATTICE_SLACK
+                    && (offset[a] - offset[a].round()).abs() < 1e-3
+            });
+            let exact = on_lattice.then(|| offset.map(|o| o.round() as i64));
+            let ratio = scale[0].min(scale[1]) * (1.0 + LATTICE_SLACK);
+            let native = (ratio.max(1.0).log2().floor() as u8).min(levels - 1);
+            let weights = (rank > 0)
+                .then(|| blend_weights(grid, grid.georef.spacing_m([grid.width, grid.height])));
+            let last = posts.map(|p| p as i64 - 1);
+            PlacedLayer { grid, offset, scale, exact, native, last, weights }
         })
         .collect();
-    (heights, summaries)
+    Ok((layout, georef, Composite { layers: placed }))
 }
 
-/// Copies node `(x, y)`'s window of the raster into `posts`; posts past the
-/// raster's edge repeat its edge (Kühnert's rule for borders without a
-/// neighbour). Returns the min and max of the centre posts.
-fn cut_node(
-    raster: &LevelRaster,
+/// Nodes of `lod` that may hold data: those meeting a layer whose native
+/// level is `lod` or finer, and the parents of every present node of the
+/// level below (so every present node's ancestors are present), the latter
+/// marked `true`.
+fn candidates(
     layout: &NodeLayout,
-    x: u32,
-    y: u32,
-    posts: &mut [f32],
-) -> NodeSummary {
-    let side = layout.stored_side() as usize;
-    let border = layout.border as i64;
-    let centre = border as usize..=border as usize + layout.node_size as usize;
-    let first = |node: u32| node as i64 * layout.node_size as i64 - border;
-    let clamp = |index: i64, count: u32| index.clamp(0, count as i64 - 1) as u32;
-    let columns: Vec<usize> =
-        (0..side as i64).map(|p| clamp(first(x) + p, raster.cols) as usize).collect();
-    let mut summary = NodeSummary { min: f32::INFINITY, max: f32::NEG_INFINITY, delta: 0.0 };
-    for (q, out) in posts.chunks_exact_mut(side).enumerate() {
-        let row = raster.row(clamp(first(y) + q as i64, raster.rows));
-        for (post, &k) in out.iter_mut().zip(&columns) {
-            *post = row[k];
-        }
-        if centre.contains(&q) {
-            for &h in &out[centre.clone()] {
-                summary.min = summary.min.min(h);
-                summary.max = summary.max.max(h);
+    composite: &Composite,
+    lod: u8,
+    below: Option<&BuiltLevel>,
+) -> Vec<(NodeId, bool)> {
+    let [nodes_x, nodes_y] = layout.nodes_at(lod);
+    let mut wanted = vec![false; nodes_x as usize * nodes_y as usize];
+    let mut parent = vec![false; wanted.len()];
+    let span = layout.span(lod) as f64;
+    for layer in composite.layers.iter().filter(|l| l.native <= lod) {
+        let [[x0, x1], [y0, y1]] = layer.bounds();
+        let range = |low: f64, high: f64, count: u32| {
+            let first = ((low / span).floor() - 1.0).max(0.0) as u32;
+            let last = ((high / span).floor() as u32).min(count - 1);
+            first..=last
+        };
+        for y in range(y0, y1, nodes_y) {
+            for x in range(x0, x1, nodes_x) {
+                let (a, b) = (x as f64 * span, (x + 1) as f64 * span);
+                let (c, d) = (y as f64 * span, (y + 1) as f64 * span);
+                if a <= x1 && b >= x0 && c <= y1 && d >= y0 {
+                    wanted[(y * nodes_x + x) as usize] = true;
+                }
             }
         }
     }
-    debug_assert!(summary.min <= summary.max);
-    summary
+    if let Some(below) = below {
+        let [child_x, _] = layout.nodes_at(lod - 1);
+        for (index, slot) in below.slots.iter().enumerate() {
+            if slot.is_some() {
+                let (x, y) = (index as u32 % child_x / 2, index as u32 / child_x / 2);
+                parent[(y * nodes_x + x) as usize] = true;
+            }
+        }
+    }
+    (0..wanted.len())
+        .filter(|&k| wanted[k] || parent[k])
+        .map(|k| (NodeId::new(lod, k as u32 % nodes_x, k as u32 / nodes_x), parent[k]))
+        .collect()
 }
 
-fn summarise_level(nodes: [u32; 2], summaries: &[NodeSummary]) -> LevelSummary {
-    let fold = |f: fn(f32, f32) -> f32, pick: fn(&NodeSummary) -> f32, init: f32| {
-        summaries.iter().map(pick).fold(init, f)
+/// Cuts the `candidates` of level `lod` out of the composite, in parallel;
+/// a candidate whose centre posts are all no-data is absent unless it is
+/// the parent of a present node.
+fn cut_level(
+    layout: &NodeLayout,
+    composite: &Composite,
+    lod: u8,
+    candidates: &[(NodeId, bool)],
+    progress: &dyn Progress,
+) -> BuiltLevel {
+    let side = layout.stored_side() as usize;
+    let cut: Vec<Option<(Vec<f32>, NodeSummary, bool)>> = candidates
+        .par_iter()
+        .map(|&(id, parent)| {
+            let mut posts = vec![0.0f32; side * side];
+            let (summary, has_data) = cut_node(layout, composite, id, &mut posts);
+            progress.advance(1);
+            (has_data || parent).then_some((posts, summary, has_data))
+        })
+        .collect();
+    let [nodes_x, nodes_y] = layout.nodes_at(lod);
+    let mut level = BuiltLevel {
+        slots: vec![None; nodes_x as usize * nodes_y as usize],
+        heights: Vec::new(),
+        summaries: Vec::new(),
+        has_data: Vec::new(),
     };
+    for ((id, _), node) in candidates.iter().zip(cut) {
+        let Some((posts, summary, has_data)) = node else { continue };
+        let index = id.y as usize * nodes_x as usize + id.x as usize;
+        level.slots[index] = Some(level.summaries.len() as u32);
+        level.heights.extend_from_slice(&posts);
+        level.summaries.push(summary);
+        level.has_data.push(has_data);
+    }
+    level
+}
+
+/// Fills node `id`'s stored posts from the composite; positions beyond the
+/// data's edge take the edge post's place (Kühnert's rule for borders
+/// without a neighbour). Returns the min and max of the centre posts with
+/// data (0 and 0 when there are none) and whether there were any.
+fn cut_node(
+    layout: &NodeLayout,
+    composite: &Composite,
+    id: NodeId,
+    posts: &mut [f32],
+) -> (NodeSummary, bool) {
+    let side = layout.stored_side() as i64;
+    let border = layout.border as i64;
+    let span = layout.span(id.level) as i64;
+    let step = 1i64 << id.level;
+    let position = |node: u32, p: i64, count: u32| {
+        (node as i64 * span + (p - border) * step).clamp(0, count as i64 - 1)
+    };
+    let centre = border..=border + layout.node_size as i64;
+    let mut summary = NodeSummary { min: f32::INFINITY, max: f32::NEG_INFINITY, delta: 0.0 };
+    for (q, row) in posts.chunks_exact_mut(side as usize).enumerate() {
+        let y = position(id.y, q as i64, layout.posts[1]);
+        for (p, post) in row.iter_mut().enumerate() {
+            let x = position(id.x, p as i64, layout.posts[0]);
+            *post = composite.height(x, y);
+            if centre.contains(&(q as i64)) && centre.contains(&(p as i64)) && !post.is_nan() {
+                summary.min = summary.min.min(*post);
+                summary.max = summary.max.max(*post);
+            }
+        }
+    }
+    let has_data = summary.min <= summary.max;
+    if !has_data {
+        summary.min = 0.0;
+        summary.max = 0.0;
+    }
+    (summary, has_data)
+}
+
+/// The ids of a level's present nodes in slot order.
+fn present_ids(layout: &NodeLayout, lod: u8, level: &BuiltLevel) -> Vec<NodeId> {
+    let [nodes_x, _] = layout.nodes_at(lod);
+    level
+        .slots
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.is_some())
+        .map(|(k, _)| NodeId::new(lod, k as u32 % nodes_x, k as u32 / nodes_x))
+        .collect()
+}
+
+fn summarise_level(nodes: [u32; 2], level: &BuiltLevel) -> LevelSummary {
+    let with_data = || level.summaries.iter().zip(&level.has_data).filter(|(_, d)| **d);
+    let height_min = with_data().map(|(s, _)| s.min).fold(f32::INFINITY, f32::min);
+    let height_max = with_data().map(|(s, _)| s.max).fold(f32::NEG_INFINITY, f32::max);
+    let (height_min, height_max) =
+        if height_min <= height_max { (height_min, height_max) } else { (0.0, 0.0) };
     LevelSummary {
         nodes,
-        delta_max: fold(f32::max, |s| s.delta, 0.0),
-        height_min: fold(f32::min, |s| s.min, f32::INFINITY),
-        height_max: fold(f32::max, |s| s.max, f32::NEG_INFINITY),
+        present: level.summaries.len() as u64,
+        delta_max: level.summaries.iter().map(|s| s.delta).fold(0.0, f32::max),
+        height_min,
+        height_max,
     }
+}
+
+/// Heights over every level and the void counts of the layers.
+fn grid_stats(levels: &[LevelSummary], composite: &Composite) -> Result<GridStats, BuildError> {
+    let with_data = levels.iter().filter(|l| l.present > 0 && l.height_min <= l.height_max);
+    let (height_min, height_max) = with_data
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), l| {
+            (lo.min(l.height_min), hi.max(l.height_max))
+        });
+    if height_min.partial_cmp(&height_max).is_none_or(|o| o.is_gt()) {
+        return Err(BuildError::InvalidGrid("no post of any layer has data".into()));
+    }
+    let mut stats = GridStats {
+        height_min,
+        height_max,
+        voids_filled: composite.layers.iter().map(|l| l.grid.voids_filled).sum(),
+        posts_from_layer: 0,
+        posts_no_data: 0,
+    };
+    for (k, layer) in composite.layers.iter().enumerate() {
+        let grid = layer.grid;
+        let (from_layer, no_data) = (0..grid.height)
+            .into_par_iter()
+            .map(|q| {
+                let row = &grid.heights[q as usize * grid.width as usize..][..grid.width as usize];
+                let mut counts = (0u64, 0u64);
+                for (p, h) in row.iter().enumerate() {
+                    if !h.is_nan() {
+                        continue;
+                    }
+                    let x = (layer.offset[0] + p as f64 * layer.scale[0]).round() as i64;
+                    let y = (layer.offset[1] + q as f64 * layer.scale[1]).round() as i64;
+                    if composite.height_without(x, y, k).is_nan() {
+                        counts.1 += 1;
+                    } else {
+                        counts.0 += 1;
+                    }
+                }
+                counts
+            })
+            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+        stats.posts_from_layer += from_layer;
+        stats.posts_no_data += no_data;
+    }
+    Ok(stats)
 }

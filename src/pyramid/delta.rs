@@ -1,114 +1,115 @@
-//! Ulrich's geometric error delta for every node of one level, measured
-//! against the full-resolution grid.
+//! Ulrich's geometric error delta of one node, measured against the best
+//! data under it.
 //!
-//! The posts of level `l` joined as triangles form one surface shared by all
-//! nodes of the level (neighbours share their edge posts). For each level-0
-//! sample the vertical distance to that surface is computed once, row by row
-//! in parallel, and each node keeps the largest distance among the samples it
-//! covers, edge samples counting for both neighbours.
+//! The best data at a place is the surface of the finest *present* node
+//! there (each cell split from its south-west to its north-east corner):
+//! level 0 where the finest layer is, the native level of a coarser layer
+//! where only that layer is. A node's delta is the largest vertical distance
+//! between its own surface and the posts of those finest present nodes it
+//! covers, edge posts counting for both neighbours. Both surfaces are
+//! piecewise linear and the finer triangulation refines the coarser one, so
+//! the largest distance is reached at a finer post: the maximum over posts
+//! is the exact maximum over the area. Posts without data are left out.
 
-use rayon::prelude::*;
-
-use super::progress::Progress;
-use super::raster::LevelRaster;
-use crate::dem::ElevationGrid;
+use super::built::{node_of, BuiltLevel};
 use crate::mesh::rtin::round_up_to_f32;
+use crate::node::{cell_surface, NodeId, NodeLayout};
 
-/// Delta of every node of level `raster.level`, `nodes[0] * nodes[1]` values in
-/// node order (row by row, south first), each rounded up to `f32`.
-pub(crate) fn level_deltas(
-    grid: &ElevationGrid,
-    raster: &LevelRaster,
-    nodes: [u32; 2],
-    span: u64,
-    progress: &dyn Progress,
-) -> Vec<f32> {
-    let node_count = nodes[0] as usize * nodes[1] as usize;
-    if raster.level == 0 {
-        // The level-0 surface passes through every sample.
-        return vec![0.0; node_count];
-    }
-    let width = grid.width as usize;
-    let worst = (0..grid.height)
-        .into_par_iter()
-        .fold(
-            || (vec![0.0f64; node_count], vec![0.0f64; width]),
-            |(mut worst, mut row_error), j| {
-                row_distances(grid, raster, j, &mut row_error);
-                record_row(&row_error, j, nodes, span, &mut worst);
-                progress.advance(1);
-                (worst, row_error)
-            },
-        )
-        .map(|(worst, _)| worst)
-        .reduce(
-            || vec![0.0; node_count],
-            |a, b| a.iter().zip(&b).map(|(x, y)| x.max(*y)).collect(),
-        );
-    worst.into_iter().map(round_up_to_f32).collect()
+/// A node's surface: its stored posts and where it lies.
+struct Surface<'a> {
+    id: NodeId,
+    posts: &'a [f32],
 }
 
-/// Vertical distance from each sample of level-0 row `j` to the level's surface.
-///
-/// Within one cell and one row the surface is linear in `fu` on each side of
-/// the diagonal, so each cell is two branch-free runs: samples west of the
-/// diagonal (`a < b`, north-west triangle) and the rest (south-east).
-fn row_distances(grid: &ElevationGrid, raster: &LevelRaster, j: u32, out: &mut [f64]) {
-    let lod = raster.level;
-    let step = 1usize << lod;
-    let inv_step = 1.0 / step as f64;
-    let m = j >> lod;
-    let south = raster.row(m);
-    let north = raster.row((m + 1).min(raster.rows - 1));
-    let b = (j as usize) & (step - 1);
-    let fv = b as f64 * inv_step;
-    let last = raster.cols as usize - 1;
-    let samples = &grid.heights[j as usize * grid.width as usize..][..grid.width as usize];
-    for (k, (samples, out)) in samples.chunks(step).zip(out.chunks_mut(step)).enumerate() {
-        let k1 = (k + 1).min(last);
-        let (h00, h10, h01, h11) =
-            (south[k] as f64, south[k1] as f64, north[k] as f64, north[k1] as f64);
-        // cell_surface with fv fixed: base + fu * slope on each triangle.
-        let (north_west_base, north_west_slope) = (h00 + fv * (h01 - h00), h11 - h01);
-        let (south_east_base, south_east_slope) = (h00 + fv * (h11 - h10), h10 - h00);
-        let split = b.min(samples.len());
-        let (west, east) = samples.split_at(split);
-        let (out_west, out_east) = out.split_at_mut(split);
-        distances_to_line(west, 0, north_west_base, north_west_slope, inv_step, out_west);
-        distances_to_line(east, split, south_east_base, south_east_slope, inv_step, out_east);
-    }
+/// Delta of present node `id` (level 1 or coarser), rounded up to `f32`.
+pub(crate) fn node_delta(levels: &[BuiltLevel], layout: &NodeLayout, id: NodeId) -> f32 {
+    let Some((posts, _)) = node_of(levels, layout, id) else { return 0.0 };
+    let target = Surface { id, posts };
+    let mut worst = 0.0f64;
+    explore(levels, layout, &target, id, &mut worst);
+    round_up_to_f32(worst)
 }
 
-/// `|sample - (base + fu * slope)|` for samples `first, first + 1, ...` of a
-/// cell, `fu = a / step`.
-#[inline]
-fn distances_to_line(
-    samples: &[f32],
-    first: usize,
-    base: f64,
-    slope: f64,
-    inv_step: f64,
-    out: &mut [f64],
+/// Measures the finest present posts under present node `node` against `target`.
+fn explore(
+    levels: &[BuiltLevel],
+    layout: &NodeLayout,
+    target: &Surface,
+    node: NodeId,
+    worst: &mut f64,
 ) {
-    for (a, (&sample, out)) in (first..).zip(samples.iter().zip(out)) {
-        *out = (sample as f64 - (base + a as f64 * inv_step * slope)).abs();
+    let Some((posts, _)) = node_of(levels, layout, node) else { return };
+    let here = Surface { id: node, posts };
+    if node.level == 0 {
+        measure(layout, target, &here, area(layout, node), worst);
+        return;
+    }
+    let [children_x, children_y] = layout.nodes_at(node.level - 1);
+    for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+        let child = NodeId::new(node.level - 1, 2 * node.x + dx, 2 * node.y + dy);
+        if child.x >= children_x || child.y >= children_y {
+            continue; // beyond the data
+        }
+        if node_of(levels, layout, child).is_some() {
+            explore(levels, layout, target, child, worst);
+        } else if node != target.id {
+            measure(layout, target, &here, area(layout, child), worst);
+        }
     }
 }
 
-/// Folds one row's distances into the nodes that cover the row.
-fn record_row(row_error: &[f64], j: u32, nodes: [u32; 2], span: u64, worst: &mut [f64]) {
-    let node_row = j as u64 / span;
-    let on_edge = j as u64 % span == 0 && node_row > 0;
-    let rows = [Some(node_row), on_edge.then(|| node_row - 1)];
-    let last_sample = row_error.len() as u64 - 1;
-    for y in rows.into_iter().flatten().filter(|&y| y < nodes[1] as u64) {
-        for x in 0..nodes[0] as u64 {
-            let first = x * span;
-            let end = ((x + 1) * span).min(last_sample);
-            let largest =
-                row_error[first as usize..=end as usize].iter().fold(0.0f64, |a, &b| a.max(b));
-            let slot = &mut worst[(y * nodes[0] as u64 + x) as usize];
-            *slot = slot.max(largest);
+/// The closed area of `id` in level-0 posts, east then north.
+fn area(layout: &NodeLayout, id: NodeId) -> [[u64; 2]; 2] {
+    let span = layout.span(id.level);
+    [[id.x as u64 * span, (id.x as u64 + 1) * span], [id.y as u64 * span, (id.y as u64 + 1) * span]]
+}
+
+/// Folds into `worst` the distance from each centre post of `from` inside
+/// `area` (and inside the data) to `target`'s surface.
+fn measure(
+    layout: &NodeLayout,
+    target: &Surface,
+    from: &Surface,
+    area: [[u64; 2]; 2],
+    worst: &mut f64,
+) {
+    let side = layout.stored_side() as usize;
+    let border = layout.border as usize;
+    let step = 1u64 << from.id.level;
+    let span = layout.span(from.id.level);
+    let last = layout.posts.map(|p| p as u64 - 1);
+    let start = [from.id.x as u64 * span, from.id.y as u64 * span];
+    let target_step = (1u64 << target.id.level) as f64;
+    let target_start = [
+        target.id.x as u64 * layout.span(target.id.level),
+        target.id.y as u64 * layout.span(target.id.level),
+    ];
+    let last_cell = layout.node_size as usize - 1;
+    let t = |p: usize, q: usize| target.posts[(q + border) * side + p + border] as f64;
+    for q in 0..=layout.node_size as usize {
+        let y = start[1] + q as u64 * step;
+        if y < area[1][0] || y > area[1][1] || y > last[1] {
+            continue;
+        }
+        let fy = (y - target_start[1]) as f64 / target_step;
+        let cy = (fy.floor() as usize).min(last_cell);
+        let fv = fy - cy as f64;
+        for p in 0..=layout.node_size as usize {
+            let x = start[0] + p as u64 * step;
+            if x < area[0][0] || x > area[0][1] || x > last[0] {
+                continue;
+            }
+            let h = from.posts[(q + border) * side + p + border] as f64;
+            let fx = (x - target_start[0]) as f64 / target_step;
+            let cx = (fx.floor() as usize).min(last_cell);
+            let fu = fx - cx as f64;
+            let surface =
+                cell_surface(t(cx, cy), t(cx + 1, cy), t(cx, cy + 1), t(cx + 1, cy + 1), fu, fv);
+            let distance = (h - surface).abs();
+            if distance > *worst {
+                // NaN (no data on either side) never compares greater.
+                *worst = distance;
+            }
         }
     }
 }
@@ -116,7 +117,6 @@ fn record_row(row_error: &[f64], j: u32, nodes: [u32; 2], span: u64, worst: &mut
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::node::cell_surface;
 
     #[test]
     fn rounding_up_never_loses_the_bound() {

@@ -1,6 +1,7 @@
-//! The bytes of `cache/NAME/pyramid.rlp`, format version 1. Every number is
+//! The bytes of `cache/NAME/pyramid.rlp`, format version 2. Every number is
 //! little-endian; every byte of the file is covered by a CRC-32 (IEEE) or
-//! must be zero.
+//! must be zero. Version 1 files (no absent nodes, one void count) are
+//! refused with a "rebuild it" error.
 //!
 //! ```text
 //! header   magic "RIDGEPYR"  version u32  header_len u64  file_len u64
@@ -8,10 +9,13 @@
 //!          spacing_m f64 x2                      (local frame, east, north)
 //!          crs u32 (0 geographic, 1 projected, 2 local)  epsg u32 (0 unknown)
 //!          origin f64 x2  spacing f64 x2         (the GeoRef, crs units)
-//!          height_min f32  height_max f32  voids_filled u64
-//!          node_count u64  record_len u32
+//!          height_min f32  height_max f32
+//!          posts_interpolated u64  posts_from_layer u64  posts_no_data u64
+//!          layers u32  finest_first u32 x2  finest_posts u32 x2
+//!          node_count u64  present_count u64  record_len u32
 //!          levels x { nodes_x u32  nodes_y u32  delta_max f32  min f32  max f32 }
 //!          nodes  x { offset u64  min f32  max f32  delta f32 }
+//!                                                (offset ABSENT and zeros: no node)
 //!          header_crc u32                        (of every header byte before it)
 //!          zero padding to a multiple of 16      (= header_len)
 //! records  nodes x { heights f32 x stored_side^2 (row 0 south, border included)
@@ -19,8 +23,12 @@
 //! ```
 //!
 //! Nodes are listed finest level first, row by row (south first) within a
-//! level ([`NodeLayout::node_index`]); records are contiguous, so `offset` is
-//! `header_len + index * record_len`, which the reader checks. The node table
+//! level ([`NodeLayout::node_index`]). The table lists every node of the
+//! layout; a node no data of its resolution reach is *absent* (offset
+//! [`ABSENT`], summary zero) and has no record: a layered pyramid stores
+//! level 0 only where the finest layer is (see [`super`]). Records of present
+//! nodes are contiguous in table order, so the `k`-th present node's `offset`
+//! is `header_len + k * record_len`, which the reader checks. The node table
 //! repeats each record's min, max and delta so bounds and errors of the whole
 //! pyramid are known without touching the heights; each record repeats them so
 //! it is self-contained (Ulrich section 15).
@@ -35,60 +43,87 @@ use std::path::Path;
 /// The first eight bytes of every pyramid file.
 pub const MAGIC: [u8; 8] = *b"RIDGEPYR";
 /// The format version this build writes and reads.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
+/// The node table's offset of an absent node.
+pub const ABSENT: u64 = u64::MAX;
 /// The pyramid's file inside a cache directory.
 pub const FILE_NAME: &str = "pyramid.rlp";
 const HEADER_ALIGN: u64 = 16;
 /// Bytes of the header before the level table.
-const FIXED_LEN: u64 = 132;
-const LEVEL_ENTRY_LEN: u64 = 20;
+const FIXED_LEN: u64 = 176;
+const LEVEL_ENTRY_LEN: u64 = 28;
 const NODE_ENTRY_LEN: u64 = 20;
 
-/// Heights over the whole grid and how many voids the importer filled.
+/// Heights over all the data and what became of the sources' voids. The
+/// three counts are in posts of the source files (each layer on its own
+/// lattice) and do not overlap.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct GridStats {
-    /// Lowest height of the grid, metres.
+    /// Lowest height of any present node, metres.
     pub height_min: f32,
-    /// Highest height of the grid, metres.
+    /// Highest height of any present node, metres.
     pub height_max: f32,
-    /// Posts the importer filled because the source had voids there.
+    /// Void posts in small voids, interpolated from their neighbours
+    /// ([`crate::dem::voids`]).
     pub voids_filled: u64,
+    /// Void posts of a layer in large voids that a coarser layer covers:
+    /// the pyramid holds the coarser layer's data there.
+    pub posts_from_layer: u64,
+    /// Void posts of a layer in large voids no other layer covers: no data
+    /// there, nothing is drawn.
+    pub posts_no_data: u64,
+}
+
+/// A window of level-0 posts: its south-west post and its size in posts.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct PostWindow {
+    /// Level-0 post (east, north) of the window's south-west corner.
+    pub first: [u32; 2],
+    /// Posts east and north.
+    pub posts: [u32; 2],
 }
 
 /// One level at a glance.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct LevelSummary {
-    /// Nodes east and north at this level.
+    /// Nodes of the layout at this level, east and north (present or not).
     pub nodes: [u32; 2],
-    /// The largest delta of the level's nodes, metres.
+    /// Nodes of the level that are stored (present).
+    pub present: u64,
+    /// The largest delta of the level's present nodes, metres.
     pub delta_max: f32,
-    /// Lowest height of the level's nodes, metres.
+    /// Lowest height of the level's present nodes, metres.
     pub height_min: f32,
-    /// Highest height of the level's nodes, metres.
+    /// Highest height of the level's present nodes, metres.
     pub height_max: f32,
 }
 
 /// One node at a glance: see [`crate::node::NodeData`] for the meanings.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct NodeSummary {
-    /// Lowest height of the node's centre posts.
+    /// Lowest centre post, metres.
     pub min: f32,
-    /// Highest height of the node's centre posts.
+    /// Highest centre post, metres.
     pub max: f32,
-    /// Ulrich's delta of the node, metres.
+    /// Largest vertical distance to the best data under the node, metres.
     pub delta: f32,
 }
 
 /// Everything the header says about a pyramid except the node table.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PyramidInfo {
-    /// Levels, node size, border and post spacing.
+    /// The node layout over the union of all layers.
     pub layout: NodeLayout,
-    /// Where the grid lies on the earth.
+    /// Where level-0 post (0, 0) is and the level-0 post spacing.
     pub georef: GeoRef,
-    /// Heights and void counts over the whole grid.
+    /// Heights and void counts.
     pub stats: GridStats,
-    /// One summary per level, finest first.
+    /// How many layers (sets of files of one resolution) were imported.
+    pub layers: u32,
+    /// The level-0 posts of the finest layer (where a flight over the best
+    /// data goes).
+    pub finest: PostWindow,
+    /// Per level, finest first.
     pub levels: Vec<LevelSummary>,
 }
 
@@ -124,19 +159,20 @@ fn crs_from_code((code, epsg): (u32, u32)) -> Result<Crs, String> {
     }
 }
 
-/// The header of a pyramid with `nodes` in node order.
-pub(crate) fn encode_header(info: &PyramidInfo, nodes: &[NodeSummary]) -> Vec<u8> {
+/// The header of a pyramid with `nodes` in node order (`None`: absent).
+pub(crate) fn encode_header(info: &PyramidInfo, nodes: &[Option<NodeSummary>]) -> Vec<u8> {
     let layout = &info.layout;
     debug_assert_eq!(nodes.len() as u64, layout.node_count());
     debug_assert_eq!(info.levels.len(), layout.levels as usize);
     let header_len =
         header_len(info.levels.len() as u64, nodes.len() as u64).expect("in-memory sizes fit u64");
     let record_len = record_len(layout);
+    let present = nodes.iter().flatten().count() as u64;
     let mut e = Encoder::default();
     e.bytes.extend_from_slice(&MAGIC);
     e.u32(VERSION);
     e.u64(header_len);
-    e.u64(header_len + nodes.len() as u64 * record_len);
+    e.u64(header_len + present * record_len);
     for v in
         [layout.node_size, layout.border, layout.levels as u32, layout.posts[0], layout.posts[1]]
     {
@@ -150,17 +186,33 @@ pub(crate) fn encode_header(info: &PyramidInfo, nodes: &[NodeSummary]) -> Vec<u8
     e.f32(info.stats.height_min);
     e.f32(info.stats.height_max);
     e.u64(info.stats.voids_filled);
+    e.u64(info.stats.posts_from_layer);
+    e.u64(info.stats.posts_no_data);
+    e.u32(info.layers);
+    info.finest.first.iter().chain(&info.finest.posts).for_each(|&v| e.u32(v));
     e.u64(nodes.len() as u64);
+    e.u64(present);
     e.u32(record_len as u32);
     debug_assert_eq!(e.bytes.len() as u64, FIXED_LEN);
     for level in &info.levels {
         e.u32(level.nodes[0]);
         e.u32(level.nodes[1]);
+        e.u64(level.present);
         [level.delta_max, level.height_min, level.height_max].iter().for_each(|&v| e.f32(v));
     }
-    for (index, node) in nodes.iter().enumerate() {
-        e.u64(header_len + index as u64 * record_len);
-        [node.min, node.max, node.delta].iter().for_each(|&v| e.f32(v));
+    let mut next = header_len;
+    for node in nodes {
+        match node {
+            Some(node) => {
+                e.u64(next);
+                next += record_len;
+                [node.min, node.max, node.delta].iter().for_each(|&v| e.f32(v));
+            }
+            None => {
+                e.u64(ABSENT);
+                [0.0f32; 3].iter().for_each(|&v| e.f32(v));
+            }
+        }
     }
     let crc = crc32fast::hash(&e.bytes);
     e.u32(crc);
@@ -171,8 +223,9 @@ pub(crate) fn encode_header(info: &PyramidInfo, nodes: &[NodeSummary]) -> Vec<u8
 /// A header read back and checked.
 pub(crate) struct DecodedHeader {
     pub info: PyramidInfo,
-    pub nodes: Vec<NodeSummary>,
-    pub header_len: u64,
+    /// Per node in table order: its record's offset and summary, `None`
+    /// for an absent node.
+    pub nodes: Vec<Option<(u64, NodeSummary)>>,
     pub record_len: u64,
 }
 
@@ -209,9 +262,12 @@ pub(crate) fn decode_header(path: &Path, bytes: &[u8]) -> Result<DecodedHeader, 
     check_layout(&layout).map_err(corrupt)?;
     let node_count = layout.node_count();
     let expected_header = header_len(layout.levels as u64, node_count);
-    let expected_file =
-        expected_header.and_then(|h| node_count.checked_mul(record_len(&layout))?.checked_add(h));
+    let expected_file = expected_header.and_then(|h| {
+        let present = fixed.present_count.min(node_count);
+        present.checked_mul(record_len(&layout))?.checked_add(h)
+    });
     if fixed.node_count != node_count
+        || fixed.present_count > node_count
         || fixed.record_len as u64 != record_len(&layout)
         || expected_header != Some(fixed.header_len)
         || expected_file != Some(fixed.file_len)
@@ -229,12 +285,25 @@ pub(crate) fn decode_header(path: &Path, bytes: &[u8]) -> Result<DecodedHeader, 
         return Err(corrupt("header padding is not zero".into()));
     }
     let levels = read_levels(&mut d, &layout).map_err(corrupt)?;
-    let nodes =
-        read_nodes(&mut d, node_count, fixed.header_len, record_len(&layout)).map_err(corrupt)?;
+    let table = NodeTable {
+        count: node_count,
+        present: fixed.present_count,
+        header_len: fixed.header_len,
+        record_len: record_len(&layout),
+    };
+    let nodes = read_nodes(&mut d, &table).map_err(corrupt)?;
+    check_presence(&layout, &levels, &nodes).map_err(corrupt)?;
     let georef = GeoRef { crs: crs_from_code(fixed.crs).map_err(corrupt)?, ..fixed.georef };
-    let info = PyramidInfo { layout, georef, stats: fixed.stats, levels };
+    let info = PyramidInfo {
+        layout,
+        georef,
+        stats: fixed.stats,
+        layers: fixed.layers,
+        finest: fixed.finest,
+        levels,
+    };
     check_stats(&info).map_err(corrupt)?;
-    Ok(DecodedHeader { info, nodes, header_len: fixed.header_len, record_len: record_len(&layout) })
+    Ok(DecodedHeader { info, nodes, record_len: record_len(&layout) })
 }
 
 /// Byte position of the header checksum.
@@ -249,7 +318,10 @@ struct Fixed {
     crs: (u32, u32),
     georef: GeoRef,
     stats: GridStats,
+    layers: u32,
+    finest: PostWindow,
     node_count: u64,
+    present_count: u64,
     record_len: u32,
 }
 
@@ -263,12 +335,33 @@ fn read_fixed(d: &mut Decoder) -> Option<Fixed> {
     // The crs is decoded once the checksum has been checked.
     let georef =
         GeoRef { crs: Crs::Local, origin: [d.f64()?, d.f64()?], spacing: [d.f64()?, d.f64()?] };
-    let stats = GridStats { height_min: d.f32()?, height_max: d.f32()?, voids_filled: d.u64()? };
+    let stats = GridStats {
+        height_min: d.f32()?,
+        height_max: d.f32()?,
+        voids_filled: d.u64()?,
+        posts_from_layer: d.u64()?,
+        posts_no_data: d.u64()?,
+    };
+    let layers = d.u32()?;
+    let finest = PostWindow { first: [d.u32()?, d.u32()?], posts: [d.u32()?, d.u32()?] };
     let node_count = d.u64()?;
+    let present_count = d.u64()?;
     let record_len = d.u32()?;
     let levels = u8::try_from(levels).unwrap_or(u8::MAX);
     let layout = NodeLayout { levels, node_size, border, posts: [samples_x, samples_y], spacing_m };
-    Some(Fixed { header_len, file_len, layout, crs, georef, stats, node_count, record_len })
+    Some(Fixed {
+        header_len,
+        file_len,
+        layout,
+        crs,
+        georef,
+        stats,
+        layers,
+        finest,
+        node_count,
+        present_count,
+        record_len,
+    })
 }
 
 fn read_levels(d: &mut Decoder, layout: &NodeLayout) -> Result<Vec<LevelSummary>, String> {
@@ -276,6 +369,7 @@ fn read_levels(d: &mut Decoder, layout: &NodeLayout) -> Result<Vec<LevelSummary>
         .map(|lod| {
             let short = || "level table cut short".to_string();
             let nodes = [d.u32().ok_or_else(short)?, d.u32().ok_or_else(short)?];
+            let present = d.u64().ok_or_else(short)?;
             let [delta_max, height_min, height_max] = [
                 d.f32().ok_or_else(short)?,
                 d.f32().ok_or_else(short)?,
@@ -287,18 +381,26 @@ fn read_levels(d: &mut Decoder, layout: &NodeLayout) -> Result<Vec<LevelSummary>
                     layout.nodes_at(lod)
                 ));
             }
-            Ok(LevelSummary { nodes, delta_max, height_min, height_max })
+            Ok(LevelSummary { nodes, present, delta_max, height_min, height_max })
         })
         .collect()
 }
 
-fn read_nodes(
-    d: &mut Decoder,
+/// The node table's sizes.
+struct NodeTable {
     count: u64,
+    present: u64,
     header_len: u64,
     record_len: u64,
-) -> Result<Vec<NodeSummary>, String> {
-    (0..count)
+}
+
+fn read_nodes(
+    d: &mut Decoder,
+    table: &NodeTable,
+) -> Result<Vec<Option<(u64, NodeSummary)>>, String> {
+    let mut next = table.header_len;
+    let mut present = 0u64;
+    let nodes = (0..table.count)
         .map(|index| {
             let short = || "node table cut short".to_string();
             let offset = d.u64().ok_or_else(short)?;
@@ -307,16 +409,51 @@ fn read_nodes(
                 max: d.f32().ok_or_else(short)?,
                 delta: d.f32().ok_or_else(short)?,
             };
-            if offset != header_len + index * record_len {
-                return Err(format!(
-                    "node {index} at offset {offset}, expected {}",
-                    header_len + index * record_len
-                ));
+            if offset == ABSENT {
+                if summary != NodeSummary::default() {
+                    return Err(format!("absent node {index} has a summary {summary:?}"));
+                }
+                return Ok(None);
             }
+            if offset != next || present >= table.present {
+                return Err(format!("node {index} at offset {offset}, expected {next}"));
+            }
+            next += table.record_len;
+            present += 1;
             check_summary(&summary).map_err(|p| format!("node {index}: {p}"))?;
-            Ok(summary)
+            Ok(Some((offset, summary)))
         })
-        .collect()
+        .collect::<Result<Vec<_>, String>>()?;
+    if present != table.present {
+        return Err(format!("{present} present nodes listed, the header says {}", table.present));
+    }
+    Ok(nodes)
+}
+
+/// Checks that the root level is present (every lookup falls back to it)
+/// and that each level's count of present nodes matches the table.
+fn check_presence(
+    layout: &NodeLayout,
+    levels: &[LevelSummary],
+    nodes: &[Option<(u64, NodeSummary)>],
+) -> Result<(), String> {
+    let mut start = 0usize;
+    for (lod, level) in levels.iter().enumerate() {
+        let count = layout.nodes_at_count(lod as u8) as usize;
+        let present = nodes[start..start + count].iter().flatten().count() as u64;
+        if present != level.present {
+            return Err(format!(
+                "level {lod} lists {} present nodes, the node table {present}",
+                level.present
+            ));
+        }
+        start += count;
+    }
+    let root = levels.last().map_or(0, |l| l.present);
+    if root != layout.nodes_at_count(layout.levels - 1) {
+        return Err("the root level has absent nodes".into());
+    }
+    Ok(())
 }
 
 fn check_summary(s: &NodeSummary) -> Result<(), String> {

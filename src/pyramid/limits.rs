@@ -10,6 +10,8 @@ pub const MAX_NODE_SIZE: u32 = 4096;
 pub const MAX_BORDER: u32 = 16;
 /// Deepest pyramid a file may declare (2^31 posts per side at node size 1).
 pub const MAX_LEVELS: u8 = 32;
+/// Most level-0 posts per side of the union of all layers.
+pub const MAX_POSTS_PER_SIDE: u64 = 1 << 30;
 
 /// Why `node_size` and `border` are out of range, if they are.
 pub(crate) fn check_node(node_size: u32, border: u32) -> Result<(), String> {

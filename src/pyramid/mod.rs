@@ -18,18 +18,28 @@
 //!   their children's posts (Ulrich's vertical morph moves only the posts in
 //!   between), and makes delta the honest bound of what the coarse node
 //!   leaves out.
-//! - **Split and stitch in one pass**: each level is first held as one whole
-//!   raster of posts (level 0 is the grid itself, level `l + 1` every other
-//!   post of level `l`); cutting a node's window out of it, border included,
-//!   copies the neighbours' posts into the border (Kühnert's stitch) and
-//!   clamping at the raster's edge extends the centre (his edge rule). The
-//!   result is the same as his split, downsample, stitch sequence without a
-//!   pass over node borders.
-//! - **Delta is computed, never assumed to halve**: for every level-0 sample
-//!   under a node, the vertical distance to the node's surface (each cell
-//!   split from its south-west to its north-east corner), in `f64`, stored
-//!   rounded up to `f32` so the stored bound is never below the true one.
-//!   Level 0 passes through every sample, so its delta is exactly 0.
+//! - **Split and stitch in one pass**: every post of every level is the
+//!   composite surface of all layers sampled at that post ([`layers`]), so
+//!   a node's window, border included, holds the neighbours' posts in its
+//!   border (Kühnert's stitch), positions past the data's edge take the edge
+//!   post (his edge rule), and a post of level `l + 1` is the post of level
+//!   `l` at the same place (subsampling). No level is held whole: nodes are
+//!   cut one by one.
+//! - **Layers and absent nodes**: the layers (files of different
+//!   resolutions, extents and lattices in one coordinate system) are placed
+//!   on the finest layer's lattice; a node of level `l` is stored only where
+//!   a layer whose native level is `l` or finer reaches it (and its data are
+//!   not all missing), plus every ancestor of a stored node. Other nodes are
+//!   *absent*: listed in the file's node table without a record, and never
+//!   requested by the clipmap, which draws the deepest present ancestor
+//!   (best-available data, not an error). A 5' base under a 3" tile is thus
+//!   stored from level 6 (3.2' posts) up, and level 0 only where the tile is.
+//! - **Delta is computed, never assumed to halve**: for every post of the
+//!   best data under a node (the finest present node at each place), the
+//!   vertical distance to the node's surface (each cell split from its
+//!   south-west to its north-east corner), in `f64`, stored rounded up to
+//!   `f32` so the stored bound is never below the true one. Level 0 passes
+//!   through every post, so its delta is exactly 0.
 //! - **Verification at page-in**: [`Pyramid::open`] checks the header and its
 //!   checksum (which covers the node table) and nothing else, so opening a
 //!   10 GB pyramid costs what opening a 1 MB one does; `read_node` checks
@@ -42,21 +52,24 @@
 //! See [`mod@format`] for the bytes on disk.
 
 mod build;
+mod built;
 mod bytes;
 mod delta;
 mod error;
 pub mod format;
+pub mod layers;
 mod limits;
 mod open;
 mod progress;
-mod raster;
 mod synthetic;
 mod write;
 
-pub use build::{build, BuildOptions, BuiltPyramid};
+pub use build::{build, build_layers, BuildOptions};
+pub use built::BuiltPyramid;
 pub use error::{BuildError, PyramidError};
-pub use format::{GridStats, LevelSummary, NodeSummary, PyramidInfo, FILE_NAME};
-pub use limits::{MAX_BORDER, MAX_LEVELS, MAX_NODE_SIZE};
+pub use format::{GridStats, LevelSummary, NodeSummary, PostWindow, PyramidInfo, FILE_NAME};
+pub use layers::BLEND_MARGIN_M;
+pub use limits::{MAX_BORDER, MAX_LEVELS, MAX_NODE_SIZE, MAX_POSTS_PER_SIDE};
 pub use open::Pyramid;
 pub use progress::{Progress, Silent};
 pub use synthetic::{synthetic_grid, MAX_SYNTHETIC_SIZE};

@@ -7,7 +7,9 @@
 //! 1 MB and a 10 GB pyramid. Each node's checksum is checked when the node is
 //! read ([`NodeSource::read_node`]); [`Pyramid::verify`] checks every node at
 //! once, for `ridgeline info` and anyone who wants a damaged file refused
-//! before anything is drawn.
+//! before anything is drawn. Absent nodes (no data of their resolution
+//! there) have no record: [`NodeSource::has_node`] says so, and exact heights
+//! come from the finest present node at each place.
 
 use std::fs::File;
 use std::ops::Range;
@@ -22,11 +24,11 @@ use super::error::PyramidError;
 use super::format::{check_record, decode_header, NodeSummary, PyramidInfo, FILE_NAME};
 use crate::node::{NodeData, NodeError, NodeId, NodeLayout, NodeSource};
 
-/// A level-0 node [`Pyramid::exact_height`] has not checked yet.
+/// A node [`Pyramid::exact_height`] has not checked yet.
 const UNCHECKED: u8 = 0;
-/// A level-0 node whose record passed its check.
+/// A node whose record passed its check.
 const INTACT: u8 = 1;
-/// A level-0 node whose record failed its check.
+/// A node whose record failed its check.
 const DAMAGED: u8 = 2;
 
 /// A memory-mapped pyramid file whose header has been checked; nodes are
@@ -37,14 +39,14 @@ pub struct Pyramid {
     file: File,
     map: Mmap,
     info: PyramidInfo,
-    /// Node summaries in file order ([`NodeLayout::node_index`]).
-    nodes: Vec<NodeSummary>,
-    header_len: u64,
+    /// Per node in file order ([`NodeLayout::node_index`]): its record's
+    /// offset and summary, `None` for an absent node.
+    nodes: Vec<Option<(u64, NodeSummary)>>,
     record_len: u64,
-    /// Per level-0 node, whether [`Pyramid::exact_height`] found its record
-    /// intact ([`UNCHECKED`], [`INTACT`], [`DAMAGED`]): it reads a few posts
-    /// per call, too few to pay for a whole record's checksum each time.
-    level0_checked: Vec<AtomicU8>,
+    /// Per node, whether [`Pyramid::exact_height`] found its record intact
+    /// ([`UNCHECKED`], [`INTACT`], [`DAMAGED`]): it reads a few posts per
+    /// call, too few to pay for a whole record's checksum each time.
+    checked: Vec<AtomicU8>,
 }
 
 impl Pyramid {
@@ -58,16 +60,15 @@ impl Pyramid {
         let file = File::open(&path).map_err(PyramidError::io(&path))?;
         let map = map_file(&file).map_err(PyramidError::io(&path))?;
         let header = decode_header(&path, &map)?;
-        let level0 = header.info.layout.nodes_at_count(0) as usize;
+        let count = header.nodes.len();
         Ok(Pyramid {
             path,
             file,
             map,
             info: header.info,
             nodes: header.nodes,
-            header_len: header.header_len,
             record_len: header.record_len,
-            level0_checked: (0..level0).map(|_| AtomicU8::new(UNCHECKED)).collect(),
+            checked: (0..count).map(|_| AtomicU8::new(UNCHECKED)).collect(),
         })
     }
 
@@ -76,9 +77,8 @@ impl Pyramid {
     pub fn verify(&self) -> Result<(), PyramidError> {
         self.check_length().map_err(|problem| PyramidError::corrupt(&self.path, problem))?;
         let damaged = (0..self.nodes.len() as u64).into_par_iter().find_map_any(|index| {
-            check_record(self.record(index), &self.nodes[index as usize])
-                .err()
-                .map(|problem| (index, problem))
+            let (offset, summary) = self.nodes[index as usize]?;
+            check_record(self.record(offset), &summary).err().map(|problem| (index, problem))
         });
         match damaged {
             None => Ok(()),
@@ -114,26 +114,48 @@ impl Pyramid {
         self.map.len() as u64
     }
 
-    /// Min, max and delta of node `id` without reading its heights.
+    /// Min, max and delta of node `id` without reading its heights; `None`
+    /// for a node outside the pyramid or absent.
     pub fn node_summary(&self, id: NodeId) -> Option<NodeSummary> {
-        self.info.layout.node_index(id).map(|index| self.nodes[index as usize])
+        let index = self.info.layout.node_index(id)?;
+        self.nodes[index as usize].map(|(_, summary)| summary)
+    }
+
+    /// Whether node `id` is stored (inside the pyramid and not absent).
+    pub fn is_present(&self, id: NodeId) -> bool {
+        self.node_summary(id).is_some()
     }
 
     /// The bytes of the file holding node `id`'s record (its heights, min,
-    /// max, delta and checksum), `None` for a node outside the pyramid.
+    /// max, delta and checksum), `None` for a node outside the pyramid or
+    /// absent.
     pub fn record_range(&self, id: NodeId) -> Option<Range<u64>> {
         let index = self.info.layout.node_index(id)?;
-        let start = self.header_len + index * self.record_len;
+        let (start, _) = self.nodes[index as usize]?;
         Some(start..start + self.record_len)
     }
 
-    /// The full-resolution height at `(x_m, y_m)` in the local frame, read
-    /// from level 0 and interpolated on the south-west to north-east
-    /// triangles of its cell. Positions outside the data take the height at
-    /// the nearest edge (the pyramid's clamping rule); `None` for a
-    /// non-finite position, or where a level-0 node holding the cell's posts
-    /// fails its checksum (each level-0 node is checked the first time a
-    /// height is read from it, not on every call).
+    /// The finest layer's area in the local frame: its south-west post and
+    /// its extent east and north, metres (where the best data are; the
+    /// built-in approach flies over it).
+    pub fn finest_area_m(&self) -> ([f64; 2], [f64; 2]) {
+        let layout = &self.info.layout;
+        let window = self.info.finest;
+        let at = |a: usize, posts: u32| posts as f64 * layout.spacing_m[a];
+        (
+            [at(0, window.first[0]), at(1, window.first[1])],
+            [at(0, window.posts[0].saturating_sub(1)), at(1, window.posts[1].saturating_sub(1))],
+        )
+    }
+
+    /// The height of the best data at `(x_m, y_m)` in the local frame: the
+    /// finest present node there, interpolated on the south-west to
+    /// north-east triangles of its cell. Positions outside the data take the
+    /// height at the nearest edge (the pyramid's clamping rule); NaN where
+    /// the best data have no data; `None` for a non-finite position, or
+    /// where the node holding the cell's posts fails its checksum (each node
+    /// is checked the first time a height is read from it, not on every
+    /// call).
     pub fn exact_height(&self, x_m: f64, y_m: f64) -> Option<f32> {
         if !(x_m.is_finite() && y_m.is_finite()) {
             return None;
@@ -145,36 +167,45 @@ impl Pyramid {
     /// a node is damaged.
     fn checked_exact_height(&self, x_m: f64, y_m: f64) -> Result<f32, NodeError> {
         let layout = &self.info.layout;
-        let (i, fu) = cell_of(x_m / layout.spacing_m[0], layout.posts[0]);
-        let (j, fv) = cell_of(y_m / layout.spacing_m[1], layout.posts[1]);
-        let (i1, j1) = ((i + 1).min(layout.posts[0] - 1), (j + 1).min(layout.posts[1] - 1));
-        let h = |i, j| self.sample(i, j).map(|h| h as f64);
-        let surface = crate::node::cell_surface(h(i, j)?, h(i1, j)?, h(i, j1)?, h(i1, j1)?, fu, fv);
-        Ok(surface as f32)
+        let [ex, ey] = layout.extent_m();
+        let (x_m, y_m) = (x_m.clamp(0.0, ex), y_m.clamp(0.0, ey));
+        for lod in 0..layout.levels {
+            let Some(point) = layout.locate(lod, x_m, y_m) else { break };
+            let Some(index) = layout.node_index(point.id) else { break };
+            let Some((offset, _)) = self.nodes[index as usize] else { continue };
+            self.check_node(point.id, index)?;
+            let last_cell = layout.node_size.saturating_sub(1);
+            let cell = |p: f64| (p.max(0.0).floor() as u32).min(last_cell);
+            let (i, j) = (cell(point.posts[0]), cell(point.posts[1]));
+            let (fu, fv) = (point.posts[0] - i as f64, point.posts[1] - j as f64);
+            let h = |i: u32, j: u32| self.post(offset, i, j) as f64;
+            let surface = crate::node::cell_surface(
+                h(i, j),
+                h(i + 1, j),
+                h(i, j + 1),
+                h(i + 1, j + 1),
+                fu,
+                fv,
+            );
+            return Ok(surface as f32);
+        }
+        Err(NodeError::OutsideData { x_m, y_m })
     }
 
-    /// Level-0 sample `(i, j)`, read from the level-0 node that holds it
-    /// once that node's record has been found intact.
-    fn sample(&self, i: u32, j: u32) -> Result<f32, NodeError> {
+    /// Centre post `(i, j)` of the record at `offset`.
+    fn post(&self, offset: u64, i: u32, j: u32) -> f32 {
         let layout = &self.info.layout;
-        let [nodes_x, nodes_y] = layout.nodes_at(0);
-        let (x, y) =
-            ((i / layout.node_size).min(nodes_x - 1), (j / layout.node_size).min(nodes_y - 1));
-        let (p, q) =
-            (i - x * layout.node_size + layout.border, j - y * layout.node_size + layout.border);
-        let id = NodeId::new(0, x, y);
-        let index = layout.node_index(id).expect("the node of a sample exists");
-        self.check_level0(id, index)?;
+        let (p, q) = (i + layout.border, j + layout.border);
         let post = q as u64 * layout.stored_side() as u64 + p as u64;
-        let at = (self.header_len + index * self.record_len + 4 * post) as usize;
+        let at = (offset + 4 * post) as usize;
         // In bounds: the header check tied every record to the file's length.
-        Ok(f32::from_le_bytes(self.map[at..at + 4].try_into().expect("4 bytes")))
+        f32::from_le_bytes(self.map[at..at + 4].try_into().expect("4 bytes"))
     }
 
-    /// Checks level-0 node `id` (at `index`) the first time it is asked for,
-    /// and remembers the answer.
-    fn check_level0(&self, id: NodeId, index: u64) -> Result<(), NodeError> {
-        let state = &self.level0_checked[index as usize];
+    /// Checks node `id` (at `index`) the first time it is asked for, and
+    /// remembers the answer.
+    fn check_node(&self, id: NodeId, index: u64) -> Result<(), NodeError> {
+        let state = &self.checked[index as usize];
         match state.load(Ordering::Acquire) {
             INTACT => Ok(()),
             DAMAGED => Err(self.corrupt(id, "failed its checksum earlier".into())),
@@ -194,12 +225,12 @@ impl Pyramid {
     /// The heights bytes of node `id` (at `index`) once its record has
     /// passed its checksum and repeats the node table's summary.
     fn checked_record(&self, id: NodeId, index: u64) -> Result<&[u8], NodeError> {
+        let (offset, summary) = self.nodes[index as usize].ok_or(NodeError::Absent { id })?;
         self.check_length().map_err(|problem| NodeError::Io {
             path: self.path.clone(),
             source: std::io::Error::new(std::io::ErrorKind::UnexpectedEof, problem),
         })?;
-        check_record(self.record(index), &self.nodes[index as usize])
-            .map_err(|problem| self.corrupt(id, problem))
+        check_record(self.record(offset), &summary).map_err(|problem| self.corrupt(id, problem))
     }
 
     fn corrupt(&self, id: NodeId, problem: String) -> NodeError {
@@ -222,21 +253,11 @@ impl Pyramid {
         }
     }
 
-    /// The bytes of record `index`.
-    fn record(&self, index: u64) -> &[u8] {
-        let start = (self.header_len + index * self.record_len) as usize;
+    /// The bytes of the record at `offset`.
+    fn record(&self, offset: u64) -> &[u8] {
+        let start = offset as usize;
         &self.map[start..start + self.record_len as usize]
     }
-}
-
-/// The sample column (or row) whose cell holds `position` samples from the
-/// origin, and the fraction across it; positions outside `0..=samples - 1`
-/// clamp to the edge.
-fn cell_of(position: f64, samples: u32) -> (u32, f64) {
-    let last = (samples - 1) as f64;
-    let position = position.clamp(0.0, last);
-    let cell = (position.floor() as u32).min(samples.saturating_sub(2));
-    (cell, position - cell as f64)
 }
 
 /// The id of the node at position `index` in file order.
@@ -273,13 +294,26 @@ impl NodeSource for Pyramid {
         &self.info.layout
     }
 
+    fn has_node(&self, id: NodeId) -> bool {
+        self.is_present(id)
+    }
+
+    /// The best data's height at a point inside the data (see
+    /// [`Pyramid::exact_height`]); points outside are [`NodeError::OutsideData`].
+    fn exact_height(&self, x_m: f64, y_m: f64) -> Result<f32, NodeError> {
+        if self.info.layout.locate(0, x_m, y_m).is_none() {
+            return Err(NodeError::OutsideData { x_m, y_m });
+        }
+        self.checked_exact_height(x_m, y_m)
+    }
+
     /// Reads node `id` after checking its record's checksum: the check at
     /// page-in that [`Pyramid::open`] leaves to each node. A damaged record
     /// is [`NodeError::Corrupt`], naming the file and the node; `out` is
     /// then left as it was.
     fn read_node(&self, id: NodeId, out: &mut NodeData) -> Result<(), NodeError> {
         let index = self.info.layout.node_index(id).ok_or(NodeError::OutOfRange { id })?;
-        let summary = self.nodes[index as usize];
+        let (_, summary) = self.nodes[index as usize].ok_or(NodeError::Absent { id })?;
         let heights = self.checked_record(id, index)?;
         f32s_from_le(heights, &mut out.heights);
         out.min = summary.min;

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
 
-use super::build::BuiltPyramid;
+use super::built::BuiltPyramid;
 use super::error::PyramidError;
 use super::format::{encode_header, encode_record, record_len};
 use super::progress::Progress;
@@ -50,7 +50,8 @@ fn write_file(
     let layout = pyramid.layout();
     let header = encode_header(&pyramid.info, &pyramid.node_summaries());
     let record_len = record_len(layout) as usize;
-    progress.phase("write", header.len() as u64 + layout.node_count() * record_len as u64);
+    let present: u64 = pyramid.info.levels.iter().map(|l| l.present).sum();
+    progress.phase("write", header.len() as u64 + present * record_len as u64);
     let mut file = File::create(path).map_err(PyramidError::io(path))?;
     file.write_all(&header).map_err(PyramidError::io(path))?;
     progress.advance(header.len() as u64);

@@ -43,7 +43,8 @@ pub struct PreloadedTerrain {
 }
 
 impl PreloadedTerrain {
-    /// Reads all nodes of `source` (meant for pyramids of a few thousand nodes).
+    /// Reads all present nodes of `source` (meant for pyramids of a few
+    /// thousand nodes); absent ones are left out, as the clipmap leaves them.
     pub fn load(source: &dyn NodeSource) -> Result<Self, NodeError> {
         let layout = *source.layout();
         let mut nodes = HashMap::new();
@@ -54,12 +55,14 @@ impl PreloadedTerrain {
             for y in 0..ny {
                 for x in 0..nx {
                     let id = NodeId::new(lod, x, y);
+                    if !source.has_node(id) {
+                        continue;
+                    }
                     let mut data = NodeData::default();
                     source.read_node(id, &mut data)?;
                     deltas[lod as usize] = deltas[lod as usize].max(data.delta as f64);
-                    if lod == 0 {
-                        range = (range.0.min(data.min), range.1.max(data.max));
-                    }
+                    // Every level: a layered pyramid's level 0 is sparse.
+                    range = (range.0.min(data.min), range.1.max(data.max));
                     nodes.insert(id, data);
                 }
             }

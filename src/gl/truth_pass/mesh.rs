@@ -7,8 +7,9 @@
 //! normal equal to its own, and skirt vertices that copy the edge posts (drawn
 //! with depth 0 they have no area), so the terrain pass draws it as a big
 //! unmorphed level-0 tile. The region is widened to whole chunks; posts
-//! outside the data take the height of the nearest edge post, the pyramid's
-//! clamping rule, as the LOD display's edge tiles do.
+//! outside the data have no data. Where a layered pyramid has no level-0
+//! node (no data that fine there), the posts are the best data: the
+//! deepest present ancestor's surface sampled at the level-0 posts.
 
 use crate::lod::select::tiles_at;
 use crate::node::{NodeData, NodeError, NodeId, NodeLayout, NodeSource};
@@ -21,6 +22,9 @@ pub const MAX_TRUTH_POSTS: u64 = 1 << 24;
 /// Cells per chunk side: the largest power of two whose tile grid,
 /// skirts included, numbers its vertices in `u16`.
 pub const CHUNK_CELLS: u32 = 128;
+/// Posts per side of the largest square of whole chunks within
+/// [`MAX_TRUTH_POSTS`].
+pub const MAX_TRUTH_SIDE: u32 = 31 * CHUNK_CELLS + 1;
 
 /// A rectangle of level-0 posts: `posts` of them east and north from `first`.
 /// It may reach past the data, where heights extend the edge.
@@ -46,6 +50,45 @@ impl TruthRegion {
             first: [0, 0],
             posts: tiles.map(|t| t.saturating_mul(grid_size).saturating_add(1)),
         }
+    }
+
+    /// What the level-0 tiles cover ([`TruthRegion::covering_tiles`]),
+    /// within a window of [`MAX_TRUTH_SIDE`] posts a side centred on the
+    /// middle of `positions` (local metres): all of a single tile, the part
+    /// of a layered pyramid's level 0 (which spans its whole base) around a
+    /// flight.
+    pub fn around_positions(
+        layout: &NodeLayout,
+        grid_size: u32,
+        positions: impl IntoIterator<Item = [f64; 2]>,
+    ) -> Self {
+        let (mut low, mut high) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for p in positions {
+            for a in 0..2 {
+                low[a] = low[a].min(p[a]);
+                high[a] = high[a].max(p[a]);
+            }
+        }
+        let centre = [0, 1].map(|a| {
+            let middle = if low[a] <= high[a] { 0.5 * (low[a] + high[a]) } else { 0.0 };
+            (middle / layout.spacing_m[a]).round() as i64
+        });
+        Self::covering_tiles(layout, grid_size).around(centre, MAX_TRUTH_SIDE)
+    }
+
+    /// The part of this region inside a square of `side` posts centred on
+    /// level-0 post `centre`: for data too large to hold whole at full
+    /// resolution (a layered pyramid's level 0 spans its coarse base).
+    pub fn around(self, centre: [i64; 2], side: u32) -> Self {
+        let window = |a: usize| {
+            let end = self.first[a] + self.posts[a] as i64;
+            let first = (centre[a] - side as i64 / 2).max(self.first[a]);
+            let last = (first + side as i64).min(end);
+            let first = (last - side as i64).max(self.first[a]);
+            (first, (last - first) as u32)
+        };
+        let [(x, east), (y, north)] = [window(0), window(1)];
+        TruthRegion { first: [x, y], posts: [east, north] }
     }
 
     /// The region widened east and north to whole chunks, as posts per side
@@ -214,13 +257,30 @@ impl MarginGrid {
         for (node_y, rows) in y.runs() {
             for (node_x, columns) in &x_runs {
                 let id = NodeId::new(0, *node_x, node_y);
+                // The deepest present node: the level-0 one or an ancestor.
+                let mut best = id;
+                while !source.has_node(best) && best.level + 1 < layout.levels {
+                    best = NodeId::new(best.level + 1, best.x / 2, best.y / 2);
+                }
                 source
-                    .read_node(id, &mut node)
-                    .map_err(|source| TruthError::Node { id, source })?;
+                    .read_node(best, &mut node)
+                    .map_err(|source| TruthError::Node { id: best, source })?;
+                let stride = (1u64 << best.level) as f64;
+                let offset = [0, 1].map(|a| {
+                    let (level0, ancestor) = if a == 0 { (id.x, best.x) } else { (id.y, best.y) };
+                    (level0 as u64 * layout.node_size as u64
+                        - ancestor as u64 * layout.span(best.level)) as f64
+                });
                 for row in rows.clone() {
                     for column in columns.clone() {
                         let (i, j) = (x.local[column], y.local[row]);
-                        let height = node.post(layout, i, j);
+                        let height = if best.level == 0 {
+                            node.post(layout, i, j)
+                        } else {
+                            let fx = (offset[0] + i as f64) / stride;
+                            let fy = (offset[1] + j as f64) / stride;
+                            crate::tiles::vertex::sample_node(layout, &node, fx, fy)
+                        };
                         if height.is_infinite() {
                             return Err(TruthError::NotFinite { id, i, j });
                         }

@@ -85,6 +85,16 @@ pub fn srtm_tile_pyramid() -> Arc<Pyramid> {
     Arc::clone(pyramid)
 }
 
+/// The built-in terrain's SRTM tile's south-west post in the pyramid's local
+/// frame, metres: the built-in terrain is the tile over a larger ETOPO5
+/// base, and the scene and render helpers ([`scene::camera`],
+/// [`render::camera`], [`render::ground`]) take positions relative to the
+/// tile, as they were before the base was added.
+pub fn builtin_origin() -> glam::DVec2 {
+    static ORIGIN: OnceLock<glam::DVec2> = OnceLock::new();
+    *ORIGIN.get_or_init(|| glam::DVec2::from(builtin_pyramid().finest_area_m().0))
+}
+
 /// A camera at `(x, y, altitude)` metres, heading and pitch in degrees, no
 /// roll, a 60 degree field of view, over `viewport` pixels.
 pub fn camera(

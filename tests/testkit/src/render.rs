@@ -42,10 +42,12 @@ pub const SENTINEL_RGBA: [u8; 4] = [255, 0, 255, 255];
 pub const TOLERANCE: compare::Tolerance =
     compare::Tolerance { channel_threshold: 16, max_share_over: 0.0002, max_mean: 0.1 };
 
-/// Terrain height under `(x, y)`; the views stay inside the data.
+/// Terrain height under `(x, y)` metres from the built-in SRTM tile's
+/// south-west post ([`crate::builtin_origin`]); the views stay inside the data.
 pub fn ground(x: f64, y: f64) -> f64 {
+    let origin = crate::builtin_origin();
     builtin_pyramid()
-        .exact_height(x, y)
+        .exact_height(origin.x + x, origin.y + y)
         .unwrap_or_else(|| panic!("({x}, {y}) is outside the terrain")) as f64
 }
 
@@ -73,9 +75,11 @@ pub fn open_over(
     DisplayParts::open(config, pyramid, summary)
 }
 
-/// A camera over the render tests' viewport ([`SIZE`]).
+/// A camera over the render tests' viewport ([`SIZE`]) at `(x, y)` metres
+/// from the built-in SRTM tile's south-west post ([`crate::builtin_origin`]).
 pub fn camera(x: f64, y: f64, altitude: f64, heading_deg: f64, pitch_deg: f64) -> Camera {
-    crate::camera([SIZE.x, SIZE.y], x, y, altitude, heading_deg, pitch_deg)
+    let origin = crate::builtin_origin();
+    crate::camera([SIZE.x, SIZE.y], origin.x + x, origin.y + y, altitude, heading_deg, pitch_deg)
 }
 
 /// A named fixed view over the built-in terrain (local metres, degrees).
@@ -97,11 +101,9 @@ impl View {
 
 /// The golden views: a medium one, a low one among ridges higher than the
 /// aircraft (amber and red terrain-awareness bands), a high one looking
-/// steeply down. All look across the data, away from its near edges. Where
-/// the aircraft is above every ridge the skyline is the data's far edge,
-/// hazed at 50 to 65 km: the medium view's few rows of sky just above it and
-/// about one row in the low view would show terrain beyond the data in the
-/// world; the high view shows no sky.
+/// steeply down, all over the built-in SRTM tile (positions relative to its
+/// south-west post) and looking across it. Beyond the tile the ETOPO5 base
+/// carries the terrain to the horizon: no view shows an edge of the data.
 pub const VIEWS: [View; 3] = [
     View {
         name: "medium",
@@ -136,8 +138,9 @@ pub fn redraw(display: &mut DisplayParts, alter: impl FnOnce(&mut DrawList)) -> 
     display.context.read_pixels().expect("read back")
 }
 
-/// The data rectangle less `margin_m` on every side, and the lowest height,
-/// for [`coverage::terrain_guaranteed`].
+/// The data rectangle (the whole base: terrain reaches every corner of it)
+/// less `margin_m` on every side, and the lowest height, for
+/// [`coverage::terrain_guaranteed`].
 pub fn terrain_bounds(margin_m: f64) -> coverage::TerrainBounds {
     let pyramid = builtin_pyramid();
     let layout = *ridgeline::node::NodeSource::layout(&*pyramid);

@@ -66,9 +66,12 @@ pub fn terrain() -> &'static PreloadedTerrain {
         .get_or_init(|| PreloadedTerrain::load(builtin_pyramid().as_ref()).expect("all nodes read"))
 }
 
-/// A camera over the scene tests' viewport ([`VIEWPORT`]).
+/// A camera over the scene tests' viewport ([`VIEWPORT`]) at `(x, y)`
+/// metres from the built-in SRTM tile's south-west post
+/// ([`crate::builtin_origin`]).
 pub fn camera(x: f64, y: f64, altitude: f64, heading: f64, pitch: f64) -> Camera {
-    crate::camera(VIEWPORT, x, y, altitude, heading, pitch)
+    let origin = crate::builtin_origin();
+    crate::camera(VIEWPORT, origin.x + x, origin.y + y, altitude, heading, pitch)
 }
 
 /// Drawn height at every edge post and edge-segment midpoint of every tile,
