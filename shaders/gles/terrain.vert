@@ -17,7 +17,7 @@ uniform mat4 u_view_projection;
 uniform vec4 u_tile;      // south-west post numbered from the anchor (xy), level-0 posts per cell (z), skirt edges (w: bit k-1 for edge k)
 uniform vec4 u_posts;     // level-0 post spacing (xy), camera minus anchor post (zw), metres
 uniform vec4 u_morph;     // morph start, morph end, skirt depth, unused
-uniform vec4 u_frame;     // camera altitude, 1 / (2 R) or 0 for a flat earth, unused, unused
+uniform vec4 u_frame;     // camera altitude, 1 / (2 R) or 0 for a flat earth, the data's last post numbered from the anchor (zw)
 
 varying vec3 v_normal;
 varying float v_relative_height;  // terrain height minus aircraft altitude
@@ -25,9 +25,13 @@ varying float v_height;
 varying float v_distance;
 varying vec3 v_position;     // camera-relative, for the accuracy tool's position output
 varying float v_void;        // 1 at a post without data, 0 elsewhere (see VOIDS in the fragment shaders)
+varying vec2 v_beyond;       // posts past the data's last post, east and north (clipped where above 0)
 
 void main() {
-    vec2 position = (u_tile.xy + a_grid.xy * u_tile.z) * u_posts.xy - u_posts.zw;
+    vec2 post = u_tile.xy + a_grid.xy * u_tile.z;
+    vec2 position = post * u_posts.xy - u_posts.zw;
+    // Linear across every triangle, so the clip at 0 is the data's edge.
+    v_beyond = post - u_frame.zw;
     float altitude = u_frame.x;
     // A post without data carries tiles::NO_DATA (-1e9 m) and, as its target,
     // a real height nearby: its triangles are dropped, but stay small.

@@ -35,6 +35,9 @@ pub struct LodSurface {
     spacing_m: [f64; 2],
     eye: DVec2,
     posts: PostFrame,
+    /// The data's last post, local metres east and north: the terrain
+    /// program clips there.
+    last_m: [f64; 2],
     /// The shader's f32 altitude and 1 / (2 R) (0 for a flat earth), widened.
     altitude: f64,
     curvature: f64,
@@ -56,15 +59,22 @@ impl LodSurface {
             }
         });
         let posts = list.uniforms.map_or(PostFrame::default(), |f| f.posts);
-        LodSurface { tiles, levels, grid_size, spacing_m, eye, posts, altitude, curvature }
+        let last_m = list
+            .uniforms
+            .map_or([f64::INFINITY; 2], |f| [0, 1].map(|k| f.last_post[k] as f64 * spacing_m[k]));
+        LodSurface { tiles, levels, grid_size, spacing_m, eye, posts, last_m, altitude, curvature }
     }
 
     /// Height of the drawn surface at the local point `(x_m, y_m)`, metres
     /// above the datum with the curvature drop taken off (what the GPU drew
     /// there plus the camera altitude); `None` where no tile was drawn, or
     /// where the tile's triangle there touches a post without data (the
-    /// display drops such triangles).
+    /// display drops such triangles), and past the data's last post (the
+    /// display clips there).
     pub fn height_at(&self, staging: &[u8], x_m: f64, y_m: f64) -> Option<f64> {
+        if x_m > self.last_m[0] || y_m > self.last_m[1] {
+            return None;
+        }
         let (tile, local) = self.locate(x_m, y_m)?;
         let height = self.tile_surface(staging, tile, local);
         height.is_finite().then_some(height)

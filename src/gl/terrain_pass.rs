@@ -316,11 +316,12 @@ fn set_frame_uniforms(calls: Calls<'_>, at: &Locations, frame: &FrameUniforms) {
     let sun = frame.sun_direction;
     let posts = &frame.posts;
     let awareness = [frame.warning_above_m, frame.caution_below_m, frame.fog_distance_m, 0.0];
+    let [last_x, last_y] = posts.number(frame.last_post);
     // SAFETY: the program is bound; locations come from it.
     unsafe {
         calls.uniform_4(
             at.frame.as_ref(),
-            [frame.camera_altitude as f32, curvature as f32, 0.0, 0.0],
+            [frame.camera_altitude as f32, curvature as f32, last_x, last_y],
         );
         let [sx, sy] = posts.spacing;
         calls.uniform_4(at.posts.as_ref(), [sx, sy, posts.offset[0], posts.offset[1]]);

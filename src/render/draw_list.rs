@@ -36,6 +36,10 @@ pub struct FrameUniforms {
     pub fog_distance_m: f32,
     /// Where level-0 posts are relative to the camera.
     pub posts: PostFrame,
+    /// The data's last level-0 post east and north (the layout's posts
+    /// minus one): the terrain program clips every tile there, so a cell
+    /// the data end inside ends with them (see `tiles::PostReader::value`).
+    pub last_post: [i64; 2],
     /// The depth range cut in two where one 24-bit range cannot resolve it.
     pub slices: DepthSlices,
 }
@@ -403,6 +407,7 @@ mod tests {
             viewport: [1, 1],
             fog_distance_m: 1.0,
             posts,
+            last_post: [i64::MAX / 2; 2],
             slices: DepthSlices {
                 near: Mat4::IDENTITY,
                 far: None,

@@ -277,6 +277,7 @@ pub fn frame_uniforms(
         viewport: camera.viewport,
         fog_distance_m: far,
         posts: PostFrame::new(camera.position.truncate(), terrain.layout().spacing_m),
+        last_post: terrain.layout().posts.map(|p| p as i64 - 1),
         slices: DepthSlices::new(camera, near, far, terrain.height_range()),
     }
 }

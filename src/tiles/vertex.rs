@@ -7,8 +7,8 @@ use super::grid::{edge_posts, vertex_count};
 use crate::lod::TileKey;
 use crate::node::{cell_surface, NodeData, NodeId, NodeLayout};
 
-/// The height a vertex carries where the data has none (a void, or beyond
-/// the data's edge): far below any terrain, so that no consumer mistakes it
+/// The height a vertex carries where the data has none (a void, or more
+/// than one post beyond the data's edge): far below any terrain, so that no consumer mistakes it
 /// for one. Its morph target then holds a nearby real height, for the
 /// rasteriser's sake only; every triangle touching such a vertex is dropped
 /// (see [`TileCoverage`] and the terrain shaders' `VOIDS` variant).
@@ -25,8 +25,9 @@ pub enum TileCoverage {
     /// Every post has data.
     #[default]
     Full,
-    /// Some posts have none, or a skirt faces no data: the tile is drawn
-    /// with the program that drops the triangles touching them.
+    /// Some posts have none, or a skirt faces no data, or posts lie past
+    /// the data's last post: the tile is drawn with the program that drops
+    /// the triangles touching posts without data and clips at the last post.
     Partial,
     /// No post has data: nothing to draw.
     Empty,
@@ -87,22 +88,101 @@ impl<'a> PostReader<'a> {
 
     /// Height of the tile's post `(i, j)`; `i` and `j` may reach two posts
     /// outside the tile (into the node's border). NaN where the data has no
-    /// post: a void in the node, or beyond the data's edge (never an
-    /// edge-copied height).
+    /// post: a void in the node, or more than one post beyond the data's
+    /// last post (never an edge-copied height). See [`Self::value`] for the
+    /// first post beyond it.
     pub fn post(&self, i: i64, j: i64) -> f32 {
-        let x = self.origin[0] + i * self.stride;
-        let y = self.origin[1] + j * self.stride;
-        let [last_x, last_y] = self.layout.posts.map(|p| p as i64 - 1);
-        if x < 0 || y < 0 || x > last_x || y > last_y {
+        let [x, y] = self.position(i, j);
+        self.value(x, y, self.stride)
+    }
+
+    /// Height of the parent level's post `(i, j)` (both even): the tile's
+    /// own where the data reach, the parent lattice's extrapolation (see
+    /// [`Self::value`]) on the first parent post beyond the data.
+    pub fn parent_post(&self, i: i64, j: i64) -> f32 {
+        let [x, y] = self.position(i, j);
+        self.value(x, y, 2 * self.stride)
+    }
+
+    /// Whether post `(i, j)` lies beyond the data's last post east or
+    /// north: drawn only by the program that clips at that post.
+    pub fn is_beyond(&self, i: i64, j: i64) -> bool {
+        let [x, y] = self.position(i, j);
+        let [last_x, last_y] = self.last();
+        x > last_x || y > last_y
+    }
+
+    fn position(&self, i: i64, j: i64) -> [i64; 2] {
+        [self.origin[0] + i * self.stride, self.origin[1] + j * self.stride]
+    }
+
+    fn last(&self) -> [i64; 2] {
+        self.layout.posts.map(|p| p as i64 - 1)
+    }
+
+    /// The surface at level-0 post `(x, y)` on a lattice of `stride`. Where
+    /// the data's last post east (or north) falls inside a cell of the
+    /// lattice, the cell's post beyond it gets the height on the line from
+    /// the post before through the data's last post: the cell then passes
+    /// through the data at its edge, and the terrain program clips it
+    /// there (`u_frame.zw`), so the surface ends where the data end, at
+    /// every level, instead of at the level's last post before them. A
+    /// lattice post more than one cell beyond has no data (NaN).
+    fn value(&self, x: i64, y: i64, stride: i64) -> f32 {
+        let last_y = self.last()[1];
+        if y <= last_y {
+            return self.value_x(x, y as f64, stride);
+        }
+        let before = y - stride;
+        if before >= last_y {
             return f32::NAN;
         }
+        let a = self.value_x(x, before as f64, stride);
+        let edge = self.value_x(x, self.edge(last_y), stride);
+        extrapolate(a, edge, (y - before) as f32 / (last_y - before) as f32)
+    }
+
+    /// [`Self::value`] along a row at `y` (level-0 posts, perhaps the edge
+    /// position of [`Self::edge`]).
+    fn value_x(&self, x: i64, y: f64, stride: i64) -> f32 {
+        let last_x = self.last()[0];
+        if x < 0 || y < 0.0 {
+            return f32::NAN;
+        }
+        if x <= last_x {
+            return self.sample(x as f64, y);
+        }
+        let before = x - stride;
+        if before >= last_x {
+            return f32::NAN;
+        }
+        let a = self.sample(before as f64, y);
+        let edge = self.sample(self.edge(last_x), y);
+        extrapolate(a, edge, (x - before) as f32 / (last_x - before) as f32)
+    }
+
+    /// Where the node holds the data's last post `last`: its first lattice
+    /// post at or beyond it, which the builder fills with the last post's
+    /// height (positions beyond the data take the edge post's place).
+    fn edge(&self, last: i64) -> f64 {
         let node_stride = 1i64 << self.node.level;
-        let span = (self.layout.node_size as i64) << self.node.level;
-        // Position in the node's posts (fractional when the node is coarser).
-        let fx = (x - self.node.x as i64 * span) as f64 / node_stride as f64;
-        let fy = (y - self.node.y as i64 * span) as f64 / node_stride as f64;
+        ((last + node_stride - 1) / node_stride * node_stride) as f64
+    }
+
+    /// The node's surface at level-0 post `(x, y)`.
+    fn sample(&self, x: f64, y: f64) -> f32 {
+        let node_stride = (1i64 << self.node.level) as f64;
+        let span = ((self.layout.node_size as i64) << self.node.level) as f64;
+        let fx = (x - self.node.x as f64 * span) / node_stride;
+        let fy = (y - self.node.y as f64 * span) / node_stride;
         sample_node(self.layout, self.data, fx, fy)
     }
+}
+
+/// The height `t` times the way from `a` toward `edge` (`t` above 1: past
+/// the edge, on the same line). NaN when either is.
+fn extrapolate(a: f32, edge: f32, t: f32) -> f32 {
+    a + (edge - a) * t
 }
 
 /// The node's surface at post coordinates `(fx, fy)` (0 = the first centre
@@ -134,13 +214,16 @@ pub fn fill_tile(
     let g = grid_size as i64;
     debug_assert_eq!(out.len(), vertex_count(grid_size));
     let h = |i: i64, j: i64| reader.post(i, j) as f64;
-    let normal = |i: i64, j: i64, step: i64| {
+    // The parent level's posts: the same where the data reach, its own
+    // lattice's extrapolation past them.
+    let hp = |i: i64, j: i64| reader.parent_post(i, j) as f64;
+    let normal = |h: &dyn Fn(i64, i64) -> f64, i: i64, j: i64, step: i64| {
         let dx = slope(h(i - step, j), h(i, j), h(i + step, j), step as f64 * spacing_m[0]);
         let dy = slope(h(i, j - step), h(i, j), h(i, j + step), step as f64 * spacing_m[1]);
         let inv = 1.0 / (dx * dx + dy * dy + 1.0).sqrt();
         [-dx * inv, -dy * inv]
     };
-    let (mut with_data, mut without) = (0usize, 0usize);
+    let (mut with_data, mut without, mut beyond) = (0usize, 0usize, 0usize);
     let mut nearest = f64::NAN;
     for j in 0..=g {
         for i in 0..=g {
@@ -151,10 +234,14 @@ pub fn fill_tile(
                 out[index] = TileVertex { height: NO_DATA, target: f32::NAN, normal: [0; 4] };
                 continue;
             }
-            with_data += 1;
+            if reader.is_beyond(i, j) {
+                beyond += 1;
+            } else {
+                with_data += 1;
+            }
             nearest = own;
-            let slope_here = normal(i, j, 1);
-            let (target, parent) = parent_surface(i, j, &h, &|i, j| normal(i, j, 2));
+            let slope_here = normal(&h, i, j, 1);
+            let (target, parent) = parent_surface(i, j, &hp, &|i, j| normal(&hp, i, j, 2));
             let (target, parent) =
                 if target.is_nan() { (own, slope_here) } else { (target, parent) };
             out[index] = TileVertex {
@@ -177,7 +264,8 @@ pub fn fill_tile(
         }
     }
     let skirts_dropped = fill_skirts(reader, grid_size, out);
-    match (with_data, without + skirts_dropped) {
+    // Posts beyond the data's last post are drawn only to be clipped there.
+    match (with_data, without + skirts_dropped + beyond) {
         (0, _) => TileCoverage::Empty,
         (_, 0) => TileCoverage::Full,
         _ => TileCoverage::Partial,
@@ -284,6 +372,64 @@ mod tests {
             .filter(|(k, _)| is_no_data(out[posts + k].height))
             .map(|(_, p)| p)
             .collect()
+    }
+
+    /// A level-1 node over data whose last post is 9 both ways (10 x 10
+    /// posts), heights `x^2 + 3 y^2`, stored as the builder stores them
+    /// (positions beyond the data take the edge post's place).
+    fn reader_test(check: impl FnOnce(&PostReader<'_>)) {
+        let layout = NodeLayout {
+            levels: 2,
+            node_size: 8,
+            border: 2,
+            posts: [10, 10],
+            spacing_m: [90.0, 90.0],
+        };
+        let side = layout.stored_side() as i64;
+        let at = |p: i64| ((p - 2) * 2).clamp(0, 9) as f32;
+        let heights = (0..side * side).map(|k| at(k % side).powi(2) + 3.0 * at(k / side).powi(2));
+        let data = NodeData { heights: heights.collect(), min: 0.0, max: 324.0, delta: 0.0 };
+        let reader =
+            PostReader::new(&layout, TileKey::new(1, 0, 0), 8, NodeId::new(1, 0, 0), &data);
+        check(&reader);
+    }
+
+    #[test]
+    fn the_cell_the_data_end_in_passes_through_their_last_post() {
+        let h = |x: f32, y: f32| x * x + 3.0 * y * y;
+        reader_test(|reader| {
+            // Post 5 of the level-1 tile is level-0 post 10, one past the
+            // data's last (9): on the line from post 8 through post 9.
+            let beyond = reader.post(5, 4);
+            assert_eq!(beyond, h(8.0, 8.0) + 2.0 * (h(9.0, 8.0) - h(8.0, 8.0)));
+            // So the drawn cell's midpoint, post 9, is the data there.
+            assert_eq!((reader.post(4, 4) + beyond) / 2.0, h(9.0, 8.0));
+            assert_eq!((reader.post(4, 4) + reader.post(4, 5)) / 2.0, h(8.0, 9.0));
+            // The corner: the SW-NE diagonal passes through (9, 9).
+            assert_eq!((reader.post(4, 4) + reader.post(5, 5)) / 2.0, h(9.0, 9.0));
+            assert!(reader.is_beyond(5, 0) && reader.is_beyond(0, 5) && !reader.is_beyond(4, 4));
+            // Two posts beyond: no data.
+            assert!(reader.post(6, 0).is_nan() && reader.post(0, 6).is_nan());
+            assert!(reader.post(-1, 0).is_nan());
+            // The parent lattice (level-0 posts 0, 4, 8, 12) extrapolates
+            // from its own post before the edge: 12 is on the line 8-9.
+            let parent = reader.parent_post(6, 0);
+            assert_eq!(parent, h(8.0, 0.0) + 4.0 * (h(9.0, 0.0) - h(8.0, 0.0)));
+            assert_eq!(reader.parent_post(4, 0), reader.post(4, 0));
+        });
+    }
+
+    /// A tile reaching past the data's last post is drawn by the clipping
+    /// program, and its posts past the edge carry heights (not NO_DATA).
+    #[test]
+    fn a_tile_past_the_data_edge_is_partial_with_heights_to_clip() {
+        reader_test(|reader| {
+            let mut out = vec![TileVertex::default(); vertex_count(8)];
+            let coverage = fill_tile(reader, 8, [180.0, 180.0], &mut out);
+            assert_eq!(coverage, TileCoverage::Partial);
+            assert!(!is_no_data(out[5 + 9 * 4].height), "one post past the edge has a height");
+            assert!(is_no_data(out[6 + 9 * 4].height), "two posts past it have none");
+        });
     }
 
     #[test]
