@@ -18,12 +18,10 @@ use std::path::PathBuf;
 use std::sync::OnceLock;
 use testkit::compare::{assert_similar, check_similar, Difference};
 use testkit::gl::{skip_for_missing_osmesa, take_turn};
-use testkit::render::{config, open, redraw, render, View, TOLERANCE, VIEWS};
+use testkit::render::{config, open, redraw, render, TOLERANCE, VIEWS};
 
-fn golden_path(view: &View) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/golden")
-        .join(format!("{}.png", view.name))
+fn golden_path(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/golden").join(format!("{name}.png"))
 }
 
 fn updating() -> bool {
@@ -40,16 +38,16 @@ fn goldens() -> &'static [RgbaImage] {
             let mut display = open(&config(GlBackend::Egl, GlesVersion::Es3)).expect("EGL display");
             VIEWS
                 .iter()
-                .map(|view| write_golden(view, render(&mut display, &view.camera()).0))
+                .map(|view| write_golden(view.name, render(&mut display, &view.camera()).0))
                 .collect()
         } else {
-            VIEWS.iter().map(read_golden).collect()
+            VIEWS.iter().map(|view| read_golden(view.name)).collect()
         }
     })
 }
 
-fn read_golden(view: &View) -> RgbaImage {
-    let path = golden_path(view);
+fn read_golden(name: &str) -> RgbaImage {
+    let path = golden_path(name);
     match image::open(&path) {
         Ok(image) => image.to_rgba8(),
         Err(e) => panic!(
@@ -61,8 +59,8 @@ fn read_golden(view: &View) -> RgbaImage {
 }
 
 /// Writes beside the old file and renames into place.
-fn write_golden(view: &View, image: RgbaImage) -> RgbaImage {
-    let path = golden_path(view);
+fn write_golden(name: &str, image: RgbaImage) -> RgbaImage {
+    let path = golden_path(name);
     let partial = path.with_extension(format!("png.tmp-{}", std::process::id()));
     std::fs::create_dir_all(path.parent().expect("golden directory")).expect("create tests/golden");
     image.save_with_format(&partial, image::ImageFormat::Png).expect("write golden image");
@@ -227,4 +225,37 @@ fn centre_tile(
             relative.cmpge(min).all() && relative.cmplt(max).all()
         })
         .expect("a drawn tile holds the centre of the picture")
+}
+
+/// The "no data" treatment, kept in a golden image (`edge.png`): the
+/// built-in SRTM tile alone, seen from 8 km beyond its east edge, looking
+/// back west. The terrain ends at the data's last post, with no shelf and
+/// no skirt curtain, and below it the sky pass's grey diagonal hatching
+/// fills what no terrain covers (a fifth of the picture and more).
+#[test]
+fn the_no_data_hatching_at_the_coverage_edge_matches_its_golden() {
+    let _turn = take_turn();
+    let pyramid = testkit::srtm_tile_pyramid();
+    let [east, north] = ridgeline::node::NodeSource::layout(&*pyramid).extent_m();
+    let size = testkit::render::SIZE;
+    let camera =
+        testkit::camera([size.x, size.y], east + 8_000.0, north / 2.0, 4_500.0, 270.0, -10.0);
+    let config = config(GlBackend::Egl, GlesVersion::Es3);
+    let mut display = testkit::render::open_over(&config, pyramid).expect("EGL display");
+    let (image, _) = render(&mut display, &camera);
+    let hatching = image.pixels().filter(|p| is_hatching(p.0)).count();
+    let share = hatching as f64 / (size.x * size.y) as f64;
+    assert!(share > 0.2, "only {:.1} % of the picture shows the no-data hatching", share * 100.0);
+    let golden = if updating() { write_golden("edge", image.clone()) } else { read_golden("edge") };
+    let difference = assert_similar("golden-egl-edge", &golden, &image, &TOLERANCE);
+    println!("EGL edge vs golden: {difference}; hatching {:.1} % of the picture", share * 100.0);
+}
+
+/// The hatching's two greys (`sky_pass::NO_DATA`, 0.22 0.22 0.24, and twice
+/// it), within rounding.
+fn is_hatching([r, g, b, _]: [u8; 4]) -> bool {
+    let near = |[er, eg, eb]: [f32; 3]| {
+        [(r, er), (g, eg), (b, eb)].iter().all(|&(c, e)| (c as f32 - e * 255.0).abs() <= 2.0)
+    };
+    near([0.22, 0.22, 0.24]) || near([0.44, 0.44, 0.48])
 }

@@ -89,8 +89,9 @@ impl<'a> PostReader<'a> {
     /// Height of the tile's post `(i, j)`; `i` and `j` may reach two posts
     /// outside the tile (into the node's border). NaN where the data has no
     /// post: a void in the node, or more than one post beyond the data's
-    /// last post (never an edge-copied height). See [`Self::value`] for the
-    /// first post beyond it.
+    /// last post (never an edge-copied height). The first post beyond it
+    /// carries the height on the line through the data's last post, to be
+    /// clipped there (see `value`).
     pub fn post(&self, i: i64, j: i64) -> f32 {
         let [x, y] = self.position(i, j);
         self.value(x, y, self.stride)
@@ -98,7 +99,7 @@ impl<'a> PostReader<'a> {
 
     /// Height of the parent level's post `(i, j)` (both even): the tile's
     /// own where the data reach, the parent lattice's extrapolation (see
-    /// [`Self::value`]) on the first parent post beyond the data.
+    /// `value`) on the first parent post beyond the data.
     pub fn parent_post(&self, i: i64, j: i64) -> f32 {
         let [x, y] = self.position(i, j);
         self.value(x, y, 2 * self.stride)
@@ -142,7 +143,7 @@ impl<'a> PostReader<'a> {
         extrapolate(a, edge, (y - before) as f32 / (last_y - before) as f32)
     }
 
-    /// [`Self::value`] along a row at `y` (level-0 posts, perhaps the edge
+    /// `value` along a row at `y` (level-0 posts, perhaps the edge
     /// position of [`Self::edge`]).
     fn value_x(&self, x: i64, y: f64, stride: i64) -> f32 {
         let last_x = self.last()[0];
