@@ -157,3 +157,67 @@ fn a_file_truncated_after_opening_is_an_io_error_not_a_crash() {
     assert_eq!(pyramid.exact_height(10.0, 10.0), None);
     assert!(matches!(pyramid.verify(), Err(PyramidError::Corrupt { .. })));
 }
+
+/// The whole frame pipeline flies over a node damaged after opening: a copy
+/// of the built-in terrain, the level-0 node under a low camera flipped on
+/// disk. Every frame is drawn (null backend, counting what GL would issue);
+/// the damage is reported once, naming node and file; the tiles over the
+/// node draw its parent's data; the tiles beside it draw their own.
+#[test]
+fn the_pipeline_flies_over_a_damaged_node_on_its_ancestor() {
+    let dir = fresh_dir("corrupt-pipeline");
+    let original = testkit::builtin_pyramid();
+    std::fs::copy(original.path(), dir.join(ridgeline::pyramid::FILE_NAME)).expect("copy");
+    let pyramid = Arc::new(Pyramid::open(&dir).expect("open the copy"));
+    let path = pyramid.path().to_path_buf();
+    let layout = *pyramid.layout();
+    let origin = testkit::builtin_origin();
+    let ground = origin + DVec2::new(30_000.0, 40_000.0);
+    let span_m = [0, 1].map(|a| layout.node_size as f64 * layout.spacing_m[a]);
+    let bad = NodeId::new(0, (ground.x / span_m[0]) as u32, (ground.y / span_m[1]) as u32);
+    assert!(pyramid.is_present(bad), "level 0 is stored over the SRTM tile");
+    let record = pyramid.record_range(bad).expect("a node of the pyramid");
+    flip_bytes(&path, record.start + (record.end - record.start) / 3, 64);
+
+    let config = ridgeline::scene::SceneConfig::default();
+    let summary = ridgeline::scene::TerrainSummary::from_pyramid(pyramid.info());
+    let mut pipeline = testkit::scene::pipeline_over(pyramid.clone(), summary, config);
+    let mut backend = testkit::scene::null_backend(&config);
+    let centre = DVec2::new((bad.x as f64 + 0.5) * span_m[0], (bad.y as f64 + 0.5) * span_m[1]);
+    let height = original.exact_height(centre.x, centre.y).expect("the original has data") as f64;
+    let grid = config.lod.grid_size;
+    let (mut over, mut beside) = (0, 0);
+    for k in 0..6 {
+        let x = centre.x - 3_000.0 + 1_000.0 * k as f64;
+        let camera = testkit::camera(
+            testkit::scene::VIEWPORT,
+            x,
+            centre.y - 2_000.0,
+            height + 400.0,
+            20.0,
+            -25.0,
+        );
+        let stats = testkit::scene::fly(&mut pipeline, &mut backend, &camera).expect("a frame");
+        assert!(stats.calls.draw_calls > 1, "frame {k} draws terrain");
+        for &(key, source_level) in &pipeline.draw_list().drawn {
+            if key.level != 0 {
+                continue;
+            }
+            let (node, _) = ridgeline::tiles::vertex::tile_node(key, grid, layout.node_size);
+            if node == bad {
+                assert!(source_level >= 1, "frame {k}: tile {key:?} drew the damaged node");
+                over += 1;
+            } else if pyramid.is_present(node) {
+                beside += usize::from(source_level == 0);
+            }
+        }
+    }
+    assert!(over > 0 && beside > 0, "tiles over the node {over}, level-0 tiles beside it {beside}");
+    let clipmap = pipeline.clipmap();
+    assert_eq!(clipmap.corrupt_nodes(), 1, "reported once");
+    match clipmap.last_load_error() {
+        Some(NodeError::Corrupt { path: named, id, .. }) => assert_eq!((named, *id), (&path, bad)),
+        other => panic!("last error {other:?}"),
+    }
+    println!("{over} tile draws over the damaged node came from its ancestors; {beside} beside it from level 0");
+}
