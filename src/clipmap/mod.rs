@@ -520,6 +520,12 @@ impl Clipmap {
         self.source.exact_height(point.x, point.y)
     }
 
+    /// Whether the source stores node `id` (an absent node: no data of its
+    /// level's resolution there; see [`NodeSource::has_node`]).
+    pub fn has_node(&self, id: NodeId) -> bool {
+        self.source.has_node(id)
+    }
+
     /// The source's node layout.
     pub fn layout(&self) -> &NodeLayout {
         &self.layout

@@ -8,6 +8,7 @@
 
 use super::{LevelRings, LodConfig, TileKey};
 use crate::camera::{curvature_drop, Frustum};
+use crate::node::{NodeId, NodeLayout};
 use glam::DVec3;
 
 /// A tile chosen for this frame.
@@ -27,6 +28,11 @@ pub trait TileBounds {
     fn spacing_m(&self) -> [f64; 2];
     /// Lowest and highest height any level-0 sample under `tile` may have.
     fn height_bounds(&self, tile: TileKey, grid_size: u32) -> (f32, f32);
+    /// Whether data finer than `tile`'s level lie under it: the node of
+    /// level `tile.level - 1` holding its children is stored. Where it is
+    /// absent, finer tiles would only resample `tile`'s own data (a 5' base
+    /// drawn in 90 m tiles), so the tile is not split.
+    fn has_finer_data(&self, tile: TileKey, grid_size: u32) -> bool;
 }
 
 /// Refines the quadtree each frame into a list of tiles.
@@ -91,7 +97,8 @@ impl TileSelector {
             };
             // Children replace this tile on the stack; keep room for the worst case.
             let room = self.selected.len() + self.stack.len() + 4 <= self.config.max_tiles;
-            if key.level > 0 && distance < view.rings.split_distance(key.level) && room {
+            let split = key.level > 0 && distance < view.rings.split_distance(key.level);
+            if split && room && terrain.has_finer_data(key, self.config.grid_size) {
                 let [nx, ny] = tiles_at(terrain.posts(), self.config.grid_size, key.level - 1);
                 for child in key.children().into_iter().rev() {
                     if child.x < nx && child.y < ny {
@@ -124,6 +131,22 @@ impl TileSelector {
         }
         view.frustum.intersects_box(lo.as_vec3(), hi.as_vec3()).then_some(distance)
     }
+}
+
+/// [`TileBounds::has_finer_data`] for a terrain whose stored nodes `has_node` says.
+pub fn children_node_stored(
+    tile: TileKey,
+    grid_size: u32,
+    layout: &NodeLayout,
+    has_node: impl Fn(NodeId) -> bool,
+) -> bool {
+    if tile.level == 0 {
+        return false;
+    }
+    let per_node = (layout.node_size / grid_size).max(1);
+    tile.children()
+        .iter()
+        .any(|child| has_node(NodeId::new(child.level, child.x / per_node, child.y / per_node)))
 }
 
 /// Tiles per side at `level` that cover `samples` posts.

@@ -3,7 +3,7 @@
 
 use super::terrain::{node_height_bounds, TerrainData};
 use crate::clipmap::{Clipmap, SlotState};
-use crate::lod::select::TileBounds;
+use crate::lod::select::{children_node_stored, TileBounds};
 use crate::lod::TileKey;
 use crate::node::{NodeData, NodeId, NodeLayout};
 use crate::pyramid::PyramidInfo;
@@ -60,6 +60,10 @@ impl TileBounds for ClipmapTerrain<'_> {
 
     fn height_bounds(&self, tile: TileKey, grid_size: u32) -> (f32, f32) {
         node_height_bounds(self, tile, grid_size, self.summary.height_range)
+    }
+
+    fn has_finer_data(&self, tile: TileKey, grid_size: u32) -> bool {
+        children_node_stored(tile, grid_size, self.clipmap.layout(), |id| self.clipmap.has_node(id))
     }
 }
 

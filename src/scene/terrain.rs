@@ -3,7 +3,7 @@
 //! it while flying; [`PreloadedTerrain`] holds every node of a small pyramid
 //! (tests, ground truth).
 
-use crate::lod::select::TileBounds;
+use crate::lod::select::{children_node_stored, TileBounds};
 use crate::lod::TileKey;
 use crate::node::{NodeData, NodeError, NodeId, NodeLayout, NodeSource};
 use crate::tiles::vertex::tile_node;
@@ -92,6 +92,10 @@ impl TileBounds for PreloadedTerrain {
 
     fn height_bounds(&self, tile: TileKey, grid_size: u32) -> (f32, f32) {
         node_height_bounds(self, tile, grid_size, self.range)
+    }
+
+    fn has_finer_data(&self, tile: TileKey, grid_size: u32) -> bool {
+        children_node_stored(tile, grid_size, &self.layout, |id| self.nodes.contains_key(&id))
     }
 }
 
