@@ -142,7 +142,7 @@ fn layered_import_counts_void_posts_by_what_became_of_them() {
     let info = ridgeline(&["info", "--json"], &cache);
     assert!(info.status.success(), "{}", String::from_utf8_lossy(&info.stderr));
     let json: serde_json::Value = serde_json::from_slice(&info.stdout).expect("JSON");
-    assert_eq!(json["format_version"], 2);
+    assert_eq!(json["format_version"], ridgeline::pyramid::format::VERSION);
     assert_eq!(json["layers"], 2);
     assert_eq!(json["posts_interpolated"], 4, "the 2 x 2 void");
     assert_eq!(json["posts_from_layer"], voids - 4);

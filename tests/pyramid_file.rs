@@ -132,10 +132,10 @@ fn truncated_empty_foreign_and_newer_files_are_refused() {
         PyramidError::NotAPyramid { .. }
     ));
     let mut newer = good.clone();
-    newer[8] = 3;
+    newer[8] = 4;
     assert!(matches!(
         assert_refused(&dir, &newer, "newer"),
-        PyramidError::Version { found: 3, .. }
+        PyramidError::Version { found: 4, .. }
     ));
     let missing = Pyramid::open(dir.join("missing")).err().expect("missing file");
     assert!(matches!(missing, PyramidError::Io { .. }) && missing.to_string().contains("missing"));
@@ -190,4 +190,35 @@ fn every_header_byte_is_covered() {
         bytes[at] ^= 0xFF;
         assert_refused(&dir, &bytes, &format!("header byte {at}"));
     }
+}
+
+/// Opening reads no node table entry (so it costs the same at any size):
+/// a damaged entry opens, and surfaces when its node is read, naming the
+/// node and the file; the other nodes read as before; verify finds it.
+#[test]
+fn a_damaged_table_entry_is_found_when_its_node_is_read() {
+    let dir = fresh_dir("file-entry");
+    let (_, path) =
+        build_and_write(&random_grid(40, 40, 8), BuildOptions { node_size: 8, border: 1 }, &dir);
+    let mut bytes = std::fs::read(&path).expect("read");
+    // The table follows the fixed header (176 bytes), the level table (28
+    // bytes a level) and the header checksum; entries are 24 bytes.
+    let levels = u32::from_le_bytes(bytes[36..40].try_into().expect("4 bytes")) as usize;
+    let table = 176 + 28 * levels + 4;
+    let bad = NodeId::new(0, 1, 0);
+    bytes[table + 24 + 9] ^= 0x40; // node index 1: its min
+    let damaged = dir.join("entry.rlp");
+    std::fs::write(&damaged, &bytes).expect("write");
+    let pyramid = Pyramid::open(&damaged).expect("opening reads no entry");
+    assert!(pyramid.is_present(bad), "a damaged entry is read, and reported, not skipped");
+    let mut node = NodeData::default();
+    match pyramid.read_node(bad, &mut node) {
+        Err(NodeError::Corrupt { path: named, id, problem }) => {
+            assert_eq!((named, id), (damaged.clone(), bad));
+            assert!(problem.contains("entry 1"), "{problem}");
+        }
+        other => panic!("expected a corrupt node, got {other:?}"),
+    }
+    pyramid.read_node(NodeId::new(0, 0, 0), &mut node).expect("its neighbour reads");
+    assert!(pyramid.verify().is_err(), "verify checks every entry");
 }

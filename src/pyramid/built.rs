@@ -47,6 +47,22 @@ impl BuiltPyramid {
         self.levels.iter().map(|l| (l.heights.as_slice(), l.summaries.as_slice()))
     }
 
+    /// The node index ([`NodeLayout::node_index`]) of every present node,
+    /// in file order: records are written in node order.
+    pub(crate) fn present_indices(&self) -> Vec<u64> {
+        let mut base = 0u64;
+        let mut indices = Vec::new();
+        for level in &self.levels {
+            let slots = level.slots.iter().enumerate().filter_map(|(k, s)| s.map(|s| (k, s)));
+            for (n, (k, slot)) in slots.enumerate() {
+                debug_assert_eq!(n, slot as usize, "slots are in node order");
+                indices.push(base + k as u64);
+            }
+            base += level.slots.len() as u64;
+        }
+        indices
+    }
+
     /// Summaries of all nodes of the layout in file order, `None` for absent ones.
     pub fn node_summaries(&self) -> Vec<Option<NodeSummary>> {
         self.levels

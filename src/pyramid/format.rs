@@ -1,7 +1,6 @@
-//! The bytes of `cache/NAME/pyramid.rlp`, format version 2. Every number is
+//! The bytes of `cache/NAME/pyramid.rlp`, format version 3. Every number is
 //! little-endian; every byte of the file is covered by a CRC-32 (IEEE) or
-//! must be zero. Version 1 files (no absent nodes, one void count) are
-//! refused with a "rebuild it" error.
+//! must be zero. Older versions are refused with a "rebuild it" error.
 //!
 //! ```text
 //! header   magic "RIDGEPYR"  version u32  header_len u64  file_len u64
@@ -13,14 +12,26 @@
 //!          posts_interpolated u64  posts_from_layer u64  posts_no_data u64
 //!          layers u32  finest_first u32 x2  finest_posts u32 x2
 //!          node_count u64  present_count u64  record_len u32
-//!          levels x { nodes_x u32  nodes_y u32  delta_max f32  min f32  max f32 }
-//!          nodes  x { offset u64  min f32  max f32  delta f32 }
-//!                                                (offset ABSENT and zeros: no node)
+//!          levels x { nodes_x u32  nodes_y u32  present u64  delta_max f32  min f32  max f32 }
 //!          header_crc u32                        (of every header byte before it)
+//!          nodes  x { offset u64  min f32  max f32  delta f32
+//!                     crc u32 }                  (of the node's index u64, then the entry)
+//!                                                (offset ABSENT and zeros: no node)
 //!          zero padding to a multiple of 16      (= header_len)
 //! records  nodes x { heights f32 x stored_side^2 (row 0 south, border included)
-//!                    min f32  max f32  delta f32  crc u32 (of the record before it) }
+//!                    min f32  max f32  delta f32
+//!                    crc u32 }                   (of the node's index u64, then the record)
 //! ```
+//!
+//! Opening checks the fixed part and the level table (their checksum) and
+//! nothing that grows with the number of nodes: each node's table entry and
+//! record are checked when the node is first read, so a 10 GB pyramid opens
+//! as fast as a 1 MB one. Both checksums start with the node's index, so an
+//! entry or record moved to another node's place fails. [`Pyramid::verify`]
+//! (`ridgeline info`) checks every entry and record, and that the entries
+//! agree with each other and with the level table.
+//!
+//! [`Pyramid::verify`]: super::Pyramid::verify
 //!
 //! Nodes are listed finest level first, row by row (south first) within a
 //! level ([`NodeLayout::node_index`]). The table lists every node of the
@@ -28,7 +39,8 @@
 //! [`ABSENT`], summary zero) and has no record: a layered pyramid stores
 //! level 0 only where the finest layer is (see [`super`]). Records of present
 //! nodes are contiguous in table order, so the `k`-th present node's `offset`
-//! is `header_len + k * record_len`, which the reader checks. The node table
+//! is `header_len + k * record_len`: a read checks that an entry's offset is
+//! some record's place, [`Pyramid::verify`] that it is the right one. The node table
 //! repeats each record's min, max and delta so bounds and errors of the whole
 //! pyramid are known without touching the heights; each record repeats them so
 //! it is self-contained (Ulrich section 15).
@@ -43,7 +55,7 @@ use std::path::Path;
 /// The first eight bytes of every pyramid file.
 pub const MAGIC: [u8; 8] = *b"RIDGEPYR";
 /// The format version this build writes and reads.
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 /// The node table's offset of an absent node.
 pub const ABSENT: u64 = u64::MAX;
 /// The pyramid's file inside a cache directory.
@@ -52,7 +64,7 @@ const HEADER_ALIGN: u64 = 16;
 /// Bytes of the header before the level table.
 const FIXED_LEN: u64 = 176;
 const LEVEL_ENTRY_LEN: u64 = 28;
-const NODE_ENTRY_LEN: u64 = 20;
+const NODE_ENTRY_LEN: u64 = 24;
 
 /// Heights over all the data and what became of the sources' voids. The
 /// three counts are in posts of the source files (each layer on its own
@@ -137,8 +149,8 @@ pub fn record_len(layout: &NodeLayout) -> u64 {
 fn header_len(levels: u64, nodes: u64) -> Option<u64> {
     let unpadded = FIXED_LEN
         .checked_add(levels.checked_mul(LEVEL_ENTRY_LEN)?)?
-        .checked_add(nodes.checked_mul(NODE_ENTRY_LEN)?)?
-        .checked_add(4)?;
+        .checked_add(4)?
+        .checked_add(nodes.checked_mul(NODE_ENTRY_LEN)?)?;
     Some(unpadded.div_ceil(HEADER_ALIGN) * HEADER_ALIGN)
 }
 
@@ -200,8 +212,11 @@ pub(crate) fn encode_header(info: &PyramidInfo, nodes: &[Option<NodeSummary>]) -
         e.u64(level.present);
         [level.delta_max, level.height_min, level.height_max].iter().for_each(|&v| e.f32(v));
     }
+    let crc = crc32fast::hash(&e.bytes);
+    e.u32(crc);
     let mut next = header_len;
-    for node in nodes {
+    for (index, node) in nodes.iter().enumerate() {
+        let start = e.bytes.len();
         match node {
             Some(node) => {
                 e.u64(next);
@@ -213,9 +228,9 @@ pub(crate) fn encode_header(info: &PyramidInfo, nodes: &[Option<NodeSummary>]) -
                 [0.0f32; 3].iter().for_each(|&v| e.f32(v));
             }
         }
+        let crc = indexed_crc(index as u64, &e.bytes[start..]);
+        e.u32(crc);
     }
-    let crc = crc32fast::hash(&e.bytes);
-    e.u32(crc);
     e.bytes.resize(header_len as usize, 0);
     e.bytes
 }
@@ -223,10 +238,8 @@ pub(crate) fn encode_header(info: &PyramidInfo, nodes: &[Option<NodeSummary>]) -
 /// A header read back and checked.
 pub(crate) struct DecodedHeader {
     pub info: PyramidInfo,
-    /// Per node in table order: its record's offset and summary, `None`
-    /// for an absent node.
-    pub nodes: Vec<Option<(u64, NodeSummary)>>,
-    pub record_len: u64,
+    /// Where the node table starts and its sizes.
+    pub table: NodeTable,
 }
 
 /// Reads and checks the header of `bytes`, the whole file at `path`.
@@ -276,23 +289,26 @@ pub(crate) fn decode_header(path: &Path, bytes: &[u8]) -> Result<DecodedHeader, 
     }
     // From here every table lies inside the file: the lengths are bounded by it.
     // crc_at + 4 <= header_len <= file_len == bytes.len(), checked just above.
-    let crc_at = crc_pos(layout.levels as u64, node_count) as usize;
+    let crc_at = crc_pos(layout.levels as u64) as usize;
     let stored_crc = u32::from_le_bytes(bytes[crc_at..crc_at + 4].try_into().expect("4 bytes"));
     if crc32fast::hash(&bytes[..crc_at]) != stored_crc {
         return Err(corrupt("header checksum mismatch".into()));
     }
-    if bytes[crc_at + 4..fixed.header_len as usize].iter().any(|&b| b != 0) {
-        return Err(corrupt("header padding is not zero".into()));
-    }
-    let levels = read_levels(&mut d, &layout).map_err(corrupt)?;
     let table = NodeTable {
+        start: crc_at as u64 + 4,
         count: node_count,
         present: fixed.present_count,
         header_len: fixed.header_len,
         record_len: record_len(&layout),
     };
-    let nodes = read_nodes(&mut d, &table).map_err(corrupt)?;
-    check_presence(&layout, &levels, &nodes).map_err(corrupt)?;
+    // The padding after the table: at most 15 bytes, whatever the size.
+    if bytes[table.end() as usize..fixed.header_len as usize].iter().any(|&b| b != 0) {
+        return Err(corrupt("header padding is not zero".into()));
+    }
+    let levels = read_levels(&mut d, &layout).map_err(corrupt)?;
+    if levels.iter().map(|l| l.present).sum::<u64>() != fixed.present_count {
+        return Err(corrupt("the levels' present nodes do not add up to the header's".into()));
+    }
     let georef = GeoRef { crs: crs_from_code(fixed.crs).map_err(corrupt)?, ..fixed.georef };
     let info = PyramidInfo {
         layout,
@@ -303,12 +319,22 @@ pub(crate) fn decode_header(path: &Path, bytes: &[u8]) -> Result<DecodedHeader, 
         levels,
     };
     check_stats(&info).map_err(corrupt)?;
-    Ok(DecodedHeader { info, nodes, record_len: record_len(&layout) })
+    Ok(DecodedHeader { info, table })
 }
 
-/// Byte position of the header checksum.
-fn crc_pos(levels: u64, nodes: u64) -> u64 {
-    FIXED_LEN + levels * LEVEL_ENTRY_LEN + nodes * NODE_ENTRY_LEN
+/// Byte position of the header checksum (the node table follows it).
+fn crc_pos(levels: u64) -> u64 {
+    FIXED_LEN + levels * LEVEL_ENTRY_LEN
+}
+
+/// CRC-32 of a node's index (little-endian u64) followed by `bytes`: ties a
+/// table entry or a record to its node, so bytes moved to another node's
+/// place fail their check.
+pub(crate) fn indexed_crc(index: u64, bytes: &[u8]) -> u32 {
+    let mut hasher = crc32fast::Hasher::new();
+    hasher.update(&index.to_le_bytes());
+    hasher.update(bytes);
+    hasher.finalize()
 }
 
 struct Fixed {
@@ -386,52 +412,90 @@ fn read_levels(d: &mut Decoder, layout: &NodeLayout) -> Result<Vec<LevelSummary>
         .collect()
 }
 
-/// The node table's sizes.
-struct NodeTable {
-    count: u64,
-    present: u64,
-    header_len: u64,
-    record_len: u64,
+/// Where the node table lies and the sizes its entries are checked against.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct NodeTable {
+    /// Byte position of entry 0.
+    pub start: u64,
+    /// Entries: every node of the layout.
+    pub count: u64,
+    /// Present nodes (records).
+    pub present: u64,
+    /// Where the records start.
+    pub header_len: u64,
+    /// Bytes of one record.
+    pub record_len: u64,
 }
 
-fn read_nodes(
-    d: &mut Decoder,
-    table: &NodeTable,
-) -> Result<Vec<Option<(u64, NodeSummary)>>, String> {
-    let mut next = table.header_len;
-    let mut present = 0u64;
-    let nodes = (0..table.count)
-        .map(|index| {
-            let short = || "node table cut short".to_string();
-            let offset = d.u64().ok_or_else(short)?;
-            let summary = NodeSummary {
-                min: d.f32().ok_or_else(short)?,
-                max: d.f32().ok_or_else(short)?,
-                delta: d.f32().ok_or_else(short)?,
-            };
-            if offset == ABSENT {
-                if summary != NodeSummary::default() {
-                    return Err(format!("absent node {index} has a summary {summary:?}"));
-                }
-                return Ok(None);
-            }
-            if offset != next || present >= table.present {
-                return Err(format!("node {index} at offset {offset}, expected {next}"));
-            }
-            next += table.record_len;
-            present += 1;
-            check_summary(&summary).map_err(|p| format!("node {index}: {p}"))?;
-            Ok(Some((offset, summary)))
-        })
-        .collect::<Result<Vec<_>, String>>()?;
-    if present != table.present {
-        return Err(format!("{present} present nodes listed, the header says {}", table.present));
+impl NodeTable {
+    /// Byte position just past the last entry.
+    fn end(&self) -> u64 {
+        self.start + self.count * NODE_ENTRY_LEN
     }
-    Ok(nodes)
+
+    /// Entry `index` of `bytes` (the whole file), checked: its checksum,
+    /// and an offset that is a record's place inside the file (or
+    /// [`ABSENT`] with a zero summary). Reads 24 bytes: opening decodes no
+    /// entry, so it costs the same whatever the number of nodes.
+    pub fn entry(&self, bytes: &[u8], index: u64) -> Result<Option<(u64, NodeSummary)>, String> {
+        if index >= self.count {
+            return Err(format!("node {index} is past the table's {} entries", self.count));
+        }
+        let at = (self.start + index * NODE_ENTRY_LEN) as usize;
+        let entry = &bytes[at..at + NODE_ENTRY_LEN as usize];
+        let (body, crc) = entry.split_at(entry.len() - 4);
+        if indexed_crc(index, body) != u32::from_le_bytes(crc.try_into().expect("4 bytes")) {
+            return Err(format!("node table entry {index}: checksum mismatch"));
+        }
+        let mut d = Decoder::new(body);
+        let short = || format!("node table entry {index} cut short");
+        let offset = d.u64().ok_or_else(short)?;
+        let summary = NodeSummary {
+            min: d.f32().ok_or_else(short)?,
+            max: d.f32().ok_or_else(short)?,
+            delta: d.f32().ok_or_else(short)?,
+        };
+        if offset == ABSENT {
+            if summary != NodeSummary::default() {
+                return Err(format!("absent node {index} has a summary {summary:?}"));
+            }
+            return Ok(None);
+        }
+        let slot =
+            offset.checked_sub(self.header_len).map(|o| (o / self.record_len, o % self.record_len));
+        if !matches!(slot, Some((k, 0)) if k < self.present) {
+            return Err(format!("node {index} at offset {offset}, not a record's place"));
+        }
+        check_summary(&summary).map_err(|p| format!("node {index}: {p}"))?;
+        Ok(Some((offset, summary)))
+    }
+
+    /// Every entry, checked one by one and together: present nodes in node
+    /// order at consecutive records, each level's count as `levels` says,
+    /// the root level whole ([`crate::pyramid::Pyramid::verify`]).
+    pub fn all_entries(
+        &self,
+        bytes: &[u8],
+        layout: &NodeLayout,
+        levels: &[LevelSummary],
+    ) -> Result<Vec<Option<(u64, NodeSummary)>>, String> {
+        let mut next = self.header_len;
+        let mut nodes = Vec::with_capacity(self.count as usize);
+        for index in 0..self.count {
+            let entry = self.entry(bytes, index)?;
+            if let Some((offset, _)) = entry {
+                if offset != next {
+                    return Err(format!("node {index} at offset {offset}, expected {next}"));
+                }
+                next += self.record_len;
+            }
+            nodes.push(entry);
+        }
+        check_presence(layout, levels, &nodes)?;
+        Ok(nodes)
+    }
 }
 
-/// Checks that the root level is present (every lookup falls back to it)
-/// and that each level's count of present nodes matches the table.
 fn check_presence(
     layout: &NodeLayout,
     levels: &[LevelSummary],
@@ -476,24 +540,26 @@ fn check_stats(info: &PyramidInfo) -> Result<(), String> {
 }
 
 /// Writes the record of one node into `out` (`record_len` bytes).
-pub(crate) fn encode_record(heights: &[f32], summary: &NodeSummary, out: &mut [u8]) {
+pub(crate) fn encode_record(index: u64, heights: &[f32], summary: &NodeSummary, out: &mut [u8]) {
     let (body, crc) = out.split_at_mut(out.len() - 4);
     debug_assert_eq!(body.len(), heights.len() * 4 + 12);
     let values = heights.iter().chain([&summary.min, &summary.max, &summary.delta]);
     for (chunk, value) in body.chunks_exact_mut(4).zip(values) {
         chunk.copy_from_slice(&value.to_le_bytes());
     }
-    crc.copy_from_slice(&crc32fast::hash(body).to_le_bytes());
+    crc.copy_from_slice(&indexed_crc(index, body).to_le_bytes());
 }
 
-/// The heights bytes of a record after checking its checksum and that it
+/// The heights bytes of node `index`'s record after checking its checksum
+/// (which covers the index: another node's record fails it) and that it
 /// repeats the node table's `expected` summary.
 pub(crate) fn check_record<'a>(
+    index: u64,
     record: &'a [u8],
     expected: &NodeSummary,
 ) -> Result<&'a [u8], String> {
     let (body, crc) = record.split_at(record.len() - 4);
-    if crc32fast::hash(body) != u32::from_le_bytes(crc.try_into().expect("4 bytes")) {
+    if indexed_crc(index, body) != u32::from_le_bytes(crc.try_into().expect("4 bytes")) {
         return Err("checksum mismatch".into());
     }
     let (heights, tail) = body.split_at(body.len() - 12);

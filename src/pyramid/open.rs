@@ -21,7 +21,7 @@ use rayon::prelude::*;
 
 use super::bytes::f32s_from_le;
 use super::error::PyramidError;
-use super::format::{check_record, decode_header, NodeSummary, PyramidInfo, FILE_NAME};
+use super::format::{check_record, decode_header, NodeSummary, NodeTable, PyramidInfo, FILE_NAME};
 use crate::node::{NodeData, NodeError, NodeId, NodeLayout, NodeSource};
 
 /// A node [`Pyramid::exact_height`] has not checked yet.
@@ -39,10 +39,8 @@ pub struct Pyramid {
     file: File,
     map: Mmap,
     info: PyramidInfo,
-    /// Per node in file order ([`NodeLayout::node_index`]): its record's
-    /// offset and summary, `None` for an absent node.
-    nodes: Vec<Option<(u64, NodeSummary)>>,
-    record_len: u64,
+    /// The node table, read one entry at a time from the map.
+    table: NodeTable,
     /// Per node, whether [`Pyramid::exact_height`] found its record intact
     /// ([`UNCHECKED`], [`INTACT`], [`DAMAGED`]): it reads a few posts per
     /// call, too few to pay for a whole record's checksum each time.
@@ -60,14 +58,13 @@ impl Pyramid {
         let file = File::open(&path).map_err(PyramidError::io(&path))?;
         let map = map_file(&file).map_err(PyramidError::io(&path))?;
         let header = decode_header(&path, &map)?;
-        let count = header.nodes.len();
+        let count = header.table.count;
         Ok(Pyramid {
             path,
             file,
             map,
             info: header.info,
-            nodes: header.nodes,
-            record_len: header.record_len,
+            table: header.table,
             checked: (0..count).map(|_| AtomicU8::new(UNCHECKED)).collect(),
         })
     }
@@ -76,9 +73,14 @@ impl Pyramid {
     /// GB/s), and reports the first damaged node found, by id and file.
     pub fn verify(&self) -> Result<(), PyramidError> {
         self.check_length().map_err(|problem| PyramidError::corrupt(&self.path, problem))?;
-        let damaged = (0..self.nodes.len() as u64).into_par_iter().find_map_any(|index| {
-            let (offset, summary) = self.nodes[index as usize]?;
-            check_record(self.record(offset), &summary).err().map(|problem| (index, problem))
+        let nodes = self
+            .table
+            .all_entries(&self.map, &self.info.layout, &self.info.levels)
+            .map_err(|problem| PyramidError::corrupt(&self.path, problem))?;
+        let damaged = (0..nodes.len() as u64).into_par_iter().find_map_any(|index| {
+            let (offset, summary) = nodes[index as usize]?;
+            let record = self.record(offset);
+            check_record(index, record, &summary).err().map(|problem| (index, problem))
         });
         match damaged {
             None => Ok(()),
@@ -117,22 +119,29 @@ impl Pyramid {
     /// Min, max and delta of node `id` without reading its heights; `None`
     /// for a node outside the pyramid or absent.
     pub fn node_summary(&self, id: NodeId) -> Option<NodeSummary> {
-        let index = self.info.layout.node_index(id)?;
-        self.nodes[index as usize].map(|(_, summary)| summary)
+        self.entry(id).ok().flatten().map(|(_, summary)| summary)
     }
 
-    /// Whether node `id` is stored (inside the pyramid and not absent).
+    /// Whether node `id` is stored (inside the pyramid and not absent). A
+    /// node whose table entry fails its check counts as stored: reading it
+    /// reports the damage, and its ancestor serves.
     pub fn is_present(&self, id: NodeId) -> bool {
-        self.node_summary(id).is_some()
+        self.info.layout.node_index(id).is_some() && !matches!(self.entry(id), Ok(None))
+    }
+
+    /// Node `id`'s table entry, checked: its record's offset and summary,
+    /// `None` when absent.
+    fn entry(&self, id: NodeId) -> Result<Option<(u64, NodeSummary)>, String> {
+        let index = self.info.layout.node_index(id).ok_or("outside the pyramid")?;
+        self.table.entry(&self.map, index)
     }
 
     /// The bytes of the file holding node `id`'s record (its heights, min,
     /// max, delta and checksum), `None` for a node outside the pyramid or
     /// absent.
     pub fn record_range(&self, id: NodeId) -> Option<Range<u64>> {
-        let index = self.info.layout.node_index(id)?;
-        let (start, _) = self.nodes[index as usize]?;
-        Some(start..start + self.record_len)
+        let (start, _) = self.entry(id).ok()??;
+        Some(start..start + self.table.record_len)
     }
 
     /// The finest layer's area in the local frame: its south-west post and
@@ -172,7 +181,9 @@ impl Pyramid {
         for lod in 0..layout.levels {
             let Some(point) = layout.locate(lod, x_m, y_m) else { break };
             let Some(index) = layout.node_index(point.id) else { break };
-            let Some((offset, _)) = self.nodes[index as usize] else { continue };
+            let entry =
+                self.table.entry(&self.map, index).map_err(|p| self.corrupt(point.id, p))?;
+            let Some((offset, _)) = entry else { continue };
             self.check_node(point.id, index)?;
             let last_cell = layout.node_size.saturating_sub(1);
             let cell = |p: f64| (p.max(0.0).floor() as u32).min(last_cell);
@@ -224,13 +235,16 @@ impl Pyramid {
 
     /// The heights bytes of node `id` (at `index`) once its record has
     /// passed its checksum and repeats the node table's summary.
-    fn checked_record(&self, id: NodeId, index: u64) -> Result<&[u8], NodeError> {
-        let (offset, summary) = self.nodes[index as usize].ok_or(NodeError::Absent { id })?;
+    fn checked_record(&self, id: NodeId, index: u64) -> Result<(&[u8], NodeSummary), NodeError> {
+        let entry = self.table.entry(&self.map, index).map_err(|p| self.corrupt(id, p))?;
+        let (offset, summary) = entry.ok_or(NodeError::Absent { id })?;
         self.check_length().map_err(|problem| NodeError::Io {
             path: self.path.clone(),
             source: std::io::Error::new(std::io::ErrorKind::UnexpectedEof, problem),
         })?;
-        check_record(self.record(offset), &summary).map_err(|problem| self.corrupt(id, problem))
+        let heights = check_record(index, self.record(offset), &summary)
+            .map_err(|problem| self.corrupt(id, problem))?;
+        Ok((heights, summary))
     }
 
     fn corrupt(&self, id: NodeId, problem: String) -> NodeError {
@@ -256,7 +270,7 @@ impl Pyramid {
     /// The bytes of the record at `offset`.
     fn record(&self, offset: u64) -> &[u8] {
         let start = offset as usize;
-        &self.map[start..start + self.record_len as usize]
+        &self.map[start..start + self.table.record_len as usize]
     }
 }
 
@@ -313,8 +327,7 @@ impl NodeSource for Pyramid {
     /// then left as it was.
     fn read_node(&self, id: NodeId, out: &mut NodeData) -> Result<(), NodeError> {
         let index = self.info.layout.node_index(id).ok_or(NodeError::OutOfRange { id })?;
-        let (_, summary) = self.nodes[index as usize].ok_or(NodeError::Absent { id })?;
-        let heights = self.checked_record(id, index)?;
+        let (heights, summary) = self.checked_record(id, index)?;
         f32s_from_le(heights, &mut out.heights);
         out.min = summary.min;
         out.max = summary.max;

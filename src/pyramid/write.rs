@@ -57,16 +57,23 @@ fn write_file(
     progress.advance(header.len() as u64);
     let posts = (layout.stored_side() as usize).pow(2);
     let mut batch = vec![0u8; RECORDS_PER_BATCH * record_len];
+    let indices = pyramid.present_indices();
+    let mut written = 0usize;
     for (heights, summaries) in pyramid.levels() {
         for (nodes, summaries) in
             heights.chunks(RECORDS_PER_BATCH * posts).zip(summaries.chunks(RECORDS_PER_BATCH))
         {
             let bytes = &mut batch[..summaries.len() * record_len];
+            let batch_indices = &indices[written..written + summaries.len()];
+            written += summaries.len();
             bytes
                 .par_chunks_mut(record_len)
                 .zip(nodes.par_chunks(posts))
                 .zip(summaries)
-                .for_each(|((record, heights), summary)| encode_record(heights, summary, record));
+                .zip(batch_indices)
+                .for_each(|(((record, heights), summary), &index)| {
+                    encode_record(index, heights, summary, record)
+                });
             file.write_all(bytes).map_err(PyramidError::io(path))?;
             progress.advance(bytes.len() as u64);
         }
