@@ -4,8 +4,8 @@
 //! same run (the machine is shared and noisy; the ratio is what compares).
 //!
 //! A second table measures opening against file size: `Pyramid::open` reads
-//! only the header, so its time should not grow with the file (the header
-//! itself grows by 20 bytes a node, about 0.1 % of the file); the first
+//! only the fixed header and the level table (format 3: no node table entry
+//! is read until its node is), so its time should not grow with the file; the first
 //! page-in of a node and a full `verify` are shown beside it. The pyramids,
 //! 0.4 MB to 1.06 GB (fewer sizes with `--quick`), are built once from the
 //! synthetic terrain into `target/bench/open-scale/` (about 20 s and 3 GB of
@@ -220,7 +220,7 @@ fn print_open_rows(quick: bool, repeats: usize, rows: &[OpenRow]) {
         })
         .collect();
     print_table(&title, &header, &cells);
-    println!("  open checks the header only; each node is checked when paged in; verify checks them all (ridgeline info)");
+    println!("  open checks the fixed header and level table only; each node's entry and record are checked when paged in; verify checks them all (ridgeline info)");
 }
 
 /// Open, first page-in and full verification time against file size.
