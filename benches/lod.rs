@@ -180,11 +180,11 @@ fn main() {
     let views: Vec<(f64, Camera)> =
         path.frame_times(view_count).map(|t| (t, camera_at(&path, t))).collect();
     let source: Arc<dyn NodeSource> = pyramid.clone();
-    let mesh = TruthMesh::load(
-        source.as_ref(),
-        TruthRegion::covering_tiles(&layout, LodConfig::default().grid_size),
-    )
-    .expect("truth mesh");
+    // As `ridgeline accuracy`: a window of level 0 around the views (a
+    // layered pyramid's level 0 spans its whole base).
+    let positions = views.iter().map(|(_, c)| [c.position.x, c.position.y]);
+    let region = TruthRegion::around_positions(&layout, LodConfig::default().grid_size, positions);
+    let mesh = TruthMesh::load(source.as_ref(), region).expect("truth mesh");
     let mut results = Vec::new();
     for point in points() {
         let result = measure_point(&point, &pyramid, &mesh, &path, &views, flight_frames);
