@@ -5,33 +5,15 @@
 //! included), the measurement sees the error of coarse tiles, and the LOD
 //! and full-resolution images cover the same pixels.
 
-use std::sync::Arc;
-
 use ridgeline::camera::Camera;
-use ridgeline::display::measure::{measure_flight, AccuracyRun};
-use ridgeline::gl::{GlBackend, GlesVersion, TruthMesh, TruthPass, TruthRegion};
-use ridgeline::node::NodeSource;
+use ridgeline::display::measure::AccuracyRun;
 use testkit::builtin_pyramid;
-use testkit::render::{config, open, VIEWS};
+use testkit::render::{measure_accuracy, VIEWS};
 
 fn measure(tau_px: f64) -> AccuracyRun {
-    let mut config = config(GlBackend::Egl, GlesVersion::Es3);
-    config.scene.lod.tau_px = tau_px;
-    // Kühnert's rings (3 tile sizes) would hide tau at this small viewport:
-    // with 1 tile size, Ulrich's bound sets the rings.
-    config.scene.lod.view_distance = 1.0;
-    let mut display = open(&config).expect("headless EGL display");
-    let pyramid = builtin_pyramid();
-    let layout = *pyramid.layout();
     let views: Vec<(f64, Camera)> =
         VIEWS.iter().enumerate().map(|(k, v)| (k as f64, v.camera())).collect();
-    let positions = views.iter().map(|(_, c)| [c.position.x, c.position.y]);
-    let region = TruthRegion::around_positions(&layout, config.scene.lod.grid_size, positions);
-    let mesh = TruthMesh::load(pyramid.as_ref(), region).expect("truth mesh");
-    let truth = TruthPass::new(display.context.gl(), &mesh).expect("truth pass");
-    let source = Arc::clone(&pyramid);
-    let exact = move |x: f64, y: f64| source.exact_height(x, y);
-    measure_flight(&mut display, &truth, &exact, layout.spacing_m, &views).expect("measured")
+    measure_accuracy(builtin_pyramid(), &views, tau_px)
 }
 
 fn print(run: &AccuracyRun) {

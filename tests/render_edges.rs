@@ -13,13 +13,12 @@
 use std::sync::Arc;
 
 use ridgeline::camera::Camera;
-use ridgeline::display::measure::{measure_flight, AccuracyRun};
-use ridgeline::gl::{GlBackend, GlesVersion, TruthMesh, TruthPass, TruthRegion};
+use ridgeline::display::measure::AccuracyRun;
 use ridgeline::node::NodeSource;
 use ridgeline::pyramid::Pyramid;
 use testkit::compare::save_evidence;
 use testkit::gl::take_turn;
-use testkit::render::{config, open_over, SIZE};
+use testkit::render::{measure_accuracy, SIZE};
 use testkit::{builtin_pyramid, srtm_tile_pyramid};
 
 /// Views at the edges of the tile whose south-west post is at `origin`
@@ -49,21 +48,7 @@ fn edge_views(origin: [f64; 2], extent: [f64; 2]) -> Vec<(f64, Camera)> {
 /// metres) over `pyramid` at `tau_px`.
 fn measure(pyramid: Arc<Pyramid>, tile: ([f64; 2], [f64; 2]), tau_px: f64) -> AccuracyRun {
     let _turn = take_turn();
-    let mut config = config(GlBackend::Egl, GlesVersion::Es3);
-    config.scene.lod.tau_px = tau_px;
-    // As in render_accuracy: one tile of view distance, so Ulrich's bound
-    // sets the rings at this small viewport.
-    config.scene.lod.view_distance = 1.0;
-    let mut display = open_over(&config, pyramid.clone()).expect("headless EGL display");
-    let layout = *NodeSource::layout(&*pyramid);
-    let views = edge_views(tile.0, tile.1);
-    let positions = views.iter().map(|(_, c)| [c.position.x, c.position.y]);
-    let region = TruthRegion::around_positions(&layout, config.scene.lod.grid_size, positions);
-    let mesh = TruthMesh::load(pyramid.as_ref(), region).expect("truth mesh");
-    let truth = TruthPass::new(display.context.gl(), &mesh).expect("truth pass");
-    let source = Arc::clone(&pyramid);
-    let exact = move |x: f64, y: f64| source.exact_height(x, y);
-    measure_flight(&mut display, &truth, &exact, layout.spacing_m, &views).expect("measured")
+    measure_accuracy(pyramid, &edge_views(tile.0, tile.1), tau_px)
 }
 
 #[test]

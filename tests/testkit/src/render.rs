@@ -171,3 +171,27 @@ pub fn lod_changed(before: &BTreeSet<TileKey>, after: &BTreeSet<TileKey>) -> boo
     after.difference(before).any(|key| related(key, before))
         || before.difference(after).any(|key| related(key, after))
 }
+
+/// `ridgeline accuracy`'s measurement of `views` over `pyramid` at
+/// `tau_px`, at the render tests' size on EGL: one tile of view distance (so
+/// Ulrich's bound, not Kühnert's three-tile rings, sets the rings at this
+/// small viewport), the truth a window of level 0 around the views.
+pub fn measure_accuracy(
+    pyramid: Arc<Pyramid>,
+    views: &[(f64, Camera)],
+    tau_px: f64,
+) -> ridgeline::display::measure::AccuracyRun {
+    use ridgeline::gl::{TruthMesh, TruthPass, TruthRegion};
+    let mut config = config(GlBackend::Egl, GlesVersion::Es3);
+    config.scene.lod.tau_px = tau_px;
+    config.scene.lod.view_distance = 1.0;
+    let mut display = open_over(&config, pyramid.clone()).expect("headless EGL display");
+    let layout = pyramid.info().layout;
+    let positions = views.iter().map(|(_, c)| [c.position.x, c.position.y]);
+    let region = TruthRegion::around_positions(&layout, config.scene.lod.grid_size, positions);
+    let mesh = TruthMesh::load(pyramid.as_ref(), region).expect("truth mesh");
+    let truth = TruthPass::new(display.context.gl(), &mesh).expect("truth pass");
+    let exact = |x: f64, y: f64| pyramid.exact_height(x, y);
+    ridgeline::display::measure::measure_flight(&mut display, &truth, &exact, layout.spacing_m, views)
+        .expect("measured")
+}
