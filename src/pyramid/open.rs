@@ -31,6 +31,14 @@ const INTACT: u8 = 1;
 /// A node whose record failed its check.
 const DAMAGED: u8 = 2;
 
+/// A node whose table entry [`Pyramid::is_present`] has not read yet.
+const UNREAD: u8 = 0;
+/// A node whose table entry says absent.
+const ABSENT_NODE: u8 = 1;
+/// A node whose table entry says present (or fails its check: reading the
+/// node then reports the damage).
+const STORED_NODE: u8 = 2;
+
 /// A memory-mapped pyramid file whose header has been checked; nodes are
 /// checked as they are read.
 pub struct Pyramid {
@@ -45,6 +53,11 @@ pub struct Pyramid {
     /// ([`UNCHECKED`], [`INTACT`], [`DAMAGED`]): it reads a few posts per
     /// call, too few to pay for a whole record's checksum each time.
     checked: Vec<AtomicU8>,
+    /// Per node, what its table entry said the first time
+    /// [`Pyramid::is_present`] read it ([`UNREAD`], [`ABSENT_NODE`],
+    /// [`STORED_NODE`]): the clipmap and the LOD ask every frame, and the
+    /// entry's checksum need not be recomputed for each question.
+    presence: Vec<AtomicU8>,
 }
 
 impl Pyramid {
@@ -66,6 +79,7 @@ impl Pyramid {
             info: header.info,
             table: header.table,
             checked: (0..count).map(|_| AtomicU8::new(UNCHECKED)).collect(),
+            presence: (0..count).map(|_| AtomicU8::new(UNREAD)).collect(),
         })
     }
 
@@ -126,7 +140,18 @@ impl Pyramid {
     /// node whose table entry fails its check counts as stored: reading it
     /// reports the damage, and its ancestor serves.
     pub fn is_present(&self, id: NodeId) -> bool {
-        self.info.layout.node_index(id).is_some() && !matches!(self.entry(id), Ok(None))
+        let Some(index) = self.info.layout.node_index(id) else { return false };
+        let state = &self.presence[index as usize];
+        let known = match state.load(Ordering::Relaxed) {
+            UNREAD => {
+                let stored = !matches!(self.table.entry(&self.map, index), Ok(None));
+                let known = if stored { STORED_NODE } else { ABSENT_NODE };
+                state.store(known, Ordering::Relaxed);
+                known
+            }
+            known => known,
+        };
+        known == STORED_NODE
     }
 
     /// Node `id`'s table entry, checked: its record's offset and summary,
