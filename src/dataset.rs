@@ -9,9 +9,11 @@
 //! (the Black Sea floor, to -2173 m) are raised to 0 m, sea level; the SRTM
 //! tile is kept as it is.
 
+use crate::chunks::{ChunkError, ChunkOptions, ChunkedSource};
 use crate::dem::{self, ImportError};
 use crate::pyramid::{self, BuildError, BuildOptions, Progress, Pyramid, PyramidError, FILE_NAME};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// The built-in terrain's cache name.
 pub const DEFAULT_DATASET: &str = "srtm3_n39e040_etopo5";
@@ -47,6 +49,9 @@ pub enum DatasetError {
     /// The pyramid file failed to open.
     #[error(transparent)]
     Pyramid(#[from] PyramidError),
+    /// The adaptive meshes could not be built or read.
+    #[error("meshes: {0}")]
+    Chunks(#[from] ChunkError),
     /// No pyramid exists for a dataset name.
     #[error("dataset {name}: no pyramid at {path} (build one with `ridgeline import FILES --out {path}`)")]
     Missing {
@@ -76,6 +81,19 @@ pub fn open(
         return Err(DatasetError::Missing { name: name.to_string(), path: dir });
     }
     Ok(Pyramid::open(&dir)?)
+}
+
+/// [`open`], with each node's adaptive mesh: the mesh file beside the
+/// pyramid is built first when it is missing, damaged, of another pyramid
+/// or of other `options`.
+pub fn open_chunked(
+    name: Option<&str>,
+    cache_root: &Path,
+    options: ChunkOptions,
+    progress: &dyn Progress,
+) -> Result<ChunkedSource, DatasetError> {
+    let pyramid = Arc::new(open(name, cache_root, progress)?);
+    Ok(ChunkedSource::open_or_build(pyramid, options, progress)?)
 }
 
 /// Opens the built-in terrain, building it first when it is missing or damaged.

@@ -176,6 +176,56 @@ pub fn cell_surface(h00: f64, h10: f64, h01: f64, h11: f64, fu: f64, fv: f64) ->
     }
 }
 
+/// One vertex of a node's adaptive mesh: 16 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct MeshVertex {
+    /// Mesh post `(i, j)` from the node's south-west post, in steps of
+    /// `2^NodeMesh::post_level` level-0 posts.
+    pub post: [u16; 2],
+    /// Height of the data there, metres; NaN where there is none.
+    pub height: f32,
+    /// Ulrich's morph target: the parent node's mesh height at the same
+    /// place (the vertex's own height for a root node, or where the parent
+    /// has no data there).
+    pub target: f32,
+    /// Unit normals, x and y scaled to -127..127 (z positive): of this
+    /// level's surface, then of the parent level's.
+    pub normal: [i8; 4],
+}
+
+/// A node's adaptive mesh (Ulrich's chunk): a right-triangulated irregular
+/// network of the best data under the node, simplified to its level's error
+/// (see [`crate::mesh`] and the chunk builder). Empty when the source keeps
+/// none: tiles then draw the node's posts as a regular grid.
+///
+/// Invariant: every index is below `vertices.len()`, `indices.len()` is a
+/// multiple of 3, triangles are counter-clockwise seen from above, and each
+/// triangle lies inside one square of `tile_cells` node posts.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct NodeMesh {
+    /// The level whose post spacing the vertices' posts count in (the
+    /// reference level, at most a few levels below the node's own).
+    pub post_level: u8,
+    /// The vertices.
+    pub vertices: Vec<MeshVertex>,
+    /// Three indices a triangle.
+    pub indices: Vec<u16>,
+}
+
+impl NodeMesh {
+    /// Whether the source keeps no mesh for the node.
+    pub fn is_empty(&self) -> bool {
+        self.indices.is_empty()
+    }
+
+    /// Checks the invariant (debug builds).
+    pub fn debug_check(&self) {
+        debug_assert_eq!(self.indices.len() % 3, 0);
+        debug_assert!(self.indices.iter().all(|&i| (i as usize) < self.vertices.len()));
+    }
+}
+
 /// A node's stored content.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct NodeData {
@@ -187,8 +237,11 @@ pub struct NodeData {
     pub max: f32,
     /// Ulrich's delta: the largest vertical distance, in metres, between the
     /// node's surface (posts joined as triangles, each cell split from its
-    /// south-west to its north-east corner) and the level-0 posts it covers.
+    /// south-west to its north-east corner) and the level-0 posts it covers;
+    /// with a mesh, the mesh's.
     pub delta: f32,
+    /// The node's adaptive mesh, if its source keeps one.
+    pub mesh: NodeMesh,
 }
 
 impl NodeData {

@@ -18,8 +18,8 @@ use std::path::{Path, PathBuf};
 /// layer or of earlier ones.
 const LAYERS: &[&[&str]] = &[
     &["geo", "node", "allocator", "camera"],
-    &["mesh", "dem", "pyramid", "procedural", "dataset"],
-    &["clipmap", "lod", "tiles"],
+    &["mesh", "dem", "pyramid", "procedural"],
+    &["clipmap", "lod", "tiles", "chunks", "dataset"],
     &["render"],
     &["scene", "pipeline"],
     &["accuracy", "flight"],

@@ -14,7 +14,7 @@
 
 use std::collections::HashMap;
 
-use super::rtin::{anti_diagonal_crossings, for_each_post, on_plane, Triangle};
+use super::rtin::{anti_diagonal_crossings, for_each_post, on_plane, Diagonal, Rtin, Triangle};
 use super::{HeightGrid, Mesh};
 
 /// The largest `|mesh - post|` over every post of `grid` covered by `mesh`,
@@ -61,6 +61,8 @@ fn triangle_heights(mesh: &Mesh, vertex_heights: &[f32], t: usize) -> [f64; 3] {
 #[derive(Clone, Debug)]
 pub struct MeshSampler {
     cells: u32,
+    diagonal: Diagonal,
+    hierarchy_leaves: bool,
     /// Post `(i, j)` as `j * side + i` to the vertex's height.
     heights: HashMap<u32, f32>,
 }
@@ -68,6 +70,11 @@ pub struct MeshSampler {
 impl MeshSampler {
     /// Indexes `mesh`, vertex `v` at height `vertex_heights[v]`.
     pub fn new(mesh: &Mesh, vertex_heights: &[f32]) -> MeshSampler {
+        MeshSampler::along(mesh, vertex_heights, Diagonal::SouthWest)
+    }
+
+    /// [`Self::new`] for a mesh whose root triangles meet along `diagonal`.
+    pub fn along(mesh: &Mesh, vertex_heights: &[f32], diagonal: Diagonal) -> MeshSampler {
         debug_assert_eq!(vertex_heights.len(), mesh.vertices.len());
         let side = mesh.side;
         let heights = mesh
@@ -76,7 +83,13 @@ impl MeshSampler {
             .zip(vertex_heights)
             .map(|(&[i, j], &h)| (j as u32 * side + i as u32, h))
             .collect();
-        MeshSampler { cells: side - 1, heights }
+        MeshSampler { cells: side - 1, diagonal, hierarchy_leaves: false, heights }
+    }
+
+    /// [`Self::new`] for a mesh `rtin` extracted: its diagonal and leaves.
+    pub fn of_rtin(mesh: &Mesh, vertex_heights: &[f32], rtin: &Rtin) -> MeshSampler {
+        let sampler = MeshSampler::along(mesh, vertex_heights, rtin.diagonal());
+        MeshSampler { hierarchy_leaves: rtin.hierarchy_leaves(), ..sampler }
     }
 
     /// The mesh's height at `(x, y)` in post coordinates (`x` east, `y`
@@ -86,8 +99,11 @@ impl MeshSampler {
         if !(0.0..=n).contains(&x) || !(0.0..=n).contains(&y) {
             return None;
         }
-        let [south_east, north_west] = Triangle::roots(self.cells);
-        let mut t = if x >= y { south_east } else { north_west };
+        let [first, second] = Triangle::roots_along(self.cells, self.diagonal);
+        // The first root holds its right angle's side of the diagonal a-b.
+        let (a, b) = (as_f64(first.a), as_f64(first.b));
+        let c_side = signed_area(a, b, as_f64(first.c));
+        let mut t = if signed_area(a, b, [x, y]) * c_side >= 0.0 { first } else { second };
         while !t.is_leaf() && self.vertex(t.midpoint()).is_some() {
             let [first, second] = t.children();
             // The children meet on the line from the right angle to the midpoint.
@@ -102,6 +118,9 @@ impl MeshSampler {
     /// cell redrawn along the level-0 diagonal ([`Triangle::drawn`]) may hand
     /// the place to the other drawn half.
     fn drawn_under(&self, t: &Triangle, x: f64, y: f64) -> [[u32; 2]; 3] {
+        if self.hierarchy_leaves {
+            return t.ccw();
+        }
         let drawn = t.drawn(|p| self.vertex(p).is_some());
         if drawn == t.ccw() {
             return drawn;
@@ -113,6 +132,11 @@ impl MeshSampler {
         } else {
             [sw, ne, [sx, sy + 1]]
         }
+    }
+
+    /// Whether post `(i, j)` is a vertex of the mesh.
+    pub fn has_vertex(&self, i: u32, j: u32) -> bool {
+        i <= self.cells && j <= self.cells && self.vertex([i, j]).is_some()
     }
 
     fn vertex(&self, p: [u32; 2]) -> Option<f32> {

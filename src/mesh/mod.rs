@@ -25,7 +25,7 @@ pub mod view_refine;
 
 pub use delta::{max_post_distance, max_surface_distance, MeshSampler};
 pub use error::MeshError;
-pub use rtin::{Metric, Rtin, RtinOptions};
+pub use rtin::{Diagonal, Metric, Rtin, RtinOptions};
 pub use view_refine::{view_refine, ViewParams};
 
 /// Largest vertex count a mesh may have: indices are 16-bit.
@@ -43,6 +43,22 @@ impl<'a> HeightGrid<'a> {
     /// Checks the shape (`2^k + 1` posts a side, at most `2^15 + 1` so that
     /// coordinates fit `u16`) and that every height is finite.
     pub fn new(side: u32, heights: &'a [f32]) -> Result<Self, MeshError> {
+        let grid = Self::with_voids(side, heights)?;
+        if let Some(index) = heights.iter().position(|h| h.is_nan()) {
+            let side = side as usize;
+            return Err(MeshError::NotFinite {
+                i: (index % side) as u32,
+                j: (index / side) as u32,
+            });
+        }
+        Ok(grid)
+    }
+
+    /// [`Self::new`], but NaN marks a post without data (a void, or beyond
+    /// the data): the error map then splits every triangle that mixes posts
+    /// with and without data down to half cells, and leaves triangles
+    /// without any alone. Infinite heights are still refused.
+    pub fn with_voids(side: u32, heights: &'a [f32]) -> Result<Self, MeshError> {
         let cells = side.wrapping_sub(1);
         if side < 2 || !cells.is_power_of_two() || cells > 1 << 15 {
             return Err(MeshError::Side(side));
@@ -51,7 +67,7 @@ impl<'a> HeightGrid<'a> {
         if heights.len() != expected {
             return Err(MeshError::Length { expected, found: heights.len() });
         }
-        if let Some(index) = heights.iter().position(|h| !h.is_finite()) {
+        if let Some(index) = heights.iter().position(|h| h.is_infinite()) {
             let side = side as usize;
             return Err(MeshError::NotFinite {
                 i: (index % side) as u32,

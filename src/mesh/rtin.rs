@@ -38,6 +38,29 @@ impl Triangle {
         [Triangle { a: [0, 0], b: [n, n], c: [n, 0] }, Triangle { a: [n, n], b: [0, 0], c: [0, n] }]
     }
 
+    /// The two triangles of a square split along `diagonal`: the roots of a
+    /// node whose hierarchy continues its parent's (see [`Diagonal`]).
+    pub fn roots_along(cells: u32, diagonal: Diagonal) -> [Triangle; 2] {
+        let n = cells;
+        match diagonal {
+            Diagonal::SouthWest => Triangle::roots(cells),
+            Diagonal::SouthEast => [
+                Triangle { a: [n, 0], b: [0, n], c: [n, n] },
+                Triangle { a: [0, n], b: [n, 0], c: [0, 0] },
+            ],
+        }
+    }
+
+    /// The larger side of the triangle's bounding box, in posts.
+    pub fn extent(&self) -> u32 {
+        let span = |k: usize| {
+            let lo = self.a[k].min(self.b[k]).min(self.c[k]);
+            let hi = self.a[k].max(self.b[k]).max(self.c[k]);
+            hi - lo
+        };
+        span(0).max(span(1))
+    }
+
     /// The hypotenuse's midpoint, where a split puts its vertex.
     pub fn midpoint(&self) -> [u32; 2] {
         [(self.a[0] + self.b[0]) / 2, (self.a[1] + self.b[1]) / 2]
@@ -156,6 +179,35 @@ pub enum Metric {
     Surface,
 }
 
+/// Which diagonal splits the square into the hierarchy's two root triangles.
+///
+/// Two levels of bisection below a square split south-west to north-east,
+/// its south-west and north-east quadrants are split the same way and the
+/// other two the other way. So a node whose hierarchy must be the continuation
+/// of its parent's (every parent mesh then is a coarsening of the child's, and
+/// a child morphed fully onto its parent draws the parent's very surface) is
+/// split along [`Diagonal::of_node`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Diagonal {
+    /// South-west to north-east (the level-0 cells' diagonal).
+    #[default]
+    SouthWest,
+    /// South-east to north-west.
+    SouthEast,
+}
+
+impl Diagonal {
+    /// The diagonal of square `(x, y)` of a level of squares that halve a
+    /// root square split south-west to north-east: the parity of `x + y`.
+    pub fn of_node(x: u32, y: u32) -> Diagonal {
+        if (x + y) % 2 == 0 {
+            Diagonal::SouthWest
+        } else {
+            Diagonal::SouthEast
+        }
+    }
+}
+
 /// Options fixed when the error map is built.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct RtinOptions {
@@ -167,6 +219,14 @@ pub struct RtinOptions {
     pub bounds: bool,
     /// What the error map measures.
     pub metric: Metric,
+    /// The diagonal of the two root triangles.
+    pub diagonal: Diagonal,
+    /// Draw half cells as the hierarchy makes them, never redrawn along the
+    /// south-west to north-east diagonal ([`Triangle::drawn`]). Needed when
+    /// the grid is coarser than the data: then a coarser mesh of the same
+    /// hierarchy is refined by this one only if neither redraws (a redrawn
+    /// cell of the coarse lattice is no leaf of the fine one).
+    pub hierarchy_leaves: bool,
 }
 
 /// The box around everything a split at one midpoint refines, nested: it
@@ -198,6 +258,8 @@ impl SplitBounds {
 #[derive(Clone, Debug)]
 pub struct Rtin {
     side: u32,
+    diagonal: Diagonal,
+    hierarchy_leaves: bool,
     /// Per post: the bound described in the module notes (0 where no split
     /// lands, infinite on forced edge posts), rounded up to `f32`.
     errors: Vec<f32>,
@@ -217,13 +279,15 @@ impl Rtin {
         let posts = side as usize * side as usize;
         let mut rtin = Rtin {
             side,
+            diagonal: options.diagonal,
+            hierarchy_leaves: options.hierarchy_leaves,
             errors: vec![0.0; posts],
             bounds: options.bounds.then(|| vec![SplitBounds::EMPTY; posts]),
         };
         let depths = 2 * grid.cells().trailing_zeros();
         // Leaves (depth `depths`) cover no post but their corners: nothing to record.
         for depth in (0..depths).rev() {
-            for root in Triangle::roots(grid.cells()) {
+            for root in Triangle::roots_along(grid.cells(), options.diagonal) {
                 root.for_each_at_depth(depth, &mut |t| rtin.record(grid, t, options));
             }
         }
@@ -233,6 +297,16 @@ impl Rtin {
     /// Posts a side of the grid.
     pub fn side(&self) -> u32 {
         self.side
+    }
+
+    /// The diagonal of the root triangles.
+    pub fn diagonal(&self) -> Diagonal {
+        self.diagonal
+    }
+
+    /// Whether half cells are drawn as the hierarchy makes them.
+    pub fn hierarchy_leaves(&self) -> bool {
+        self.hierarchy_leaves
     }
 
     /// The error map at post `(i, j)`: splitting there is needed for any
@@ -261,7 +335,7 @@ impl Rtin {
         split: &mut impl FnMut(&Triangle, [u32; 2]) -> bool,
         emit: &mut impl FnMut(Triangle),
     ) {
-        for root in Triangle::roots(self.side - 1) {
+        for root in Triangle::roots_along(self.side - 1, self.diagonal) {
             self.walk_from(root, split, emit);
         }
     }
@@ -301,15 +375,46 @@ impl Rtin {
     /// The mesh whose vertical error at every post is at most `max_error`:
     /// vertices numbered in the order the walk first meets them.
     pub fn extract(&self, max_error: f64) -> Result<Mesh, MeshError> {
+        self.extract_within(max_error, self.side - 1)
+    }
+
+    /// [`Self::extract`], also splitting every triangle wider than
+    /// `max_extent` posts: each triangle then lies inside one square of that
+    /// many cells (a power of two), so a tile of that size or larger takes
+    /// whole triangles from the mesh.
+    pub fn extract_within(&self, max_error: f64, max_extent: u32) -> Result<Mesh, MeshError> {
+        self.extract_with(max_error, max_extent, |_| false)
+    }
+
+    /// [`Self::extract_within`], also splitting wherever `keep(midpoint)`
+    /// says: the vertices of a coarser mesh of the same hierarchy (a
+    /// parent node's), so that this mesh refines that one. `keep` must be
+    /// closed like a mesh's vertex set, or the mesh has T-junctions.
+    pub fn extract_with(
+        &self,
+        max_error: f64,
+        max_extent: u32,
+        keep: impl Fn([u32; 2]) -> bool,
+    ) -> Result<Mesh, MeshError> {
         if !(max_error >= 0.0 && max_error.is_finite()) {
             return Err(MeshError::MaxError(max_error));
         }
         let mut vertex_of = vec![u32::MAX; self.errors.len()];
         let mut vertices: Vec<[u16; 2]> = Vec::new();
         let mut triangles: Vec<u32> = Vec::new();
-        let is_vertex = |p: [u32; 2]| self.is_vertex(p, max_error);
-        self.for_each_triangle(max_error, &mut |t| {
-            for v in t.drawn(is_vertex) {
+        let errors = &self.errors;
+        let side = self.side as usize;
+        let is_vertex = |p: [u32; 2]| {
+            self.is_vertex(p, max_error) || self.forced_vertex(p, max_extent) || keep(p)
+        };
+        let mut split = |t: &Triangle, m: [u32; 2]| {
+            t.extent() > max_extent
+                || errors[m[1] as usize * side + m[0] as usize] as f64 > max_error
+                || keep(m)
+        };
+        self.walk(&mut split, &mut |t| {
+            let corners = if self.hierarchy_leaves { t.ccw() } else { t.drawn(is_vertex) };
+            for v in corners {
                 let slot = &mut vertex_of[self.index(v)];
                 if *slot == u32::MAX {
                     *slot = vertices.len() as u32;
@@ -334,6 +439,13 @@ impl Rtin {
         corner || self.errors[self.index(p)] as f64 > max_error
     }
 
+    /// Post `p` is a vertex forced by `max_extent`: the splits of every
+    /// triangle wider than `max_extent` put a vertex on every post of the
+    /// lattice `max_extent` apart (the corners of the squares that size).
+    fn forced_vertex(&self, p: [u32; 2], max_extent: u32) -> bool {
+        p[0] % max_extent == 0 && p[1] % max_extent == 0
+    }
+
     fn index(&self, p: [u32; 2]) -> usize {
         p[1] as usize * self.side as usize + p[0] as usize
     }
@@ -346,18 +458,31 @@ impl Rtin {
         let h = corners.map(|[i, j]| grid.at(i, j) as f64);
         let mut worst = 0.0f64;
         let mut z = [f32::INFINITY, f32::NEG_INFINITY];
+        // Posts without data (NaN, see `HeightGrid::with_voids`): a triangle
+        // with none needs no vertex; one with some but not all is split down
+        // to half cells, so that the mesh has data exactly where the grid has.
+        let (mut with_data, mut without) = (0u32, 0u32);
         for_each_post(corners, |i, j, w| {
             let post = grid.at(i, j);
+            if post.is_nan() {
+                without += 1;
+                return;
+            }
+            with_data += 1;
             worst = worst.max((post as f64 - on_plane(h, w)).abs());
             z = [z[0].min(post), z[1].max(post)];
         });
-        if options.metric == Metric::Surface {
+        if options.metric == Metric::Surface && without == 0 {
             for (p, q) in [(0, 1), (1, 2), (2, 0)] {
                 let crossing = anti_diagonal_crossings(grid, corners[p], h[p], corners[q], h[q]);
                 worst = worst.max(crossing);
             }
         }
-        let mut error = round_up_to_f32(worst);
+        let mut error = match (with_data, without) {
+            (0, _) => 0.0,
+            (_, 0) => round_up_to_f32(worst),
+            _ => f32::INFINITY,
+        };
         let forced = options.edge_step.is_some_and(|step| {
             t.hypotenuse_on_boundary(self.side - 1) && t.axis_hypotenuse() >= 2 * step
         });

@@ -73,4 +73,4 @@ pub use limits::{MAX_BORDER, MAX_LEVELS, MAX_NODE_SIZE, MAX_POSTS_PER_SIDE};
 pub use open::Pyramid;
 pub use progress::{Progress, Silent};
 pub use synthetic::{synthetic_grid, MAX_SYNTHETIC_SIZE};
-pub use write::write_atomic;
+pub use write::{replace_file, write_atomic};

@@ -23,16 +23,29 @@ pub fn write_atomic(
     path: &Path,
     progress: &dyn Progress,
 ) -> Result<(), PyramidError> {
+    replace_file(path, |temporary| write_file(pyramid, temporary, progress), |path, source| {
+        PyramidError::Io { path: path.to_path_buf(), source }
+    })
+}
+
+/// Replaces the file at `path` so that a crash at any moment leaves the old
+/// file or the new one: `write` fills `NAME.tmp-PID` beside it (and flushes
+/// it), which is then renamed over `path`, and the directory flushed. `io`
+/// turns an I/O failure on a path into the caller's error.
+pub fn replace_file<E>(
+    path: &Path,
+    write: impl FnOnce(&Path) -> Result<(), E>,
+    io: impl Fn(&Path, std::io::Error) -> E,
+) -> Result<(), E> {
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
     let name = path.file_name().ok_or_else(|| {
-        let source = std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a file path");
-        PyramidError::Io { path: path.to_path_buf(), source }
+        io(path, std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a file path"))
     })?;
     remove_stale_temporaries(dir, &name.to_string_lossy());
     let temporary = dir.join(format!("{}.tmp-{}", name.to_string_lossy(), std::process::id()));
-    let written = write_file(pyramid, &temporary, progress).and_then(|()| {
-        fs::rename(&temporary, path).map_err(PyramidError::io(path))?;
-        sync_dir(dir)
+    let written = write(&temporary).and_then(|()| {
+        fs::rename(&temporary, path).map_err(|e| io(path, e))?;
+        sync_dir(dir).map_err(|e| io(dir, e))
     });
     if written.is_err() {
         // Best effort: the error being returned matters more than this one.
@@ -83,9 +96,9 @@ fn write_file(
 
 /// Makes the rename durable: on Unix a directory entry reaches the disk only
 /// when the directory itself is flushed.
-fn sync_dir(dir: &Path) -> Result<(), PyramidError> {
+fn sync_dir(dir: &Path) -> std::io::Result<()> {
     #[cfg(unix)]
-    File::open(dir).and_then(|d| d.sync_all()).map_err(PyramidError::io(dir))?;
+    File::open(dir).and_then(|d| d.sync_all())?;
     #[cfg(not(unix))]
     let _ = dir;
     Ok(())

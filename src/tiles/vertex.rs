@@ -358,6 +358,7 @@ mod tests {
             min: 0.0,
             max: 120.0,
             delta: 0.0,
+            mesh: Default::default(),
         };
         let reader =
             PostReader::new(&layout, TileKey::new(0, 0, 0), 8, NodeId::new(0, 0, 0), &data);
@@ -389,7 +390,13 @@ mod tests {
         let side = layout.stored_side() as i64;
         let at = |p: i64| ((p - 2) * 2).clamp(0, 9) as f32;
         let heights = (0..side * side).map(|k| at(k % side).powi(2) + 3.0 * at(k / side).powi(2));
-        let data = NodeData { heights: heights.collect(), min: 0.0, max: 324.0, delta: 0.0 };
+        let data = NodeData {
+            heights: heights.collect(),
+            min: 0.0,
+            max: 324.0,
+            delta: 0.0,
+            mesh: Default::default(),
+        };
         let reader =
             PostReader::new(&layout, TileKey::new(1, 0, 0), 8, NodeId::new(1, 0, 0), &data);
         check(&reader);

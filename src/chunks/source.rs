@@ -1,0 +1,85 @@
+//! A pyramid whose nodes come with their adaptive meshes: what `fly` and
+//! `accuracy` page from. Opening builds the mesh file when it is missing or
+//! belongs to another pyramid (an import, or an older cache).
+
+use std::path::Path;
+use std::sync::Arc;
+
+use super::build::build_chunks;
+use super::file::{pyramid_identity, write_chunks, ChunkFile, CHUNK_FILE_NAME};
+use super::{ChunkError, ChunkOptions};
+use crate::node::{NodeData, NodeError, NodeId, NodeLayout, NodeSource};
+use crate::pyramid::{Progress, Pyramid};
+
+/// The pyramid and its mesh file.
+pub struct ChunkedSource {
+    pyramid: Arc<Pyramid>,
+    chunks: ChunkFile,
+}
+
+impl ChunkedSource {
+    /// Opens the mesh file beside `pyramid`, first building it with
+    /// `options` when it is missing, damaged, or of another pyramid.
+    pub fn open_or_build(
+        pyramid: Arc<Pyramid>,
+        options: ChunkOptions,
+        progress: &dyn Progress,
+    ) -> Result<ChunkedSource, ChunkError> {
+        let path = mesh_path(pyramid.path());
+        let layout = *pyramid.layout();
+        let identity = pyramid_identity(pyramid.path())
+            .map_err(|source| ChunkError::Io { path: pyramid.path().to_path_buf(), source })?;
+        let chunks = match ChunkFile::open(&path, &layout, identity) {
+            Ok(chunks) if chunks.header().options == options => chunks,
+            _ => {
+                let built = build_chunks(pyramid.as_ref(), options, progress)?;
+                write_chunks(&built, &layout, identity, &path)?;
+                ChunkFile::open(&path, &layout, identity)?
+            }
+        };
+        Ok(ChunkedSource { pyramid, chunks })
+    }
+
+    /// The pyramid the nodes' posts come from.
+    pub fn pyramid(&self) -> &Arc<Pyramid> {
+        &self.pyramid
+    }
+
+    /// The mesh file.
+    pub fn chunks(&self) -> &ChunkFile {
+        &self.chunks
+    }
+
+    /// Largest mesh delta of each level, metres, finest first: what the
+    /// distance rings are computed from.
+    pub fn delta_per_level(&self) -> Vec<f64> {
+        self.chunks.header().delta_per_level.iter().map(|&d| d as f64).collect()
+    }
+}
+
+/// The mesh file beside the pyramid file at `pyramid_file`.
+pub fn mesh_path(pyramid_file: &Path) -> std::path::PathBuf {
+    pyramid_file.with_file_name(CHUNK_FILE_NAME)
+}
+
+impl NodeSource for ChunkedSource {
+    fn layout(&self) -> &NodeLayout {
+        self.pyramid.layout()
+    }
+
+    fn has_node(&self, id: NodeId) -> bool {
+        self.pyramid.has_node(id)
+    }
+
+    fn exact_height(&self, x_m: f64, y_m: f64) -> Result<f32, NodeError> {
+        NodeSource::exact_height(self.pyramid.as_ref(), x_m, y_m)
+    }
+
+    /// The node's posts from the pyramid and its mesh from the mesh file;
+    /// its delta is the mesh's.
+    fn read_node(&self, id: NodeId, out: &mut NodeData) -> Result<(), NodeError> {
+        self.pyramid.read_node(id, out)?;
+        out.delta = self.chunks.read(self.pyramid.layout(), id, &mut out.mesh)?;
+        Ok(())
+    }
+}
