@@ -13,12 +13,21 @@
 //!   (one vertex buffer, upload and bind per tile: `ChunkedBaseline`) from a
 //!   display of its own, for the tau points.
 //!
+//! - for the tau sweep, at the same views, two GL-free baselines over one
+//!   square of level-0 posts around the flight (`support::rtin_floor`): the
+//!   RTIN floor (a view-dependent RTIN refinement of those posts at the same
+//!   tau and K, triangles meeting the culling frustum) and the
+//!   full-resolution triangles in that frustum, each against the LOD's
+//!   triangles over the same square.
+//!
 //! Ratios against the brute-force mesh are per view, so machine noise hits
-//! both sides alike. Prints the table, writes target/bench/lod.json and
-//! target/bench/lod.svg (frame time against measured p99 error).
+//! both sides alike. Prints the tables, writes target/bench/lod.json and
+//! target/bench/lod.svg (frame time against measured p99 error; triangles
+//! against tau beside the floors).
 
 mod support;
 
+use std::cell::OnceCell;
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
@@ -38,14 +47,18 @@ use ridgeline::node::NodeSource;
 use ridgeline::pipeline::FrameStats;
 use ridgeline::pyramid::{Pyramid, Silent};
 use ridgeline::render::RenderBackend;
-use ridgeline::scene::TerrainSummary;
+use ridgeline::scene::{clip_planes, TerrainSummary};
 use serde_json::json;
+use support::rtin_floor::{FloorCount, FloorGrid, FloorView};
 use support::{print_table, write_json, write_svg, BenchArgs, Panel, Series};
 
 const SIZE: UVec2 = UVec2::new(1280, 720);
 const FOV_X_DEG: f64 = 60.0;
 /// Frames of the flight part are this often: a low-power board's rate.
 const FLIGHT_RATE_HZ: f64 = 10.0;
+/// Posts a side of the RTIN floor's square of level-0 posts: the truth's
+/// window (31 chunks of 128 cells) and a little more, `2^12 + 1`.
+const FLOOR_SIDE: u32 = 4097;
 
 /// One point of the sweep.
 #[derive(Clone, Copy, serde::Serialize)]
@@ -168,6 +181,46 @@ struct PointResult {
     /// Clear and sky alone at the flight's first pose: the fill floor no
     /// triangle count goes below on this driver.
     sky_only_ms: f64,
+    /// The RTIN floor and full resolution in the frustum (tau sweep only).
+    floors: Option<FloorRow>,
+}
+
+/// One view's triangles against the baselines over the floor's square.
+#[derive(Clone, Copy, serde::Serialize)]
+struct FloorViewRow {
+    t: f64,
+    /// The LOD frame's surface triangles, all of them and over the square
+    /// (each tile's by the share of its footprint over it).
+    triangles_lod: u64,
+    triangles_lod_square: f64,
+    /// The frame had to coarsen (tiles did not fit the buffer).
+    coarsened: u32,
+    rtin: FloorCount,
+    full_res_in_frustum: u64,
+}
+
+/// Means over the views; ratios per view, then averaged.
+#[derive(serde::Serialize)]
+struct FloorRow {
+    triangles_lod: f64,
+    triangles_lod_square: f64,
+    rtin_floor: f64,
+    rtin_all_round: f64,
+    full_res_in_frustum: f64,
+    lod_over_rtin: f64,
+    full_res_over_lod: f64,
+    views: Vec<FloorViewRow>,
+}
+
+/// The floors' square and what does not depend on tau, computed once.
+struct Floors {
+    pyramid: Arc<Pyramid>,
+    grid: FloorGrid,
+    /// Per view: full-resolution triangles in its frustum.
+    full_res: Vec<OnceCell<u64>>,
+    checked: OnceCell<()>,
+    /// Ulrich's K of the views, pixels.
+    k: f64,
 }
 
 fn main() {
@@ -185,9 +238,10 @@ fn main() {
     let positions = views.iter().map(|(_, c)| [c.position.x, c.position.y]);
     let region = TruthRegion::around_positions(&layout, LodConfig::default().grid_size, positions);
     let mesh = TruthMesh::load(source.as_ref(), region).expect("truth mesh");
+    let floors = Floors::load(&pyramid, region, &views);
     let mut results = Vec::new();
     for point in points() {
-        let result = measure_point(&point, &pyramid, &mesh, &path, &views, flight_frames);
+        let result = measure_point(&point, &pyramid, &mesh, &floors, &path, &views, flight_frames);
         println!(
             "  {:<16} tau {:>3}: p99.9 {:.3} px, {:.0} triangles, {:.1} ms (truth {:.1} ms)",
             point.name,
@@ -199,7 +253,7 @@ fn main() {
         );
         results.push(result);
     }
-    report(&args, &results, view_count);
+    report(&args, &results, view_count, &floors);
 }
 
 fn camera_at(path: &FlightPath, t: f64) -> Camera {
@@ -221,6 +275,7 @@ fn measure_point(
     point: &Point,
     pyramid: &Arc<Pyramid>,
     mesh: &TruthMesh,
+    floors: &Floors,
     path: &FlightPath,
     views: &[(f64, Camera)],
     flight_frames: u32,
@@ -230,6 +285,7 @@ fn measure_point(
     let exact = |x: f64, y: f64| pyramid.exact_height(x, y);
     let run = measure_flight(&mut display, &truth, &exact, pyramid.layout().spacing_m, views)
         .expect("accuracy views");
+    let floor_row = point.baseline.then(|| floors.measure(&mut display, point, views, &run));
     let (flight, _) = fly(&mut display, None, path, flight_frames);
     let sky_only_ms = sky_only(&mut display, &views[0].1);
     drop(truth);
@@ -253,7 +309,219 @@ fn measure_point(
     let mut result =
         summarise(point, &run, FlightRow::of(&flight), chunked, chunked_uploads_per_frame);
     result.sky_only_ms = sky_only_ms;
+    result.floors = floor_row;
     result
+}
+
+impl Floors {
+    /// The square of [`FLOOR_SIDE`] posts centred on the truth's `region`,
+    /// and its error map. Its first post is a multiple of the largest power
+    /// of two that still lets it hold the whole window (at most the root
+    /// level's post step): the coarse levels' posts, those of a base layer
+    /// among them, then fall on corners of the RTIN's squares, as they fall
+    /// on the LOD's tiles' corners.
+    fn load(pyramid: &Arc<Pyramid>, region: TruthRegion, views: &[(f64, Camera)]) -> Floors {
+        let start = Instant::now();
+        let slack = FLOOR_SIDE.saturating_sub(region.posts[0].max(region.posts[1])).max(1);
+        let root_step = 1u32 << (pyramid.layout().levels - 1);
+        let align = (1u32 << slack.ilog2()).min(root_step) as i64;
+        let grid = FloorGrid::load(pyramid.as_ref(), region, FLOOR_SIDE, align);
+        let (sw, ne) = grid.extent_m();
+        println!(
+            "RTIN floor square: {side}x{side} level-0 posts from post ({}, {}) (a multiple of {align}; truth window {:?} posts from {:?}), \
+             {:.0} x {:.0} km, local x {:.0}..{:.0} m, y {:.0}..{:.0} m; {} posts without data filled; \
+             error map in {:.1} s",
+            grid.first[0],
+            grid.first[1],
+            region.posts,
+            region.first,
+            (ne[0] - sw[0]) / 1e3,
+            (ne[1] - sw[1]) / 1e3,
+            sw[0],
+            ne[0],
+            sw[1],
+            ne[1],
+            grid.filled,
+            start.elapsed().as_secs_f64(),
+            side = grid.side,
+        );
+        Floors {
+            pyramid: pyramid.clone(),
+            grid,
+            full_res: vec![OnceCell::new(); views.len()],
+            checked: OnceCell::new(),
+            k: views.first().map_or(0.0, |(_, c)| c.perspective_scale()),
+        }
+    }
+
+    /// Prints the table of the tau sweep against the floors; returns what
+    /// the JSON says of the square.
+    fn report(&self, results: &[PointResult]) -> serde_json::Value {
+        let grid = &self.grid;
+        let (sw, ne) = grid.extent_m();
+        let km = [(ne[0] - sw[0]) / 1e3, (ne[1] - sw[1]) / 1e3];
+        let header = [
+            "tau",
+            "LOD p99.9 px",
+            "LOD tri",
+            "LOD tri on square",
+            "RTIN floor",
+            "LOD/RTIN",
+            "RTIN all round",
+            "full res in frustum",
+            "full res/LOD",
+            "every post/LOD",
+        ];
+        let rows: Vec<Vec<String>> = results
+            .iter()
+            .filter_map(|r| r.floors.as_ref().map(|f| (r, f)))
+            .map(|(r, f)| {
+                vec![
+                    format!("{}", r.point.lod.tau_px),
+                    format!("{:.4}", r.p999_px),
+                    format!("{:.0}", f.triangles_lod),
+                    format!("{:.0}", f.triangles_lod_square),
+                    format!("{:.0}", f.rtin_floor),
+                    format!("{:.2}", f.lod_over_rtin),
+                    format!("{:.0}", f.rtin_all_round),
+                    format!("{:.0}", f.full_res_in_frustum),
+                    format!("{:.2}", f.full_res_over_lod),
+                    format!("{:.2}", r.truth_over_lod_triangles),
+                ]
+            })
+            .collect();
+        print_table(
+            &format!(
+                "Triangles in view against the floors over the {side}x{side}-post square of level 0 \
+                 ({:.0} x {:.0} km around the flight): means over the views, ratios per view then averaged",
+                km[0],
+                km[1],
+                side = grid.side,
+            ),
+            &header,
+            &rows,
+        );
+        println!(
+            "  RTIN floor: view-dependent RTIN refinement of the square's posts, split while the error \
+             (max vertical distance to the posts) > tau D / K, K = {:.1} px, D from the eye to the split's box;\n  \
+             counted: triangles whose box meets the LOD's culling frustum (conservative, curvature drop as the \
+             selector's). Full res: 2 per level-0 cell of the square whose box meets that frustum.\n  \
+             LOD on square: each drawn tile's triangles by the share of its footprint over the square. \
+             every post/LOD: the truth window's triangles over all the LOD's.",
+            self.k
+        );
+        json!({
+            "side": grid.side,
+            "first_post": grid.first,
+            "extent_m": [sw, ne],
+            "km": km,
+            "posts_filled": grid.filled,
+            "full_res_triangles": grid.full_res_triangles(),
+            "k_px": self.k,
+        })
+    }
+
+    /// The baselines at `point`'s tau for each view, beside the LOD frame
+    /// `display` draws there (settled, as `measure_flight` measured it).
+    fn measure(
+        &self,
+        display: &mut DisplayParts,
+        point: &Point,
+        views: &[(f64, Camera)],
+        run: &AccuracyRun,
+    ) -> FloorRow {
+        let grid_size = point.lod.grid_size;
+        let per_tile = 2 * grid_size as u64 * grid_size as u64;
+        let curvature = display.pipeline.scene().config().curvature;
+        let mut rows = Vec::with_capacity(views.len());
+        for (v, (t, camera)) in views.iter().enumerate() {
+            display.pipeline.settle(camera, 10_000).expect("settle");
+            let stats = display.frame(camera).expect("LOD frame");
+            let tiles = &display.pipeline.draw_list().tiles;
+            let share: f64 =
+                tiles.iter().map(|tile| self.grid.tile_share(tile.key, grid_size)).sum();
+            let view =
+                self.grid.view(camera, clip_planes(camera, &display.pipeline.terrain()), curvature);
+            self.checked.get_or_init(|| self.check(views, &view));
+            let full_res = *self.full_res[v].get_or_init(|| self.grid.full_res_in_frustum(&view));
+            let row = FloorViewRow {
+                t: *t,
+                triangles_lod: tiles.len() as u64 * per_tile,
+                triangles_lod_square: share * per_tile as f64,
+                coarsened: stats.scene.coarsened,
+                rtin: self.grid.rtin_floor(&view, point.lod.tau_px),
+                full_res_in_frustum: full_res,
+            };
+            if row.triangles_lod != run.views[v].triangles_lod || row.coarsened > 0 {
+                println!(
+                    "  note: view {v} drew {} LOD triangles here ({} coarsenings), {} when measured",
+                    row.triangles_lod, row.coarsened, run.views[v].triangles_lod
+                );
+            }
+            rows.push(row);
+        }
+        let n = rows.len().max(1) as f64;
+        let mean = |f: &dyn Fn(&FloorViewRow) -> f64| rows.iter().map(f).sum::<f64>() / n;
+        FloorRow {
+            triangles_lod: mean(&|r| r.triangles_lod as f64),
+            triangles_lod_square: mean(&|r| r.triangles_lod_square),
+            rtin_floor: mean(&|r| r.rtin.in_frustum as f64),
+            rtin_all_round: mean(&|r| r.rtin.all_round as f64),
+            full_res_in_frustum: mean(&|r| r.full_res_in_frustum as f64),
+            lod_over_rtin: mean(&|r| r.triangles_lod_square / r.rtin.in_frustum.max(1) as f64),
+            full_res_over_lod: mean(&|r| {
+                r.full_res_in_frustum as f64 / r.triangles_lod_square.max(1.0)
+            }),
+            views: rows,
+        }
+    }
+
+    /// Once, at the first view: that the square's posts lie where the
+    /// cameras' frame puts them (the pyramid's height at the post under each
+    /// eye and on a lattice over the square is the square's), and that the
+    /// refinement spans what it should at both ends of tau: a handful of
+    /// triangles at a huge tau, and at tau 0 (every split whose box meets the
+    /// frustum) the half cells of the full-resolution cells in the frustum.
+    fn check(&self, cameras: &[(f64, Camera)], view: &FloorView) {
+        let grid = &self.grid;
+        let last = grid.side - 1;
+        let lattice = (0..=16).flat_map(|a| (0..=16).map(move |b| [a * last / 16, b * last / 16]));
+        let under =
+            cameras.iter().map(|(_, c)| grid.post_under(c).expect("every eye over the square"));
+        let posts = self.pyramid.layout().posts;
+        let (mut compared, mut worst) = (0, 0.0f64);
+        for [i, j] in under.chain(lattice) {
+            let data = [grid.first[0] + i as i64, grid.first[1] + j as i64];
+            if !(0..posts[0] as i64).contains(&data[0]) || !(0..posts[1] as i64).contains(&data[1])
+            {
+                continue;
+            }
+            let [x, y] = grid.post_m(i as f64, j as f64);
+            let Some(exact) = self.pyramid.exact_height(x, y).filter(|h| !h.is_nan()) else {
+                continue;
+            };
+            let difference = (exact as f64 - grid.at(i, j) as f64).abs();
+            assert!(
+                difference < 0.01,
+                "post ({i}, {j}) of the square: {} m, the pyramid {exact} m",
+                grid.at(i, j)
+            );
+            (compared, worst) = (compared + 1, worst.max(difference));
+        }
+        let full = grid.full_res_in_frustum(view);
+        let coarse = grid.rtin_floor(view, 1e12).in_frustum;
+        let tiny = grid.rtin_floor(view, 1e-6).in_frustum;
+        let all = grid.split_all_in_frustum(view);
+        println!(
+            "RTIN floor check, first view: {compared} posts at the pyramid's heights (largest difference {worst:.4} m); \
+             in the frustum tau 1e12: {coarse} triangles, tau 1e-6: {tiny}, every split: {all}, full resolution: {full}"
+        );
+        assert!(compared > cameras.len(), "too few posts compared: {compared}");
+        assert!(coarse <= 64, "a huge tau still leaves {coarse} triangles");
+        let ratio = all as f64 / full as f64;
+        assert!(full > 0 && (0.95..=1.0).contains(&ratio), "tau 0: {all} triangles against {full}");
+        assert!(tiny <= all, "tau 1e-6 ({tiny}) past tau 0 ({all})");
+    }
 }
 
 /// Mean of 5 frames of clear and sky only, to glFinish, with the uniforms
@@ -329,10 +597,11 @@ fn summarise(
         chunked,
         chunked_uploads_per_frame: uploads,
         sky_only_ms: 0.0,
+        floors: None,
     }
 }
 
-fn report(args: &BenchArgs, results: &[PointResult], views: u32) {
+fn report(args: &BenchArgs, results: &[PointResult], views: u32, floors: &Floors) {
     let header = [
         "point",
         "tau",
@@ -387,9 +656,10 @@ fn report(args: &BenchArgs, results: &[PointResult], views: u32) {
     );
     let floor = results.iter().map(|r| r.sky_only_ms).sum::<f64>() / results.len().max(1) as f64;
     println!("  clear and sky alone (the fill floor): {floor:.1} ms per frame");
+    let square = floors.report(results);
     let json_path = write_json(
         "lod",
-        &json!({ "quick": args.quick, "views": views, "size": [SIZE.x, SIZE.y], "brute_force_frame_ms": brute, "points": results }),
+        &json!({ "quick": args.quick, "views": views, "size": [SIZE.x, SIZE.y], "brute_force_frame_ms": brute, "floor_square": square, "points": results }),
     );
     let sweep: Vec<&PointResult> = results.iter().filter(|r| r.point.baseline).collect();
     let errors = results.iter().map(|r| r.p99_px.max(1e-4));
@@ -428,6 +698,30 @@ fn report(args: &BenchArgs, results: &[PointResult], views: u32) {
         log_y: false,
         series,
     };
-    let svg = write_svg("lod", &[panel]);
+    let svg = write_svg("lod", &[panel, floors_panel(&sweep)]);
     println!("\nwrote {} and {}", json_path.display(), svg.display());
+}
+
+/// Triangles against tau over the floors' square: the LOD, the RTIN floor
+/// and full resolution in the frustum.
+fn floors_panel(sweep: &[&PointResult]) -> Panel {
+    let line = |label: &str, f: &dyn Fn(&FloorRow) -> f64| Series {
+        label: label.into(),
+        points: sweep
+            .iter()
+            .filter_map(|r| r.floors.as_ref().map(|x| (r.point.lod.tau_px, f(x))))
+            .collect(),
+    };
+    Panel {
+        title: "triangles in view over the floors' square".into(),
+        x_label: "tau (px)".into(),
+        y_label: "triangles (mean over the views)".into(),
+        log_x: true,
+        log_y: true,
+        series: vec![
+            line("UDLOD (tiles by share over the square)", &|f| f.triangles_lod_square),
+            line("RTIN floor (same tau, in the frustum)", &|f| f.rtin_floor),
+            line("full resolution in the frustum", &|f| f.full_res_in_frustum),
+        ],
+    }
 }

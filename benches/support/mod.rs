@@ -2,6 +2,8 @@
 //! the JSON report and the SVG plot under `target/bench/`.
 #![allow(dead_code)] // each bench uses its own subset
 
+pub mod rtin_floor;
+
 use plotters::prelude::*;
 use std::path::PathBuf;
 use std::time::Instant;
