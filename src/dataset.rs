@@ -9,8 +9,8 @@
 //! (the Black Sea floor, to -2173 m) are raised to 0 m, sea level; the SRTM
 //! tile is kept as it is.
 
-use crate::chunks::{ChunkError, ChunkOptions, ChunkedSource};
 use crate::dem::{self, ImportError};
+use crate::meshes::{MeshOptions, MeshedSource, MeshesError};
 use crate::pyramid::{self, BuildError, BuildOptions, Progress, Pyramid, PyramidError, FILE_NAME};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -51,7 +51,7 @@ pub enum DatasetError {
     Pyramid(#[from] PyramidError),
     /// The adaptive meshes could not be built or read.
     #[error("meshes: {0}")]
-    Chunks(#[from] ChunkError),
+    Chunks(#[from] MeshesError),
     /// No pyramid exists for a dataset name.
     #[error("dataset {name}: no pyramid at {path} (build one with `ridgeline import FILES --out {path}`)")]
     Missing {
@@ -86,14 +86,14 @@ pub fn open(
 /// [`open`], with each node's adaptive mesh: the mesh file beside the
 /// pyramid is built first when it is missing, damaged, of another pyramid
 /// or of other `options`.
-pub fn open_chunked(
+pub fn open_meshed(
     name: Option<&str>,
     cache_root: &Path,
-    options: ChunkOptions,
+    options: MeshOptions,
     progress: &dyn Progress,
-) -> Result<ChunkedSource, DatasetError> {
+) -> Result<MeshedSource, DatasetError> {
     let pyramid = Arc::new(open(name, cache_root, progress)?);
-    Ok(ChunkedSource::open_or_build(pyramid, options, progress)?)
+    Ok(MeshedSource::open_or_build(pyramid, options, progress)?)
 }
 
 /// Opens the built-in terrain, building it first when it is missing or damaged.

@@ -13,7 +13,7 @@
 //! | [`camera`] | the viewer's position and attitude, projection, frustum, earth curvature |
 //! | [`lod`] | UDLOD tiling on the CPU: distance rings with Ulrich's bound, quadtree selection, morph |
 //! | [`mesh`] | adaptive chunk meshes, GL-free: the RTIN error map and extraction, exact mesh delta against level 0, morph-target lookup, view-dependent RTIN refinement |
-//! | [`chunks`] | Ulrich's chunks: each stored node's adaptive mesh of the best data under it (RTIN at its level's error, exact delta, morph targets, normals), the mesh file beside the pyramid, and the source that pages nodes with their meshes |
+//! | [`meshes`] | node meshes (Ulrich's chunks): each stored node's adaptive mesh of the best data under it (RTIN at its level's error, exact delta, morph targets, normals), the mesh file beside the pyramid, and the source that pages nodes with their meshes |
 //! | [`tiles`] | per-tile height buffers: shared grid, vertex data, the tile cache on the allocator |
 //! | [`render`] | the GL-free half of drawing: draw lists, the backend trait, the counting null backend, the palette |
 //! | [`flight`] | camera paths for `fly`: the `--path` CSV, interpolation, frame times, the built-in approach |
@@ -31,7 +31,6 @@
 pub mod accuracy;
 pub mod allocator;
 pub mod camera;
-pub mod chunks;
 pub mod clipmap;
 pub mod dataset;
 pub mod dem;
@@ -41,6 +40,7 @@ pub mod geo;
 pub mod gl;
 pub mod lod;
 pub mod mesh;
+pub mod meshes;
 pub mod node;
 pub mod pipeline;
 pub mod procedural;

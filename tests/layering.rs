@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 const LAYERS: &[&[&str]] = &[
     &["geo", "node", "allocator", "camera"],
     &["mesh", "dem", "pyramid", "procedural"],
-    &["clipmap", "lod", "tiles", "chunks", "dataset"],
+    &["clipmap", "lod", "tiles", "meshes", "dataset"],
     &["render"],
     &["scene", "pipeline"],
     &["accuracy", "flight"],

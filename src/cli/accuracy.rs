@@ -5,17 +5,15 @@
 //! `accuracy.json` and the worst view's heat map, and fails when the
 //! measured p99.9 exceeds tau: the bound is only a promise if this confirms it.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Arc;
 
 use anyhow::{bail, Context, Result};
 use ridgeline::camera::Camera;
-use ridgeline::dataset;
 use ridgeline::display::measure::{measure_flight, AccuracyRun};
 use ridgeline::display::{DisplayConfig, DisplayParts};
 use ridgeline::gl::{GlBackend, TruthMesh, TruthPass, TruthRegion};
 use ridgeline::node::NodeSource;
-use ridgeline::scene::TerrainSummary;
 use serde_json::json;
 
 use super::progress::Bar;
@@ -41,14 +39,13 @@ pub struct AccuracyArgs {
 pub fn run(args: &AccuracyArgs) -> Result<()> {
     check_args(args)?;
     let bar = Bar::new();
-    let pyramid = dataset::open(args.view.dataset.as_deref(), Path::new("cache"), &bar)?;
+    let terrain = args.view.open_terrain(&bar)?;
     bar.finish();
+    let pyramid = terrain.pyramid;
     let path = super::flight_path(args.view.path.as_deref(), &pyramid)?;
     let layout = *pyramid.layout();
-    let summary = TerrainSummary::from_pyramid(pyramid.info());
     let dataset_name = pyramid.path().display().to_string();
-    let pyramid = Arc::new(pyramid);
-    let source: Arc<dyn NodeSource> = pyramid.clone();
+    let (source, summary) = (terrain.source, terrain.summary);
     let mut config = DisplayConfig::new(headless(args.backend), args.view.size);
     config.scene.lod.tau_px = args.view.tau;
     config.fov_x_deg = args.view.fov;

@@ -3,18 +3,14 @@
 //! headless otherwise; headless it writes PNG snapshots, the last frame and
 //! `stats.json`, and ends with a summary table.
 
-use std::path::{Path, PathBuf};
-use std::sync::Arc;
+use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
-use ridgeline::dataset;
 use ridgeline::display::{Display, DisplayConfig};
 use ridgeline::flight::FlightPath;
 use ridgeline::gl::{GlBackend, GlesVersion, OpenedBackend};
-use ridgeline::node::NodeSource;
 use ridgeline::pipeline::FrameStats;
-use ridgeline::scene::TerrainSummary;
 use serde_json::json;
 
 use super::progress::Bar;
@@ -59,12 +55,11 @@ pub fn run(args: &FlyArgs) -> Result<()> {
         bail!("--warning-above and --caution-below must be finite metres, the caution band not negative");
     }
     let bar = Bar::new();
-    let pyramid = dataset::open(args.view.dataset.as_deref(), Path::new("cache"), &bar)?;
+    let terrain = args.view.open_terrain(&bar)?;
     bar.finish();
-    let path = super::flight_path(args.view.path.as_deref(), &pyramid)?;
-    let summary = TerrainSummary::from_pyramid(pyramid.info());
-    let dataset_name = pyramid.path().display().to_string();
-    let source: Arc<dyn NodeSource> = Arc::new(pyramid);
+    let path = super::flight_path(args.view.path.as_deref(), &terrain.pyramid)?;
+    let dataset_name = terrain.pyramid.path().display().to_string();
+    let (source, summary) = (terrain.source, terrain.summary);
     let mut config = DisplayConfig::new(args.backend, args.view.size);
     config.version = if args.es2 { GlesVersion::Es2 } else { GlesVersion::Es3 };
     config.scene.lod.tau_px = args.view.tau;

@@ -2,13 +2,15 @@
 //! into layers (files of one spacing form one layer, a mosaic), builds one
 //! node pyramid over all of them on every core with a progress bar (finer
 //! layers win, see `ridgeline::pyramid::layers`), and writes
-//! `cache/NAME/pyramid.rlp` atomically.
+//! `cache/NAME/pyramid.rlp` atomically, then each node's adaptive mesh
+//! beside it (`meshes.rlm`, see `ridgeline::chunks`).
 
 use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use ridgeline::pyramid::{self, BuildOptions, FILE_NAME, MAX_SYNTHETIC_SIZE};
+use ridgeline::meshes::{MeshOptions, MeshedSource};
+use ridgeline::pyramid::{self, BuildOptions, Pyramid, FILE_NAME, MAX_SYNTHETIC_SIZE};
 
 use super::progress::Bar;
 
@@ -29,6 +31,9 @@ pub struct ImportArgs {
     /// Posts repeated from the neighbours on each side of a node.
     #[arg(long, default_value_t = BuildOptions::default().border)]
     pub border: u32,
+    /// The adaptive meshes' error at level 1, metres (see `fly --mesh-error`).
+    #[arg(long, default_value_t = MeshOptions::default().error_m)]
+    pub mesh_error: f32,
     /// Build from a deterministic synthetic SIZE x SIZE grid instead of
     /// files (scale tests and benchmarks).
     #[arg(long, hide = true, conflicts_with = "files")]
@@ -53,6 +58,9 @@ pub fn run(args: &ImportArgs) -> Result<()> {
         .with_context(|| format!("{}: cannot create the cache", args.out.display()))?;
     let path = args.out.join(FILE_NAME);
     pyramid::write_atomic(&built, &path, &bar)?;
+    let opened = std::sync::Arc::new(Pyramid::open(&args.out)?);
+    let options = MeshOptions { error_m: args.mesh_error, ..MeshOptions::default() };
+    MeshedSource::open_or_build(opened, options, &bar).context("building the adaptive meshes")?;
     bar.finish();
     let layout = built.layout();
     let present: u64 = built.info.levels.iter().map(|l| l.present).sum();

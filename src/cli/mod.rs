@@ -5,11 +5,15 @@
 
 use std::path::Path;
 
+use std::sync::Arc;
+
 use anyhow::Result;
 use glam::UVec2;
 use ridgeline::flight::{default_flight, FlightPath};
-use ridgeline::node::NodeSource as _;
+use ridgeline::meshes::{MeshOptions, MeshedSource};
+use ridgeline::node::NodeSource;
 use ridgeline::pyramid::Pyramid;
+use ridgeline::scene::TerrainSummary;
 
 pub mod accuracy;
 pub mod fly;
@@ -48,6 +52,15 @@ pub struct ViewArgs {
     /// Horizontal field of view in degrees.
     #[arg(long, default_value_t = 60.0)]
     pub fov: f64,
+    /// The adaptive meshes' error at level 1, metres (level l: this times
+    /// 2^(l-1), level 0 exact); the meshes are built beside the pyramid
+    /// when missing or built with another error.
+    #[arg(long, default_value_t = MeshOptions::default().error_m)]
+    pub mesh_error: f32,
+    /// Draw every tile as the regular grid of its level's posts instead of
+    /// the adaptive meshes (the subsampled baseline).
+    #[arg(long)]
+    pub regular_grid: bool,
 }
 
 impl ViewArgs {
@@ -59,8 +72,35 @@ impl ViewArgs {
         if !(self.fov.is_finite() && self.fov > 0.0 && self.fov < 179.0) {
             anyhow::bail!("--fov {} must be between 0 and 179 degrees", self.fov);
         }
+        if !(self.mesh_error.is_finite() && self.mesh_error > 0.0) {
+            anyhow::bail!("--mesh-error {} must be a number of metres above 0", self.mesh_error);
+        }
         Ok(())
     }
+
+    /// Opens the terrain: the pyramid, the source the display pages nodes
+    /// from (with their adaptive meshes unless `--regular-grid`), and the
+    /// per-level errors its rings are computed from.
+    fn open_terrain(&self, progress: &dyn ridgeline::pyramid::Progress) -> Result<Terrain> {
+        let cache = Path::new("cache");
+        let pyramid = Arc::new(ridgeline::dataset::open(self.dataset.as_deref(), cache, progress)?);
+        let mut summary = TerrainSummary::from_pyramid(pyramid.info());
+        if self.regular_grid {
+            let source: Arc<dyn NodeSource> = pyramid.clone();
+            return Ok(Terrain { pyramid, source, summary });
+        }
+        let options = MeshOptions { error_m: self.mesh_error, ..MeshOptions::default() };
+        let chunked = MeshedSource::open_or_build(Arc::clone(&pyramid), options, progress)?;
+        summary.delta_per_level = chunked.delta_per_level();
+        Ok(Terrain { pyramid, source: Arc::new(chunked), summary })
+    }
+}
+
+/// An opened terrain (see [`ViewArgs::open_terrain`]).
+struct Terrain {
+    pyramid: Arc<Pyramid>,
+    source: Arc<dyn NodeSource>,
+    summary: TerrainSummary,
 }
 
 /// Writes `bytes` beside `path` and renames them into place, so a reader

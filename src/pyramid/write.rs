@@ -23,9 +23,11 @@ pub fn write_atomic(
     path: &Path,
     progress: &dyn Progress,
 ) -> Result<(), PyramidError> {
-    replace_file(path, |temporary| write_file(pyramid, temporary, progress), |path, source| {
-        PyramidError::Io { path: path.to_path_buf(), source }
-    })
+    replace_file(
+        path,
+        |temporary| write_file(pyramid, temporary, progress),
+        |path, source| PyramidError::Io { path: path.to_path_buf(), source },
+    )
 }
 
 /// Replaces the file at `path` so that a crash at any moment leaves the old

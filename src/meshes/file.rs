@@ -23,8 +23,8 @@ use std::path::{Path, PathBuf};
 
 use memmap2::Mmap;
 
-use super::build::BuiltChunks;
-use super::ChunkError;
+use super::build::BuiltMeshes;
+use super::MeshesError;
 use crate::node::{MeshVertex, NodeError, NodeId, NodeLayout, NodeMesh};
 use crate::pyramid::replace_file;
 
@@ -32,7 +32,7 @@ use crate::pyramid::replace_file;
 compile_error!("the mesh file is read by casting little-endian bytes");
 
 /// The mesh file's name in a pyramid's cache directory.
-pub const CHUNK_FILE_NAME: &str = "meshes.rlm";
+pub const MESH_FILE_NAME: &str = "meshes.rlm";
 const MAGIC: [u8; 8] = *b"RIDGEMSH";
 const VERSION: u32 = 1;
 const FIXED_LEN: usize = 40;
@@ -43,9 +43,9 @@ const PYRAMID_ID_BYTES: u64 = 64 * 1024;
 
 /// What the header says.
 #[derive(Clone, Debug, PartialEq)]
-pub struct ChunkHeader {
+pub struct MeshHeader {
     /// The options the meshes were built with.
-    pub options: super::ChunkOptions,
+    pub options: super::MeshOptions,
     /// Largest mesh delta of each level, finest first.
     pub delta_per_level: Vec<f32>,
     /// Identity of the pyramid file the meshes belong to.
@@ -59,21 +59,21 @@ pub fn pyramid_identity(path: &Path) -> std::io::Result<u32> {
     Ok(crc32fast::hash(&bytes))
 }
 
-/// Writes `chunks` (built for `layout`, the pyramid of identity `pyramid`)
+/// Writes `meshes` (built for `layout`, the pyramid of identity `pyramid`)
 /// to `path` atomically.
-pub fn write_chunks(
-    chunks: &BuiltChunks,
+pub fn write_meshes(
+    meshes: &BuiltMeshes,
     layout: &NodeLayout,
     pyramid: u32,
     path: &Path,
-) -> Result<(), ChunkError> {
-    let io = |path: &Path, source| ChunkError::Io { path: path.to_path_buf(), source };
+) -> Result<(), MeshesError> {
+    let io = |path: &Path, source| MeshesError::Io { path: path.to_path_buf(), source };
     replace_file(
         path,
         |temporary| {
             let file = File::create(temporary).map_err(|e| io(temporary, e))?;
             let mut out = BufWriter::new(file);
-            encode(chunks, layout, pyramid, &mut out).map_err(|e| io(temporary, e))?;
+            encode(meshes, layout, pyramid, &mut out).map_err(|e| io(temporary, e))?;
             let file = out.into_inner().map_err(|e| io(temporary, e.into_error()))?;
             file.sync_all().map_err(|e| io(temporary, e))
         },
@@ -82,20 +82,20 @@ pub fn write_chunks(
 }
 
 fn encode(
-    chunks: &BuiltChunks,
+    meshes: &BuiltMeshes,
     layout: &NodeLayout,
     pyramid: u32,
     out: &mut impl Write,
 ) -> std::io::Result<()> {
-    let deltas = chunks.delta_per_level();
+    let deltas = meshes.delta_per_level();
     let mut header = Vec::with_capacity(FIXED_LEN + 4 * deltas.len() + 4);
     header.extend_from_slice(&MAGIC);
     header.extend_from_slice(&VERSION.to_le_bytes());
     header.extend_from_slice(&(layout.levels as u32).to_le_bytes());
     header.extend_from_slice(&layout.node_count().to_le_bytes());
-    header.extend_from_slice(&chunks.options.error_m.to_le_bytes());
-    header.extend_from_slice(&(chunks.options.depth as u32).to_le_bytes());
-    header.extend_from_slice(&chunks.options.tile_cells.to_le_bytes());
+    header.extend_from_slice(&meshes.options.error_m.to_le_bytes());
+    header.extend_from_slice(&(meshes.options.depth as u32).to_le_bytes());
+    header.extend_from_slice(&meshes.options.tile_cells.to_le_bytes());
     header.extend_from_slice(&pyramid.to_le_bytes());
     for delta in &deltas {
         header.extend_from_slice(&delta.to_le_bytes());
@@ -111,15 +111,15 @@ fn encode(
         for y in 0..ny {
             for x in 0..nx {
                 let id = NodeId::new(level, x, y);
-                let entry = match chunks.chunk(layout, id) {
-                    Some(chunk) => {
-                        let record = record_bytes(&chunk.mesh);
+                let entry = match meshes.mesh(layout, id) {
+                    Some(built) => {
+                        let record = record_bytes(&built.mesh);
                         let crc = record_crc(index, &record);
                         let entry = Entry {
                             offset,
-                            vertices: chunk.mesh.vertices.len() as u32,
-                            indices: chunk.mesh.indices.len() as u32,
-                            delta: chunk.delta,
+                            vertices: built.mesh.vertices.len() as u32,
+                            indices: built.mesh.indices.len() as u32,
+                            delta: built.delta,
                             crc,
                         };
                         offset += record.len() as u64;
@@ -194,22 +194,22 @@ impl Entry {
 }
 
 /// An open mesh file.
-pub struct ChunkFile {
+pub struct MeshFile {
     path: PathBuf,
     map: Mmap,
-    header: ChunkHeader,
+    header: MeshHeader,
     table: usize,
     nodes: u64,
 }
 
-impl ChunkFile {
+impl MeshFile {
     /// Opens and checks the header of the mesh file at `path`, which must
     /// belong to the pyramid of `layout` and identity `pyramid`.
-    pub fn open(path: &Path, layout: &NodeLayout, pyramid: u32) -> Result<ChunkFile, ChunkError> {
-        let io = |source| ChunkError::Io { path: path.to_path_buf(), source };
+    pub fn open(path: &Path, layout: &NodeLayout, pyramid: u32) -> Result<MeshFile, MeshesError> {
+        let io = |source| MeshesError::Io { path: path.to_path_buf(), source };
         let file = File::open(path).map_err(io)?;
         let map = map_file(&file).map_err(io)?;
-        let corrupt = |problem: String| ChunkError::Corrupt { path: path.to_path_buf(), problem };
+        let corrupt = |problem: String| MeshesError::Corrupt { path: path.to_path_buf(), problem };
         let (header, table) = decode_header(&map, layout).map_err(corrupt)?;
         if header.pyramid != pyramid {
             return Err(corrupt("built for another pyramid (or an earlier import)".into()));
@@ -217,13 +217,16 @@ impl ChunkFile {
         let nodes = layout.node_count();
         let end = table as u64 + nodes * ENTRY_LEN as u64;
         if (map.len() as u64) < end {
-            return Err(corrupt(format!("truncated: {} bytes, the table ends at {end}", map.len())));
+            return Err(corrupt(format!(
+                "truncated: {} bytes, the table ends at {end}",
+                map.len()
+            )));
         }
-        Ok(ChunkFile { path: path.to_path_buf(), map, header, table, nodes })
+        Ok(MeshFile { path: path.to_path_buf(), map, header, table, nodes })
     }
 
     /// What the header says.
-    pub fn header(&self) -> &ChunkHeader {
+    pub fn header(&self) -> &MeshHeader {
         &self.header
     }
 
@@ -249,7 +252,8 @@ impl ChunkFile {
         if entry.offset == ABSENT {
             return Err(NodeError::Absent { id });
         }
-        let end = entry.offset.checked_add(entry.record_len()).filter(|&e| e <= self.map.len() as u64);
+        let end =
+            entry.offset.checked_add(entry.record_len()).filter(|&e| e <= self.map.len() as u64);
         let Some(end) = end else {
             return Err(corrupt(format!("mesh record past the end of the file ({entry:?})")));
         };
@@ -282,7 +286,7 @@ fn decode_record(record: &[u8], entry: &Entry, out: &mut NodeMesh) -> Result<(),
     Ok(())
 }
 
-fn decode_header(bytes: &[u8], layout: &NodeLayout) -> Result<(ChunkHeader, usize), String> {
+fn decode_header(bytes: &[u8], layout: &NodeLayout) -> Result<(MeshHeader, usize), String> {
     if bytes.len() < FIXED_LEN || bytes[0..8] != MAGIC {
         return Err("not a Ridgeline mesh file".into());
     }
@@ -303,7 +307,7 @@ fn decode_header(bytes: &[u8], layout: &NodeLayout) -> Result<(ChunkHeader, usiz
     if crc32fast::hash(&bytes[..crc_at]) != u32_at(crc_at) {
         return Err("header checksum mismatch".into());
     }
-    let options = super::ChunkOptions {
+    let options = super::MeshOptions {
         error_m: f32::from_bits(u32_at(24)),
         depth: u32_at(28).min(255) as u8,
         tile_cells: u32_at(32),
@@ -314,7 +318,7 @@ fn decode_header(bytes: &[u8], layout: &NodeLayout) -> Result<(ChunkHeader, usiz
     if delta_per_level.iter().any(|d| !(d.is_finite() && *d >= 0.0)) {
         return Err(format!("level deltas {delta_per_level:?} are not distances"));
     }
-    let header = ChunkHeader { options, delta_per_level, pyramid: u32_at(36) };
+    let header = MeshHeader { options, delta_per_level, pyramid: u32_at(36) };
     Ok((header, crc_at + 4))
 }
 

@@ -19,20 +19,18 @@
 use rayon::prelude::*;
 
 use super::reference::{reference_grid, ReferenceGrid};
-use super::{ChunkError, ChunkOptions};
+use super::{MeshOptions, MeshesError};
 use crate::mesh::rtin::round_up_to_f32;
 use crate::mesh::{
     max_surface_distance, Diagonal, HeightGrid, Mesh, MeshError, MeshSampler, Metric, Rtin,
     RtinOptions,
 };
-use crate::node::{
-    MeshVertex, NodeData, NodeError, NodeId, NodeLayout, NodeMesh, NodeSource,
-};
+use crate::node::{MeshVertex, NodeData, NodeError, NodeId, NodeLayout, NodeMesh, NodeSource};
 use crate::pyramid::Progress;
 use crate::tiles::vertex::{sample_node, slope};
 
 /// One node's built mesh, and what its children need of it.
-pub struct BuiltChunk {
+pub struct BuiltMesh {
     /// The mesh as stored.
     pub mesh: NodeMesh,
     /// Exact vertical distance from the mesh to the best data, metres.
@@ -45,16 +43,16 @@ pub struct BuiltChunk {
 
 /// Every present node's mesh, level by level (finest first), `None` where
 /// the node is absent.
-pub struct BuiltChunks {
+pub struct BuiltMeshes {
     /// What they were built with.
-    pub options: ChunkOptions,
+    pub options: MeshOptions,
     /// Per level, per node of the level row by row.
-    pub levels: Vec<Vec<Option<BuiltChunk>>>,
+    pub levels: Vec<Vec<Option<BuiltMesh>>>,
 }
 
-impl BuiltChunks {
+impl BuiltMeshes {
     /// The mesh of node `id`, if present.
-    pub fn chunk(&self, layout: &NodeLayout, id: NodeId) -> Option<&BuiltChunk> {
+    pub fn mesh(&self, layout: &NodeLayout, id: NodeId) -> Option<&BuiltMesh> {
         let [nx, _] = layout.nodes_at(id.level);
         let level = self.levels.get(id.level as usize)?;
         level.get((id.y * nx + id.x) as usize)?.as_ref()
@@ -70,71 +68,76 @@ impl BuiltChunks {
 }
 
 /// Builds the mesh of every node `source` stores, using every core rayon offers.
-pub fn build_chunks(
+pub fn build_meshes(
     source: &dyn NodeSource,
-    options: ChunkOptions,
+    options: MeshOptions,
     progress: &dyn Progress,
-) -> Result<BuiltChunks, ChunkError> {
+) -> Result<BuiltMeshes, MeshesError> {
     options.validate(source.layout())?;
     let layout = *source.layout();
-    let mut levels: Vec<Vec<Option<BuiltChunk>>> = (0..layout.levels).map(|_| Vec::new()).collect();
+    let mut levels: Vec<Vec<Option<BuiltMesh>>> = (0..layout.levels).map(|_| Vec::new()).collect();
     for level in (0..layout.levels).rev() {
         let [nx, ny] = layout.nodes_at(level);
-        let ids: Vec<NodeId> = (0..ny)
-            .flat_map(|y| (0..nx).map(move |x| NodeId::new(level, x, y)))
-            .collect();
+        let ids: Vec<NodeId> =
+            (0..ny).flat_map(|y| (0..nx).map(move |x| NodeId::new(level, x, y))).collect();
         progress.phase(&format!("level {level}: meshes"), ids.len() as u64);
-        let parents = levels.get(level as usize + 1).map(|p| (p.as_slice(), layout.nodes_at(level + 1)[0]));
-        let built: Vec<Result<Option<BuiltChunk>, ChunkError>> = ids
+        let parents =
+            levels.get(level as usize + 1).map(|p| (p.as_slice(), layout.nodes_at(level + 1)[0]));
+        let built: Vec<Result<Option<BuiltMesh>, MeshesError>> = ids
             .par_iter()
             .map(|&id| {
-                let parent = parents.and_then(|(chunks, px)| {
+                let parent = parents.and_then(|(built, px)| {
                     let p = id.parent()?;
-                    chunks.get((p.y * px + p.x) as usize)?.as_ref().map(|c| (p, c))
+                    built.get((p.y * px + p.x) as usize)?.as_ref().map(|c| (p, c))
                 });
-                let chunk = if source.has_node(id) {
+                let mesh = if source.has_node(id) {
                     Some(build_node(source, id, parent, &options)?)
                 } else {
                     None
                 };
                 progress.advance(1);
-                Ok(chunk)
+                Ok(mesh)
             })
             .collect();
         levels[level as usize] = built.into_iter().collect::<Result<_, _>>()?;
     }
-    Ok(BuiltChunks { options, levels })
+    Ok(BuiltMeshes { options, levels })
 }
 
 /// The mesh of node `id`, refining `parent`'s mesh (none at the root level).
 pub fn build_node(
     source: &dyn NodeSource,
     id: NodeId,
-    parent: Option<(NodeId, &BuiltChunk)>,
-    options: &ChunkOptions,
-) -> Result<BuiltChunk, ChunkError> {
+    parent: Option<(NodeId, &BuiltMesh)>,
+    options: &MeshOptions,
+) -> Result<BuiltMesh, MeshesError> {
     let post_level = id.level - id.level.min(options.depth);
     let reference = reference_grid(source, id, post_level)?;
     let grid = HeightGrid::with_voids(reference.side, &reference.heights)
-        .map_err(|e| ChunkError::Mesh { id, source: e })?;
+        .map_err(|e| MeshesError::Mesh { id, source: e })?;
     let diagonal = Diagonal::of_node(id.x, id.y);
     // Half cells are redrawn along the data's diagonal only on the data's
     // own lattice (see `RtinOptions::hierarchy_leaves`).
     let hierarchy_leaves = post_level > 0;
-    let rtin_options =
-        RtinOptions { metric: Metric::Surface, diagonal, hierarchy_leaves, ..RtinOptions::default() };
-    let rtin = Rtin::new(&grid, rtin_options).map_err(|e| ChunkError::Mesh { id, source: e })?;
+    let rtin_options = RtinOptions {
+        metric: Metric::Surface,
+        diagonal,
+        hierarchy_leaves,
+        ..RtinOptions::default()
+    };
+    let rtin = Rtin::new(&grid, rtin_options).map_err(|e| MeshesError::Mesh { id, source: e })?;
     let shift = id.level - post_level;
     let extent = options.tile_cells << shift;
     let node_size = source.layout().node_size as i64;
-    let placement = parent.map(|(pid, p)| (Placement { id, parent: pid, node_size, post_level }, p));
+    let placement =
+        parent.map(|(pid, p)| (Placement { id, parent: pid, node_size, post_level }, p));
     let keep = |m: [u32; 2]| placement.as_ref().is_some_and(|(at, p)| parent_has(at, p, m));
     let mut error = options.level_error(id.level) as f64;
     let mesh = loop {
         match rtin.extract_with(error, extent, keep) {
             Ok(mesh) => break mesh,
             Err(MeshError::TooManyVertices { .. }) if error < 1e6 => error = (2.0 * error).max(1.0),
-            Err(e) => return Err(ChunkError::Mesh { id, source: e }),
+            Err(e) => return Err(MeshesError::Mesh { id, source: e }),
         }
     };
     let heights = mesh.vertex_heights(&grid);
@@ -144,13 +147,16 @@ pub fn build_node(
     let vertices = vertices(source, id, &reference, &mesh, &heights, placement.as_ref())?;
     let node_mesh = NodeMesh { post_level, vertices, indices: mesh.indices };
     node_mesh.debug_check();
-    Ok(BuiltChunk { mesh: node_mesh, delta, error_m: error as f32, sampler })
+    Ok(BuiltMesh { mesh: node_mesh, delta, error_m: error as f32, sampler })
 }
 
 /// Whether the parent's mesh has a vertex at the child's reference post `m`.
-fn parent_has(at: &Placement, parent: &BuiltChunk, m: [u32; 2]) -> bool {
+fn parent_has(at: &Placement, parent: &BuiltMesh, m: [u32; 2]) -> bool {
     let [x, y] = at.parent_post(parent.mesh.post_level, m);
-    x >= 0.0 && y >= 0.0 && x.fract() == 0.0 && y.fract() == 0.0
+    x >= 0.0
+        && y >= 0.0
+        && x.fract() == 0.0
+        && y.fract() == 0.0
         && parent.sampler.has_vertex(x as u32, y as u32)
 }
 
@@ -183,7 +189,7 @@ fn vertices(
     reference: &ReferenceGrid,
     mesh: &Mesh,
     heights: &[f32],
-    parent: Option<&(Placement, &BuiltChunk)>,
+    parent: Option<&(Placement, &BuiltMesh)>,
 ) -> Result<Vec<MeshVertex>, NodeError> {
     let layout = *source.layout();
     let mut own = NodeData::with_capacity(&layout);

@@ -5,39 +5,39 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use super::build::build_chunks;
-use super::file::{pyramid_identity, write_chunks, ChunkFile, CHUNK_FILE_NAME};
-use super::{ChunkError, ChunkOptions};
+use super::build::build_meshes;
+use super::file::{pyramid_identity, write_meshes, MeshFile, MESH_FILE_NAME};
+use super::{MeshOptions, MeshesError};
 use crate::node::{NodeData, NodeError, NodeId, NodeLayout, NodeSource};
 use crate::pyramid::{Progress, Pyramid};
 
 /// The pyramid and its mesh file.
-pub struct ChunkedSource {
+pub struct MeshedSource {
     pyramid: Arc<Pyramid>,
-    chunks: ChunkFile,
+    chunks: MeshFile,
 }
 
-impl ChunkedSource {
+impl MeshedSource {
     /// Opens the mesh file beside `pyramid`, first building it with
     /// `options` when it is missing, damaged, or of another pyramid.
     pub fn open_or_build(
         pyramid: Arc<Pyramid>,
-        options: ChunkOptions,
+        options: MeshOptions,
         progress: &dyn Progress,
-    ) -> Result<ChunkedSource, ChunkError> {
+    ) -> Result<MeshedSource, MeshesError> {
         let path = mesh_path(pyramid.path());
         let layout = *pyramid.layout();
         let identity = pyramid_identity(pyramid.path())
-            .map_err(|source| ChunkError::Io { path: pyramid.path().to_path_buf(), source })?;
-        let chunks = match ChunkFile::open(&path, &layout, identity) {
+            .map_err(|source| MeshesError::Io { path: pyramid.path().to_path_buf(), source })?;
+        let chunks = match MeshFile::open(&path, &layout, identity) {
             Ok(chunks) if chunks.header().options == options => chunks,
             _ => {
-                let built = build_chunks(pyramid.as_ref(), options, progress)?;
-                write_chunks(&built, &layout, identity, &path)?;
-                ChunkFile::open(&path, &layout, identity)?
+                let built = build_meshes(pyramid.as_ref(), options, progress)?;
+                write_meshes(&built, &layout, identity, &path)?;
+                MeshFile::open(&path, &layout, identity)?
             }
         };
-        Ok(ChunkedSource { pyramid, chunks })
+        Ok(MeshedSource { pyramid, chunks })
     }
 
     /// The pyramid the nodes' posts come from.
@@ -46,7 +46,7 @@ impl ChunkedSource {
     }
 
     /// The mesh file.
-    pub fn chunks(&self) -> &ChunkFile {
+    pub fn chunks(&self) -> &MeshFile {
         &self.chunks
     }
 
@@ -59,10 +59,10 @@ impl ChunkedSource {
 
 /// The mesh file beside the pyramid file at `pyramid_file`.
 pub fn mesh_path(pyramid_file: &Path) -> std::path::PathBuf {
-    pyramid_file.with_file_name(CHUNK_FILE_NAME)
+    pyramid_file.with_file_name(MESH_FILE_NAME)
 }
 
-impl NodeSource for ChunkedSource {
+impl NodeSource for MeshedSource {
     fn layout(&self) -> &NodeLayout {
         self.pyramid.layout()
     }

@@ -8,12 +8,12 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use ridgeline::chunks::file::pyramid_identity;
-use ridgeline::chunks::{build_chunks, BuiltChunks, ChunkFile, ChunkOptions, ChunkedSource};
+use ridgeline::meshes::file::pyramid_identity;
+use ridgeline::meshes::{build_meshes, BuiltMeshes, MeshFile, MeshOptions, MeshedSource};
 use ridgeline::node::{NodeError, NodeId, NodeLayout, NodeMesh, NodeSource};
 use ridgeline::pyramid::{self, BuildOptions, Pyramid, Silent};
 
-const OPTIONS: ChunkOptions = ChunkOptions { error_m: 3.0, depth: 2, tile_cells: 4 };
+const OPTIONS: MeshOptions = MeshOptions { error_m: 3.0, depth: 2, tile_cells: 4 };
 
 fn pyramid_in(dir: &Path) -> Arc<Pyramid> {
     let grid = pyramid::synthetic_grid(150).expect("a synthetic grid");
@@ -47,8 +47,8 @@ fn brute_height(layout: &NodeLayout, id: NodeId, mesh: &NodeMesh, q: [f64; 2]) -
     None
 }
 
-fn built(source: &dyn NodeSource) -> BuiltChunks {
-    build_chunks(source, OPTIONS, &Silent).expect("meshes build")
+fn built(source: &dyn NodeSource) -> BuiltMeshes {
+    build_meshes(source, OPTIONS, &Silent).expect("meshes build")
 }
 
 fn present(layout: &NodeLayout, level: u8) -> impl Iterator<Item = NodeId> {
@@ -66,7 +66,7 @@ fn the_stored_delta_is_the_largest_distance_to_the_data() {
     for level in 0..layout.levels {
         let mut level_worst = 0.0f64;
         for id in present(&layout, level) {
-            let chunk = chunks.chunk(&layout, id).expect("every node of a single grid is stored");
+            let chunk = chunks.mesh(&layout, id).expect("every node of a single grid is stored");
             let span = (layout.node_size as u64) << level;
             let origin = [id.x as u64 * span, id.y as u64 * span];
             let mut worst = 0.0f64;
@@ -84,10 +84,18 @@ fn the_stored_delta_is_the_largest_distance_to_the_data() {
                     worst = worst.max((mesh - data).abs());
                 }
             }
-            assert!(worst <= chunk.delta as f64 + 1e-3, "{id:?}: brute {worst} > delta {}", chunk.delta);
+            assert!(
+                worst <= chunk.delta as f64 + 1e-3,
+                "{id:?}: brute {worst} > delta {}",
+                chunk.delta
+            );
             let fully_inside = (0..2).all(|k| (origin[k] + span) as f64 <= last[k]);
             if level <= OPTIONS.depth && fully_inside {
-                assert!(chunk.delta as f64 <= worst + 1e-3, "{id:?}: delta {} > brute {worst}", chunk.delta);
+                assert!(
+                    chunk.delta as f64 <= worst + 1e-3,
+                    "{id:?}: delta {} > brute {worst}",
+                    chunk.delta
+                );
             }
             assert!(chunk.delta <= OPTIONS.level_error(level) + 1e-3 || level > OPTIONS.depth);
             level_worst = level_worst.max(worst);
@@ -104,13 +112,14 @@ fn a_child_refines_its_parent_and_morphs_onto_its_surface() {
     let chunks = built(pyramid.as_ref());
     for level in 0..layout.levels - 1 {
         for id in present(&layout, level) {
-            let child = &chunks.chunk(&layout, id).expect("stored").mesh;
+            let child = &chunks.mesh(&layout, id).expect("stored").mesh;
             let pid = id.parent().expect("below the root");
-            let parent = &chunks.chunk(&layout, pid).expect("stored").mesh;
+            let parent = &chunks.mesh(&layout, pid).expect("stored").mesh;
             // Every parent vertex inside the child's square is a child vertex.
             let span = ((layout.node_size as u64) << level) as f64;
             let origin = [id.x as f64 * span, id.y as f64 * span];
-            let inside = |p: [f64; 2]| (0..2).all(|k| p[k] >= origin[k] && p[k] <= origin[k] + span);
+            let inside =
+                |p: [f64; 2]| (0..2).all(|k| p[k] >= origin[k] && p[k] <= origin[k] + span);
             let child_posts: Vec<[f64; 2]> =
                 child.vertices.iter().map(|v| level0(&layout, id, child, v.post)).collect();
             for v in &parent.vertices {
@@ -125,11 +134,16 @@ fn a_child_refines_its_parent_and_morphs_onto_its_surface() {
                 if v.height.is_nan() {
                     continue;
                 }
-                let on_parent = brute_height(&layout, pid, parent, *p).expect("parent covers child");
+                let on_parent =
+                    brute_height(&layout, pid, parent, *p).expect("parent covers child");
                 // Where the parent draws nothing (its triangle there has a
                 // post without data) the vertex does not morph.
                 let expected = if on_parent.is_nan() { v.height as f64 } else { on_parent };
-                assert!((v.target as f64 - expected).abs() < 1e-2, "{id:?} {p:?}: {} vs {expected}", v.target);
+                assert!(
+                    (v.target as f64 - expected).abs() < 1e-2,
+                    "{id:?} {p:?}: {} vs {expected}",
+                    v.target
+                );
             }
             for tri in child.indices.chunks_exact(3) {
                 // At the data's last post the parent's triangles reach past
@@ -187,14 +201,17 @@ fn every_triangle_lies_in_one_tile_square() {
     let chunks = built(pyramid.as_ref());
     for level in 0..layout.levels {
         for id in present(&layout, level) {
-            let mesh = &chunks.chunk(&layout, id).expect("stored").mesh;
+            let mesh = &chunks.mesh(&layout, id).expect("stored").mesh;
             let square = (OPTIONS.tile_cells << (level - mesh.post_level)) as u16;
             for tri in mesh.indices.chunks_exact(3) {
                 let p = [0, 1, 2].map(|k| mesh.vertices[tri[k] as usize].post);
                 for k in 0..2 {
                     let lo = p.iter().map(|q| q[k]).min().unwrap();
                     let hi = p.iter().map(|q| q[k]).max().unwrap();
-                    assert!(hi - lo <= square && lo / square == (hi - 1).max(lo) / square, "{id:?} {p:?}");
+                    assert!(
+                        hi - lo <= square && lo / square == (hi - 1).max(lo) / square,
+                        "{id:?} {p:?}"
+                    );
                 }
             }
         }
@@ -206,12 +223,13 @@ fn the_mesh_file_reads_back_and_refuses_damage() {
     let dir = testkit::fresh_dir("chunks-file");
     let pyramid = pyramid_in(&dir);
     let layout = *pyramid.layout();
-    let source = ChunkedSource::open_or_build(Arc::clone(&pyramid), OPTIONS, &Silent).expect("build");
+    let source =
+        MeshedSource::open_or_build(Arc::clone(&pyramid), OPTIONS, &Silent).expect("build");
     let chunks = built(pyramid.as_ref());
     let root = NodeId::new(layout.levels - 1, 0, 0);
     let mut data = ridgeline::node::NodeData::default();
     source.read_node(root, &mut data).expect("read");
-    let expected = chunks.chunk(&layout, root).expect("stored");
+    let expected = chunks.mesh(&layout, root).expect("stored");
     let bytes_of = |mesh: &NodeMesh| {
         let v: &[u8] = bytemuck::cast_slice(&mesh.vertices);
         (mesh.post_level, v.to_vec(), mesh.indices.clone())
@@ -225,20 +243,19 @@ fn the_mesh_file_reads_back_and_refuses_damage() {
     bytes[n - 8] ^= 0x40;
     std::fs::write(&path, &bytes).expect("write");
     let identity = pyramid_identity(pyramid.path()).expect("identity");
-    let damaged = ChunkFile::open(&path, &layout, identity).expect("the header is intact");
+    let damaged = MeshFile::open(&path, &layout, identity).expect("the header is intact");
     let error = damaged.read(&layout, root, &mut data.mesh).expect_err("damage is found");
     assert!(matches!(error, NodeError::Corrupt { .. }), "{error}");
     assert!(error.to_string().contains("meshes.rlm"), "{error}");
     // A damaged header is refused; opening the source rebuilds the file.
     bytes[20] ^= 1;
     std::fs::write(&path, &bytes).expect("write");
-    let refused = ChunkFile::open(&path, &layout, identity).err().expect("refused");
+    let refused = MeshFile::open(&path, &layout, identity).err().expect("refused");
     assert!(refused.to_string().contains("meshes.rlm"), "{refused}");
-    let rebuilt = ChunkedSource::open_or_build(pyramid, OPTIONS, &Silent).expect("rebuilt");
+    let rebuilt = MeshedSource::open_or_build(pyramid, OPTIONS, &Silent).expect("rebuilt");
     rebuilt.read_node(root, &mut data).expect("read after the rebuild");
     assert_eq!(bytes_of(&data.mesh), bytes_of(&expected.mesh));
     // Truncated: refused, never a panic.
     std::fs::write(&path, &bytes[..30]).expect("write");
-    assert!(ChunkFile::open(&path, &layout, identity).is_err());
+    assert!(MeshFile::open(&path, &layout, identity).is_err());
 }
-

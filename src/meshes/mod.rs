@@ -1,4 +1,4 @@
-//! Ulrich's chunks on Polok's buffers (issue 11): every node a pyramid
+//! Node meshes (Ulrich's chunks on Polok's buffers, issue 11): every node a pyramid
 //! stores gets an adaptive mesh of the best data under it, simplified to its
 //! level's error, instead of the regular grid of its own posts. Built once
 //! beside the pyramid (`meshes.rlm`), read with each node by the loader, and
@@ -15,23 +15,23 @@
 //! | [`reference`] | the best data under a node on a finer level's lattice |
 //! | [`build`] | per node: RTIN mesh, exact delta, morph targets, normals |
 //! | [`file`] | the mesh file: versioned, checksummed, memory-mapped, written atomically |
-//! | [`source`] | [`ChunkedSource`]: a pyramid whose nodes come with their meshes |
+//! | [`source`] | [`MeshedSource`]: a pyramid whose nodes come with their meshes |
 
 pub mod build;
 pub mod file;
 pub mod reference;
 pub mod source;
 
-pub use build::{build_chunks, BuiltChunks};
-pub use file::{write_chunks, ChunkFile, CHUNK_FILE_NAME};
-pub use source::ChunkedSource;
+pub use build::{build_meshes, BuiltMeshes};
+pub use file::{write_meshes, MeshFile, MESH_FILE_NAME};
+pub use source::MeshedSource;
 
 use crate::mesh::MeshError;
 use crate::node::{NodeError, NodeId, NodeLayout};
 
 /// How the meshes are built.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
-pub struct ChunkOptions {
+pub struct MeshOptions {
     /// The error of level 1, metres; level `l` gets `error_m * 2^(l-1)`
     /// (Ulrich's halving toward the fine levels) and level 0 none: it
     /// draws the data exactly wherever the error bound lets it be seen.
@@ -45,13 +45,13 @@ pub struct ChunkOptions {
     pub tile_cells: u32,
 }
 
-impl Default for ChunkOptions {
+impl Default for MeshOptions {
     fn default() -> Self {
-        ChunkOptions { error_m: 2.0, depth: 5, tile_cells: 8 }
+        MeshOptions { error_m: 2.0, depth: 5, tile_cells: 8 }
     }
 }
 
-impl ChunkOptions {
+impl MeshOptions {
     /// The error level `level`'s meshes are simplified to, metres.
     pub fn level_error(&self, level: u8) -> f32 {
         if level == 0 {
@@ -62,8 +62,8 @@ impl ChunkOptions {
     }
 
     /// Checks the options against a pyramid's layout.
-    pub fn validate(&self, layout: &NodeLayout) -> Result<(), ChunkError> {
-        let fail = |why: String| Err(ChunkError::Options(why));
+    pub fn validate(&self, layout: &NodeLayout) -> Result<(), MeshesError> {
+        let fail = |why: String| Err(MeshesError::Options(why));
         if !(self.error_m.is_finite() && self.error_m > 0.0) {
             return fail(format!("mesh error {} m must be a finite number above 0", self.error_m));
         }
@@ -87,7 +87,7 @@ impl ChunkOptions {
 
 /// Why meshes cannot be built, written or read.
 #[derive(Debug, thiserror::Error)]
-pub enum ChunkError {
+pub enum MeshesError {
     /// The options do not fit the pyramid.
     #[error("mesh options: {0}")]
     Options(String),
