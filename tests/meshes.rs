@@ -58,15 +58,15 @@ fn present(layout: &NodeLayout, level: u8) -> impl Iterator<Item = NodeId> {
 
 #[test]
 fn the_stored_delta_is_the_largest_distance_to_the_data() {
-    let dir = testkit::fresh_dir("chunks-delta");
+    let dir = testkit::fresh_dir("meshes-delta");
     let pyramid = pyramid_in(&dir);
     let layout = *pyramid.layout();
-    let chunks = built(pyramid.as_ref());
+    let meshes = built(pyramid.as_ref());
     let last = layout.posts.map(|p| (p - 1) as f64);
     for level in 0..layout.levels {
         let mut level_worst = 0.0f64;
         for id in present(&layout, level) {
-            let chunk = chunks.mesh(&layout, id).expect("every node of a single grid is stored");
+            let chunk = meshes.mesh(&layout, id).expect("every node of a single grid is stored");
             let span = (layout.node_size as u64) << level;
             let origin = [id.x as u64 * span, id.y as u64 * span];
             let mut worst = 0.0f64;
@@ -106,15 +106,15 @@ fn the_stored_delta_is_the_largest_distance_to_the_data() {
 
 #[test]
 fn a_child_refines_its_parent_and_morphs_onto_its_surface() {
-    let dir = testkit::fresh_dir("chunks-morph");
+    let dir = testkit::fresh_dir("meshes-morph");
     let pyramid = pyramid_in(&dir);
     let layout = *pyramid.layout();
-    let chunks = built(pyramid.as_ref());
+    let meshes = built(pyramid.as_ref());
     for level in 0..layout.levels - 1 {
         for id in present(&layout, level) {
-            let child = &chunks.mesh(&layout, id).expect("stored").mesh;
+            let child = &meshes.mesh(&layout, id).expect("stored").mesh;
             let pid = id.parent().expect("below the root");
-            let parent = &chunks.mesh(&layout, pid).expect("stored").mesh;
+            let parent = &meshes.mesh(&layout, pid).expect("stored").mesh;
             // Every parent vertex inside the child's square is a child vertex.
             let span = ((layout.node_size as u64) << level) as f64;
             let origin = [id.x as f64 * span, id.y as f64 * span];
@@ -195,13 +195,13 @@ fn half_twist(h: impl Fn([f64; 2]) -> f64, c: [f64; 2]) -> f64 {
 
 #[test]
 fn every_triangle_lies_in_one_tile_square() {
-    let dir = testkit::fresh_dir("chunks-squares");
+    let dir = testkit::fresh_dir("meshes-squares");
     let pyramid = pyramid_in(&dir);
     let layout = *pyramid.layout();
-    let chunks = built(pyramid.as_ref());
+    let meshes = built(pyramid.as_ref());
     for level in 0..layout.levels {
         for id in present(&layout, level) {
-            let mesh = &chunks.mesh(&layout, id).expect("stored").mesh;
+            let mesh = &meshes.mesh(&layout, id).expect("stored").mesh;
             let square = (OPTIONS.tile_cells << (level - mesh.post_level)) as u16;
             for tri in mesh.indices.chunks_exact(3) {
                 let p = [0, 1, 2].map(|k| mesh.vertices[tri[k] as usize].post);
@@ -220,16 +220,16 @@ fn every_triangle_lies_in_one_tile_square() {
 
 #[test]
 fn the_mesh_file_reads_back_and_refuses_damage() {
-    let dir = testkit::fresh_dir("chunks-file");
+    let dir = testkit::fresh_dir("meshes-file");
     let pyramid = pyramid_in(&dir);
     let layout = *pyramid.layout();
     let source =
         MeshedSource::open_or_build(Arc::clone(&pyramid), OPTIONS, &Silent).expect("build");
-    let chunks = built(pyramid.as_ref());
+    let meshes = built(pyramid.as_ref());
     let root = NodeId::new(layout.levels - 1, 0, 0);
     let mut data = ridgeline::node::NodeData::default();
     source.read_node(root, &mut data).expect("read");
-    let expected = chunks.mesh(&layout, root).expect("stored");
+    let expected = meshes.mesh(&layout, root).expect("stored");
     let bytes_of = |mesh: &NodeMesh| {
         let v: &[u8] = bytemuck::cast_slice(&mesh.vertices);
         (mesh.post_level, v.to_vec(), mesh.indices.clone())
@@ -237,7 +237,7 @@ fn the_mesh_file_reads_back_and_refuses_damage() {
     assert_eq!(bytes_of(&data.mesh), bytes_of(&expected.mesh), "NaN heights compare by bits");
     assert_eq!(data.delta, expected.delta);
     // Flip a byte of the root's record (the last one written).
-    let path = source.chunks().path().to_path_buf();
+    let path = source.file().path().to_path_buf();
     let mut bytes = std::fs::read(&path).expect("read the file");
     let n = bytes.len();
     bytes[n - 8] ^= 0x40;

@@ -14,7 +14,7 @@ use crate::pyramid::{Progress, Pyramid};
 /// The pyramid and its mesh file.
 pub struct MeshedSource {
     pyramid: Arc<Pyramid>,
-    chunks: MeshFile,
+    file: MeshFile,
 }
 
 impl MeshedSource {
@@ -29,15 +29,15 @@ impl MeshedSource {
         let layout = *pyramid.layout();
         let identity = pyramid_identity(pyramid.path())
             .map_err(|source| MeshesError::Io { path: pyramid.path().to_path_buf(), source })?;
-        let chunks = match MeshFile::open(&path, &layout, identity) {
-            Ok(chunks) if chunks.header().options == options => chunks,
+        let file = match MeshFile::open(&path, &layout, identity) {
+            Ok(file) if file.header().options == options => file,
             _ => {
                 let built = build_meshes(pyramid.as_ref(), options, progress)?;
                 write_meshes(&built, &layout, identity, &path)?;
                 MeshFile::open(&path, &layout, identity)?
             }
         };
-        Ok(MeshedSource { pyramid, chunks })
+        Ok(MeshedSource { pyramid, file })
     }
 
     /// The pyramid the nodes' posts come from.
@@ -46,14 +46,14 @@ impl MeshedSource {
     }
 
     /// The mesh file.
-    pub fn chunks(&self) -> &MeshFile {
-        &self.chunks
+    pub fn file(&self) -> &MeshFile {
+        &self.file
     }
 
     /// Largest mesh delta of each level, metres, finest first: what the
     /// distance rings are computed from.
     pub fn delta_per_level(&self) -> Vec<f64> {
-        self.chunks.header().delta_per_level.iter().map(|&d| d as f64).collect()
+        self.file.header().delta_per_level.iter().map(|&d| d as f64).collect()
     }
 }
 
@@ -79,7 +79,7 @@ impl NodeSource for MeshedSource {
     /// its delta is the mesh's.
     fn read_node(&self, id: NodeId, out: &mut NodeData) -> Result<(), NodeError> {
         self.pyramid.read_node(id, out)?;
-        out.delta = self.chunks.read(self.pyramid.layout(), id, &mut out.mesh)?;
+        out.delta = self.file.read(self.pyramid.layout(), id, &mut out.mesh)?;
         Ok(())
     }
 }
