@@ -14,7 +14,7 @@
 //!    centres where an edge crosses a cell's diagonal), plus the reference
 //!    nodes' own delta when the reference is not level 0: the node's delta;
 //! 5. per vertex, the parent mesh's height there (the morph target) and the
-//!    normals of the node's and the parent's surfaces.
+//!    data's normal there.
 
 use rayon::prelude::*;
 
@@ -25,9 +25,8 @@ use crate::mesh::{
     max_surface_distance, Diagonal, HeightGrid, Mesh, MeshError, MeshSampler, Metric, Rtin,
     RtinOptions,
 };
-use crate::node::{MeshVertex, NodeData, NodeError, NodeId, NodeLayout, NodeMesh, NodeSource};
+use crate::node::{MeshVertex, NodeId, NodeLayout, NodeMesh, NodeSource};
 use crate::pyramid::Progress;
-use crate::tiles::vertex::{sample_node, slope};
 
 /// One node's built mesh, and what its children need of it.
 pub struct BuiltMesh {
@@ -144,7 +143,7 @@ pub fn build_node(
     let surface = max_surface_distance(&mesh, &heights, &grid);
     let delta = round_up_to_f32(surface + reference.delta as f64);
     let sampler = MeshSampler::of_rtin(&mesh, &heights, &rtin);
-    let vertices = vertices(source, id, &reference, &mesh, &heights, placement.as_ref())?;
+    let vertices = vertices(source, &reference, &mesh, &heights, placement.as_ref());
     let node_mesh = NodeMesh { post_level, vertices, indices: mesh.indices };
     node_mesh.debug_check();
     Ok(BuiltMesh { mesh: node_mesh, delta, error_m: error as f32, sampler })
@@ -182,67 +181,39 @@ impl Placement {
     }
 }
 
-/// The stored vertices: heights, morph targets and normals.
+/// The stored vertices: heights, morph targets, and the data's normal at
+/// each vertex's post (on the reference lattice, so the same post has the
+/// same normal in every node and at every level drawn from that lattice).
 fn vertices(
     source: &dyn NodeSource,
-    id: NodeId,
     reference: &ReferenceGrid,
     mesh: &Mesh,
     heights: &[f32],
     parent: Option<&(Placement, &BuiltMesh)>,
-) -> Result<Vec<MeshVertex>, NodeError> {
+) -> Vec<MeshVertex> {
     let layout = *source.layout();
-    let mut own = NodeData::with_capacity(&layout);
-    source.read_node(id, &mut own)?;
-    let mut above = NodeData::with_capacity(&layout);
-    if let Some((at, _)) = parent {
-        source.read_node(at.parent, &mut above)?;
-    }
-    let shift = id.level - reference.post_level;
-    let out = mesh
-        .vertices
+    let scale = (1u64 << reference.post_level) as f64;
+    let spacing = [layout.spacing_m[0] * scale, layout.spacing_m[1] * scale];
+    mesh.vertices
         .iter()
         .zip(heights)
         .map(|(&post, &height)| {
             let m = [post[0] as u32, post[1] as u32];
-            // Node posts (of the node's own lattice) of this vertex.
-            let f = [m[0] as f64 / (1u32 << shift) as f64, m[1] as f64 / (1u32 << shift) as f64];
-            let normal_here = normal(&layout, &own, f, id.level);
-            let (target, normal_above) = match parent {
-                Some((at, p)) => {
-                    let [x, y] = at.parent_post(p.mesh.post_level, m);
-                    let on_parent = p.sampler.height_on_mesh(x, y).filter(|h| h.is_finite());
-                    let half = |k: u32, f: f64| (f + (k % 2 * layout.node_size) as f64) / 2.0;
-                    let pf = [half(id.x, f[0]), half(id.y, f[1])];
-                    let above_normal = normal(&layout, &above, pf, at.parent.level);
-                    (on_parent.map_or(height, |h| h as f32), above_normal)
-                }
-                None => (height, normal_here),
-            };
+            let [x, y] = reference.normal(m[0], m[1], spacing);
+            let on_parent = parent.and_then(|(at, p)| {
+                let [px, py] = at.parent_post(p.mesh.post_level, m);
+                p.sampler.height_on_mesh(px, py).filter(|h| h.is_finite())
+            });
             MeshVertex {
                 post,
                 height,
-                target: if height.is_nan() { f32::NAN } else { target },
-                normal: [normal_here[0], normal_here[1], normal_above[0], normal_above[1]],
+                target: if height.is_nan() {
+                    f32::NAN
+                } else {
+                    on_parent.map_or(height, |h| h as f32)
+                },
+                normal: [x, y, x, y],
             }
         })
-        .collect();
-    Ok(out)
-}
-
-/// The normal of `data`'s surface at node posts `f`, from central
-/// differences one node post apart (one-sided where a neighbour has no
-/// data), quantised as the tiles' normals are.
-fn normal(layout: &NodeLayout, data: &NodeData, f: [f64; 2], level: u8) -> [i8; 2] {
-    let h = |dx: f64, dy: f64| sample_node(layout, data, f[0] + dx, f[1] + dy) as f64;
-    let scale = (1u64 << level) as f64;
-    let step = [layout.spacing_m[0] * scale, layout.spacing_m[1] * scale];
-    let dx = slope(h(-1.0, 0.0), h(0.0, 0.0), h(1.0, 0.0), step[0]);
-    let dy = slope(h(0.0, -1.0), h(0.0, 0.0), h(0.0, 1.0), step[1]);
-    let inv = 1.0 / (dx * dx + dy * dy + 1.0).sqrt();
-    let q = |x: f64| (x * 127.0).round().clamp(-127.0, 127.0) as i8;
-    if dx.is_nan() || dy.is_nan() {
-        return [0, 0];
-    }
-    [q(-dx * inv), q(-dy * inv)]
+        .collect()
 }

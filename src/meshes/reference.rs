@@ -10,7 +10,7 @@
 
 use crate::lod::TileKey;
 use crate::node::{NodeData, NodeError, NodeId, NodeLayout, NodeSource};
-use crate::tiles::vertex::PostReader;
+use crate::tiles::vertex::{slope, PostReader};
 
 /// A node's reference grid and what it was read from.
 pub struct ReferenceGrid {
@@ -18,6 +18,9 @@ pub struct ReferenceGrid {
     pub side: u32,
     /// The heights, row-major, row 0 south; NaN where the data have none.
     pub heights: Vec<f32>,
+    /// The same with one more post on every side (`side + 2` a side), for
+    /// slopes at the node's edges that agree with the neighbour's.
+    pub bordered: Vec<f32>,
     /// The level whose lattice the posts are on.
     pub post_level: u8,
     /// The largest delta of the reference-level nodes read: how far the
@@ -39,9 +42,11 @@ pub fn reference_grid(
     let blocks = 1u32 << shift;
     let n = layout.node_size;
     let side = n * blocks + 1;
+    let wide = side as usize + 2;
     let mut grid = ReferenceGrid {
         side,
-        heights: vec![f32::NAN; side as usize * side as usize],
+        heights: Vec::new(),
+        bordered: vec![f32::NAN; wide * wide],
         post_level,
         delta: 0.0,
     };
@@ -63,15 +68,26 @@ pub fn reference_grid(
             }
             let key = TileKey::new(post_level, block.x, block.y);
             let reader = PostReader::new(&layout, key, n, from, &data);
-            let (x0, y0) = ((bx * n) as usize, (by * n) as usize);
-            for j in 0..=n {
-                let row = (y0 + j as usize) * side as usize + x0;
-                for i in 0..=n {
-                    grid.heights[row + i as usize] = reader.post(i as i64, j as i64);
+            // Block posts -1..=n+1 (the outer ones only on the node's edge).
+            let first = |b: u32| if b == 0 { -1 } else { 0 };
+            let end = |b: u32| if b + 1 == blocks { n as i64 + 1 } else { n as i64 };
+            let (x0, y0) = ((bx * n) as i64 + 1, (by * n) as i64 + 1);
+            for j in first(by)..=end(by) {
+                let row = (y0 + j) as usize * wide;
+                for i in first(bx)..=end(bx) {
+                    grid.bordered[row + (x0 + i) as usize] = reader.post(i, j);
                 }
             }
         }
     }
+    grid.heights = grid
+        .bordered
+        .chunks_exact(wide)
+        .skip(1)
+        .take(side as usize)
+        .flat_map(|row| &row[1..wide - 1])
+        .copied()
+        .collect();
     Ok(grid)
 }
 
@@ -88,4 +104,25 @@ fn stored_ancestor(
         node = node.parent().expect("below the top node there is a parent");
     }
     node
+}
+
+impl ReferenceGrid {
+    /// The unit normal of the reference surface at post `(i, j)`, x and y
+    /// quantised as the tiles' are, from central differences one post apart
+    /// (one-sided where a neighbour has no data), posts `spacing_m` apart.
+    pub fn normal(&self, i: u32, j: u32, spacing_m: [f64; 2]) -> [i8; 2] {
+        let wide = self.side as usize + 2;
+        let h = |di: i64, dj: i64| {
+            let (x, y) = ((i as i64 + 1 + di) as usize, (j as i64 + 1 + dj) as usize);
+            self.bordered[y * wide + x] as f64
+        };
+        let dx = slope(h(-1, 0), h(0, 0), h(1, 0), spacing_m[0]);
+        let dy = slope(h(0, -1), h(0, 0), h(0, 1), spacing_m[1]);
+        if dx.is_nan() || dy.is_nan() {
+            return [0, 0];
+        }
+        let inv = 1.0 / (dx * dx + dy * dy + 1.0).sqrt();
+        let q = |x: f64| (x * 127.0).round().clamp(-127.0, 127.0) as i8;
+        [q(-dx * inv), q(-dy * inv)]
+    }
 }
