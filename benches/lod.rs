@@ -45,6 +45,7 @@ use ridgeline::gl::{
 use ridgeline::lod::LodConfig;
 use ridgeline::node::NodeSource;
 use ridgeline::pipeline::FrameStats;
+use ridgeline::meshes::{MeshOptions, MeshedSource};
 use ridgeline::pyramid::{Pyramid, Silent};
 use ridgeline::render::RenderBackend;
 use ridgeline::scene::{clip_planes, TerrainSummary};
@@ -66,8 +67,28 @@ struct Point {
     name: &'static str,
     #[serde(flatten)]
     lod: LodConfigRow,
+    /// What the tiles are drawn from.
+    tiles: Tiles,
     /// Also draw the flight by plain Chunked LOD.
     baseline: bool,
+    /// Also count the RTIN floor and full resolution in the frustum.
+    floors: bool,
+}
+
+/// What the tiles are drawn from: the node meshes (`fly`'s default) or the
+/// regular grids of each level's posts (`fly --regular-grid`, the
+/// subsampled baseline before issue 11).
+#[derive(Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+enum Tiles {
+    NodeMeshes,
+    RegularGrid,
+}
+
+/// The built-in terrain, with and without its node meshes.
+struct Terrain {
+    pyramid: Arc<Pyramid>,
+    meshed: Arc<MeshedSource>,
 }
 
 #[derive(Clone, Copy, serde::Serialize)]
@@ -93,7 +114,11 @@ impl Point {
             morph_range: lod.morph_range,
             view_distance: lod.view_distance,
         };
-        Point { name, lod: row, baseline }
+        Point { name, lod: row, tiles: Tiles::NodeMeshes, baseline, floors: baseline }
+    }
+
+    fn regular(self) -> Point {
+        Point { tiles: Tiles::RegularGrid, name: "regular grid", baseline: false, ..self }
     }
 
     fn apply(&self, lod: &mut LodConfig) {
@@ -110,6 +135,11 @@ fn points() -> Vec<Point> {
         .into_iter()
         .map(|tau| Point::new("tau sweep", tau, keep, true))
         .collect();
+    // Before issue 11: the same taus drawn from each level's posts.
+    for tau in [1.0, 4.0] {
+        let point = Point::new("regular grid", tau, keep, false).regular();
+        points.push(Point { floors: true, ..point });
+    }
     // Beyond the sweep: how low the frame time goes as triangles vanish (the fill floor).
     for tau in [16.0, 64.0] {
         points.push(Point::new("coarse", tau, keep, false));
@@ -228,6 +258,9 @@ fn main() {
     let (view_count, flight_frames) = if args.quick { (4, 20) } else { (16, 60) };
     let pyramid =
         Arc::new(dataset::open(None, Path::new("cache"), &Silent).expect("the built-in terrain"));
+    let meshed = MeshedSource::open_or_build(Arc::clone(&pyramid), MeshOptions::default(), &Silent)
+        .expect("the built-in terrain's node meshes");
+    let terrain = Terrain { pyramid: Arc::clone(&pyramid), meshed: Arc::new(meshed) };
     let layout = *pyramid.layout();
     let path = default_flight(&pyramid);
     let views: Vec<(f64, Camera)> =
@@ -241,7 +274,7 @@ fn main() {
     let floors = Floors::load(&pyramid, region, &views);
     let mut results = Vec::new();
     for point in points() {
-        let result = measure_point(&point, &pyramid, &mesh, &floors, &path, &views, flight_frames);
+        let result = measure_point(&point, &terrain, &mesh, &floors, &path, &views, flight_frames);
         println!(
             "  {:<16} tau {:>3}: p99.9 {:.3} px, {:.0} triangles, {:.1} ms (truth {:.1} ms)",
             point.name,
@@ -260,38 +293,45 @@ fn camera_at(path: &FlightPath, t: f64) -> Camera {
     path.sample(t).camera(FOV_X_DEG, [SIZE.x, SIZE.y])
 }
 
-fn display_for(point: &Point, pyramid: &Arc<Pyramid>) -> DisplayParts {
+fn display_for(point: &Point, terrain: &Terrain) -> DisplayParts {
     let mut config = DisplayConfig::new(GlBackend::Egl, SIZE);
     point.apply(&mut config.scene.lod);
     config.fov_x_deg = FOV_X_DEG;
     config.loader = LoaderMode::Inline;
     config.load_budget = 64;
-    let source: Arc<dyn NodeSource> = pyramid.clone();
-    DisplayParts::open(&config, source, TerrainSummary::from_pyramid(pyramid.info()))
-        .expect("headless EGL display")
+    let mut summary = TerrainSummary::from_pyramid(terrain.pyramid.info());
+    let source: Arc<dyn NodeSource> = match point.tiles {
+        Tiles::NodeMeshes => {
+            summary.delta_per_level = terrain.meshed.delta_per_level();
+            terrain.meshed.clone()
+        }
+        Tiles::RegularGrid => terrain.pyramid.clone(),
+    };
+    DisplayParts::open(&config, source, summary).expect("headless EGL display")
 }
 
 fn measure_point(
     point: &Point,
-    pyramid: &Arc<Pyramid>,
+    terrain: &Terrain,
     mesh: &TruthMesh,
     floors: &Floors,
     path: &FlightPath,
     views: &[(f64, Camera)],
     flight_frames: u32,
 ) -> PointResult {
-    let mut display = display_for(point, pyramid);
+    let pyramid = &terrain.pyramid;
+    let mut display = display_for(point, terrain);
     let truth = TruthPass::new(display.context.gl(), mesh).expect("truth pass");
     let exact = |x: f64, y: f64| pyramid.exact_height(x, y);
     let run = measure_flight(&mut display, &truth, &exact, pyramid.layout().spacing_m, views)
         .expect("accuracy views");
-    let floor_row = point.baseline.then(|| floors.measure(&mut display, point, views, &run));
+    let floor_row = point.floors.then(|| floors.measure(&mut display, point, views, &run));
     let (flight, _) = fly(&mut display, None, path, flight_frames);
     let sky_only_ms = sky_only(&mut display, &views[0].1);
     drop(truth);
     drop(display);
     let (chunked, chunked_uploads_per_frame) = if point.baseline {
-        let mut display = display_for(point, pyramid);
+        let mut display = display_for(point, terrain);
         let mut baseline =
             ChunkedBaseline::new(display.context.gl(), point.lod.grid_size).expect("baseline");
         let (frames, transfers) = fly(&mut display, Some(&mut baseline), path, flight_frames);
@@ -361,6 +401,7 @@ impl Floors {
         let (sw, ne) = grid.extent_m();
         let km = [(ne[0] - sw[0]) / 1e3, (ne[1] - sw[1]) / 1e3];
         let header = [
+            "tiles",
             "tau",
             "LOD p99.9 px",
             "LOD tri",
@@ -377,6 +418,7 @@ impl Floors {
             .filter_map(|r| r.floors.as_ref().map(|f| (r, f)))
             .map(|(r, f)| {
                 vec![
+                    r.point.name.to_string(),
                     format!("{}", r.point.lod.tau_px),
                     format!("{:.4}", r.p999_px),
                     format!("{:.0}", f.triangles_lod),

@@ -54,7 +54,7 @@ pub fn run(out: &Path, cache: &Path, frames: u32) -> Result<PathBuf, Error> {
     let config =
         PipelineConfig { loader: LoaderMode::Inline, ..PipelineConfig::new([WIDTH, HEIGHT]) };
     let mut pipeline = FramePipeline::new(&config, pyramid.clone(), summary)?;
-    let mut renderer = GlRenderer::new(&gl, config.scene.lod.grid_size, config.scene.buffer_bytes)?;
+    let mut renderer = GlRenderer::new(&gl, config.scene.buffer_bytes)?;
     let path = default_flight(&pyramid);
     // 3. The application's loop: bind its target, ask for a frame, go on.
     for t in path.frame_times(frames) {

@@ -14,7 +14,7 @@
 //! | [`lod`] | UDLOD tiling on the CPU: distance rings with Ulrich's bound, quadtree selection, morph |
 //! | [`mesh`] | adaptive chunk meshes, GL-free: the RTIN error map and extraction, exact mesh delta against level 0, morph-target lookup, view-dependent RTIN refinement |
 //! | [`meshes`] | node meshes (Ulrich's chunks): each stored node's adaptive mesh of the best data under it (RTIN at its level's error, exact delta, morph targets, normals), the mesh file beside the pyramid, and the source that pages nodes with their meshes |
-//! | [`tiles`] | per-tile height buffers: shared grid, vertex data, the tile cache on the allocator |
+//! | [`tiles`] | per-tile mesh blocks (vertices, then indices), the regular grid mesh, vertex data, the tile cache on the allocator |
 //! | [`render`] | the GL-free half of drawing: draw lists, the backend trait, the counting null backend, the palette |
 //! | [`flight`] | camera paths for `fly`: the `--path` CSV, interpolation, frame times, the built-in approach |
 //! | [`scene`] | one frame of the display, GL-free: rings, selection, tile uploads, draw list, stage times |

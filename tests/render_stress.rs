@@ -32,7 +32,6 @@ use ridgeline::node::NodeSource;
 use ridgeline::procedural::{EarthParams, ProceduralEarth};
 use ridgeline::render::{palette, DrawList, PostFrame, TileUniforms};
 use ridgeline::scene::TerrainSummary;
-use ridgeline::tiles::grid::vertex_count;
 use ridgeline::tiles::TileVertex;
 use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;
@@ -135,8 +134,9 @@ fn near_views(earth: &ProceduralEarth) -> [EarthView; 2] {
     ]
 }
 
-/// One drawn tile: its uniforms and its vertex data (this level's height,
-/// the morph target and the normals) as the GPU buffer holds them.
+/// One drawn tile: its uniforms and its block's vertices (position, this
+/// level's height, the morph target and the normals) as the GPU buffer
+/// holds them.
 struct Drawn {
     uniforms: TileUniforms,
     /// The frame's post numbering.
@@ -147,14 +147,10 @@ struct Drawn {
 /// The draws of the display's last frame, keyed by tile.
 fn drawn(display: &DisplayParts, list: &DrawList) -> BTreeMap<TileKey, Drawn> {
     let (staging, _) = display.pipeline.scene().uploads();
-    let count = vertex_count(display.pipeline.scene().config().lod.grid_size);
-    let size = std::mem::size_of::<TileVertex>();
     list.tiles
         .iter()
         .map(|tile| {
-            let start = tile.byte_offset as usize;
-            let bytes = &staging[start..start + count * size];
-            let vertices = bytes.chunks_exact(size).map(bytemuck::pod_read_unaligned).collect();
+            let vertices = tile.block(staging).vertices().collect();
             (
                 tile.key,
                 Drawn {
@@ -167,22 +163,23 @@ fn drawn(display: &DisplayParts, list: &DrawList) -> BTreeMap<TileKey, Drawn> {
         .collect()
 }
 
-/// Where the vertex shader puts post `(i, j)` of a tile, relative to the
+/// Where the vertex shader puts vertex `v` of a tile, relative to the
 /// camera, computed as it does in f32 (before morphing, which only blends
 /// heights by this position's distance).
-fn shader_position(tile: &Drawn, grid: u32, i: u32, j: u32, altitude: f64) -> [f32; 3] {
-    let [x, y] = tile.uniforms.post_position(&tile.posts, i as f32, j as f32);
-    let height = tile.vertices[(i + j * (grid + 1)) as usize].height;
-    [x, y, height - altitude as f32]
+fn shader_position(tile: &Drawn, v: usize, altitude: f64) -> [f32; 3] {
+    let vertex = tile.vertices[v];
+    let [i, j] = vertex.post.map(f32::from);
+    let [x, y] = tile.uniforms.post_position(&tile.posts, i, j);
+    [x, y, vertex.height - altitude as f32]
 }
 
-/// The same post computed exactly in f64 from the tile key and the camera.
-fn exact_position(tile: &Drawn, grid: u32, i: u32, j: u32, eye: DVec3, spacing_m: f64) -> DVec3 {
+/// The same vertex placed exactly in f64 from the tile key and the camera.
+fn exact_position(tile: &Drawn, grid: u32, v: usize, eye: DVec3, spacing_m: f64) -> DVec3 {
     let key = tile.uniforms.key;
+    let vertex = tile.vertices[v];
     let post =
-        |k: u32, n: u32| ((k as u64 * grid as u64 + n as u64) << key.level) as f64 * spacing_m;
-    let height = tile.vertices[(i + j * (grid + 1)) as usize].height as f64;
-    DVec3::new(post(key.x, i), post(key.y, j), height) - eye
+        |k: u32, n: u16| ((k as u64 * grid as u64 + n as u64) << key.level) as f64 * spacing_m;
+    DVec3::new(post(key.x, vertex.post[0]), post(key.y, vertex.post[1]), vertex.height as f64) - eye
 }
 
 /// How the far view's tiles and vertices compare with the near view's.
@@ -230,22 +227,23 @@ fn agreement(
         {
             result.other_differences.push(*key);
         }
-        for j in 0..=grid {
-            for i in 0..=grid {
-                let p = shader_position(far_tile, grid, i, j, far_eye.z);
-                let q = shader_position(near_tile, grid, i, j, near_eye.z);
-                let apart = (0..3).map(|c| (p[c] as f64 - q[c] as f64).abs()).fold(0.0, f64::max);
-                result.between_views_m = result.between_views_m.max(apart);
-                result.vertices += 1;
-                for (tile, position, eye) in [(far_tile, p, far_eye), (near_tile, q, near_eye)] {
-                    let exact = exact_position(tile, grid, i, j, eye, spacing_m);
-                    if exact.truncate().length() <= EXACT_RADIUS_M {
-                        let error = (0..3)
-                            .map(|c| (position[c] as f64 - exact[c]).abs())
-                            .fold(0.0, f64::max);
-                        result.against_exact_m = result.against_exact_m.max(error);
-                        result.near_vertices += 1;
-                    }
+        // The surface's vertices (skirts repeat edge posts), matched by
+        // number: the far tile shows what the near one shows.
+        let count = near_tile.vertices.len().min(far_tile.vertices.len());
+        let surface = (0..count).filter(|&v| near_tile.vertices[v].skirt == 0);
+        for v in surface {
+            let p = shader_position(far_tile, v, far_eye.z);
+            let q = shader_position(near_tile, v, near_eye.z);
+            let apart = (0..3).map(|c| (p[c] as f64 - q[c] as f64).abs()).fold(0.0, f64::max);
+            result.between_views_m = result.between_views_m.max(apart);
+            result.vertices += 1;
+            for (tile, position, eye) in [(far_tile, p, far_eye), (near_tile, q, near_eye)] {
+                let exact = exact_position(tile, grid, v, eye, spacing_m);
+                if exact.truncate().length() <= EXACT_RADIUS_M {
+                    let error =
+                        (0..3).map(|c| (position[c] as f64 - exact[c]).abs()).fold(0.0, f64::max);
+                    result.against_exact_m = result.against_exact_m.max(error);
+                    result.near_vertices += 1;
                 }
             }
         }

@@ -7,6 +7,8 @@ use ridgeline::render::{
     CostModel, DrawList, FrameOutput, NullBackend, RenderBackend, RenderError, Slice,
 };
 use ridgeline::scene::{Scene, SceneConfig};
+use ridgeline::tiles::grid::tile_bytes;
+use ridgeline::tiles::{TileGrid, TileVertex};
 use testkit::scene::{camera, fly, null_backend, pipeline, terrain};
 
 /// A scripted flight through the whole pipeline (clipmap paging included)
@@ -76,7 +78,7 @@ fn the_default_transfer_cap_bounds_every_upload() {
         scene.frame(&cam, terrain()).unwrap();
         let (_, ranges) = scene.uploads();
         pieces += ranges.len();
-        let tile = ridgeline::tiles::vertex::tile_bytes(config.lod.grid_size);
+        let tile = tile_bytes(config.lod.grid_size);
         assert!(
             ranges.iter().all(|r| r.end - r.start <= cap.max(tile)),
             "a transfer exceeds the cap: {ranges:?}"
@@ -88,17 +90,16 @@ fn the_default_transfer_cap_bounds_every_upload() {
 #[test]
 fn a_small_buffer_coarsens_instead_of_failing() {
     let roomy = SceneConfig::default();
-    // The built-in base spans 600 km: its root level alone takes over 1 MB;
-    // the view wants about 3 MB of tiles.
-    let tight = SceneConfig { buffer_bytes: 1 << 21, ..roomy };
+    // The view wants about 8 MB of tiles; coarsened twice, 3 MB.
+    let tight = SceneConfig { buffer_bytes: 1 << 22, ..roomy };
     let cam = camera(30_000.0, 30_000.0, 2_600.0, 10.0, -10.0);
     let mut full = Scene::new(roomy, terrain()).unwrap();
     let wanted = full.frame(&cam, terrain()).unwrap();
     let mut scene = Scene::new(tight, terrain()).unwrap();
     let report = scene.frame(&cam, terrain()).unwrap();
-    assert!(report.coarsened > 0, "2 MB cannot hold {} tiles", wanted.tiles);
+    assert!(report.coarsened > 0, "4 MB cannot hold {} tiles", wanted.tiles);
     assert!(report.tiles > 0 && report.tiles < wanted.tiles);
-    assert!(report.allocator_used_bytes <= 1 << 21);
+    assert!(report.allocator_used_bytes <= 1 << 22);
 }
 
 /// The near plane follows the nearest tile drawn, not the highest peak of
@@ -169,4 +170,37 @@ fn tiles_stop_where_finer_data_stop() {
         "the base beyond at its own levels: {levels:?}"
     );
     println!("{} tiles at levels {levels:?}", stats.scene.tiles);
+}
+
+/// Every drawn tile's block holds its whole mesh: the regular grid's
+/// positions and indices, its own heights, indices right after the
+/// vertices, blocks apart; the frame's triangles are the tiles' indices.
+#[test]
+fn every_tile_carries_its_mesh_in_its_block() {
+    let config = SceneConfig::default();
+    let mut scene = Scene::new(config, terrain()).unwrap();
+    let cam = camera(30_000.0, 30_000.0, 2_600.0, 10.0, -10.0);
+    let report = scene.frame(&cam, terrain()).unwrap();
+    let (staging, _) = scene.uploads();
+    let list = scene.draw_list();
+    let grid = TileGrid::new(config.lod.grid_size);
+    let mut blocks: Vec<_> = list.tiles.iter().map(|t| t.block_range()).collect();
+    blocks.sort_unstable_by_key(|r| r.start);
+    assert!(blocks.windows(2).all(|w| w[0].end <= w[1].start), "blocks do not overlap");
+    assert!(blocks.iter().all(|r| r.start % 4 == 0 && r.len() as u32 == tile_bytes(32)));
+    for tile in &list.tiles {
+        let block = tile.block(staging);
+        assert_eq!(tile.index_byte_offset, tile.byte_offset + 20 * grid.vertices.len() as u32);
+        assert_eq!(block.vertex_count(), grid.vertices.len());
+        let positions = |v: TileVertex| (v.post, v.skirt);
+        assert!(block.vertices().map(positions).eq(grid.vertices.iter().copied().map(positions)));
+        let indices = (0..block.triangle_count()).flat_map(|t| block.triangle(t));
+        assert!(
+            indices.eq(grid.indices.iter().copied()),
+            "tile {:?}: the grid's triangles",
+            tile.key
+        );
+    }
+    assert_eq!(report.triangles, list.triangles());
+    assert_eq!(report.triangles, list.tiles.len() as u64 * grid.indices.len() as u64 / 3);
 }

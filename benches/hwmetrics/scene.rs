@@ -1,11 +1,12 @@
 //! The benchmark's terrain on the GL: `side x side` tiles of 64 x 64
 //! vertices in one long vertex buffer pair (grid xy and the project's
-//! 12-byte `TileVertex`) and one long index buffer, and the frame loops that
+//! 20-byte `TileVertex`, its heights read) and one long index buffer, and the frame loops that
 //! draw it with one operation per tile added (Polok, "Hardware Metrics").
 
 use glow::HasContext;
 use ridgeline::gl::{Buffer, BufferTarget, BufferUsage, GlContext, GlError, Program, VertexArray};
 use ridgeline::gl_check;
+use ridgeline::tiles::block::HEIGHT_OFFSET;
 use ridgeline::tiles::TileVertex;
 use std::rc::Rc;
 
@@ -22,7 +23,7 @@ const A_OFFSET: u32 = 2;
 const GRID_STRIDE: usize = 8;
 const HEIGHT_STRIDE: usize = std::mem::size_of::<TileVertex>();
 /// Bytes of one tile's vertex data: 64 x 64 of the project's `TileVertex`
-/// (the project's own tiles add skirts, see `tiles::vertex::tile_bytes`).
+/// (the project's own tiles add skirts and indices, see `tiles::grid::tile_bytes`).
 pub const TILE_BYTES: u32 = TILE_VERTICES * HEIGHT_STRIDE as u32;
 
 const VERTEX_SOURCE: &str = "#version 100
@@ -226,8 +227,8 @@ impl Scene {
             )
         };
         self.heights.bind();
-        // SAFETY: as above for the height buffer; height is the first field
-        // of `TileVertex`.
+        // SAFETY: as above for the height buffer; the height lies
+        // `HEIGHT_OFFSET` bytes into a `TileVertex`.
         unsafe {
             self.gl.vertex_attrib_pointer_f32(
                 A_HEIGHT,
@@ -235,7 +236,7 @@ impl Scene {
                 glow::FLOAT,
                 false,
                 HEIGHT_STRIDE as i32,
-                (first * HEIGHT_STRIDE) as i32,
+                (first * HEIGHT_STRIDE) as i32 + HEIGHT_OFFSET as i32,
             )
         };
     }
@@ -391,7 +392,7 @@ fn tile_vertices(tiles: u32) -> Vec<TileVertex> {
     (0..tiles * TILE_VERTICES)
         .map(|i| {
             let h = ((i % 997) as f32 * 0.37).sin() * 120.0 + (i / TILE_VERTICES) as f32;
-            TileVertex { height: h, target: h, normal: [0, 0, 127, 127] }
+            TileVertex { height: h, target: h, normal: [0, 0, 127, 127], ..TileVertex::default() }
         })
         .collect()
 }

@@ -1,7 +1,7 @@
 #version 100
-// Terrain tile vertex shader, GLSL ES 1.00. No texture reads: heights arrive
-// as attributes from the tile's own block of the vertex buffer (Polok), the
-// tile's placement as uniforms. Positions are relative to the camera, from
+// Terrain tile vertex shader, GLSL ES 1.00. No texture reads: positions and
+// heights arrive as attributes from the tile's own block of the tile buffer
+// (Polok; src/tiles/block.rs), the tile's placement as uniforms. Positions are relative to the camera, from
 // integer post numbers counted from an anchor post next to it: a post two
 // tiles share gets the same bits from both, so edges are watertight.
 //
@@ -9,7 +9,7 @@
 // u_morph.x to 1 at u_morph.y with the vertex's distance to the camera,
 // measured with its unmorphed height.
 
-attribute vec3 a_grid;    // post i, post j, skirt edge 1..4 or 0 (shared by all tiles)
+attribute vec3 a_grid;    // post i, post j (in the tile's posts), skirt edge 1..4 or 0
 attribute vec2 a_height;  // this level's height, the parent level's height
 attribute vec4 a_normal;  // normal xy at this level, at the parent level
 

@@ -1,34 +1,38 @@
 //! [`LodSurface`]: the surface the LOD display drew, evaluated on the CPU at
-//! any ground point, from the frame's draw list and the tile vertices in the
-//! allocator's staging copy (byte for byte what the GPU holds). Each vertex
-//! is morphed as `shaders/gles/terrain.vert` does ([`crate::lod::morph`]),
-//! from the same f32 uniforms, and lowered by the earth's curvature as the
-//! shader lowers it, per vertex (so the drawn triangles sag below the
-//! curved surface between vertices, as the GPU's do); the cell is split
-//! south-west to north-east as the shared grid's indices are
-//! ([`cell_surface`]). Skirts are not part of the surface.
+//! any ground point, from the frame's draw list and the tile blocks in the
+//! allocator's staging copy (byte for byte what the GPU holds): each tile's
+//! own vertices and triangles, whatever its mesh. Each vertex is morphed as
+//! `shaders/gles/terrain.vert` does ([`crate::lod::morph`]), from the same
+//! f32 uniforms, and lowered by the earth's curvature as the shader lowers
+//! it, per vertex (so the drawn triangles sag below the curved surface
+//! between vertices, as the GPU's do); between vertices the surface is the
+//! block's triangle there, interpolated linearly. Skirts are not part of
+//! the surface.
 
 use std::collections::HashMap;
 
 use glam::DVec2;
 
+use super::tile_triangles::TileTriangles;
 use crate::camera::EARTH_RADIUS_M;
 use crate::lod::morph::{morph_factor, morphed_height};
 use crate::lod::TileKey;
-use crate::node::cell_surface;
 use crate::render::{DrawList, PostFrame, TileUniforms};
 use crate::tiles::vertex::is_no_data;
-use crate::tiles::TileVertex;
+use crate::tiles::TileBlock;
 
 /// How close to a tile edge, in posts, a drawn point counts as on it (a
 /// skirt's points lie on the edge's vertical plane; 2/1000 of a post is
 /// a few centimetres, above f32 rounding at 100 km).
 pub const EDGE_TOLERANCE_POSTS: f64 = 2e-3;
 
-/// The drawn tiles of one frame, indexed by key.
+/// The drawn tiles of one frame, indexed by key, and their triangles.
 #[derive(Debug, Default)]
 pub struct LodSurface {
-    tiles: HashMap<TileKey, TileUniforms>,
+    /// Each drawn tile's place in `drawn`.
+    tiles: HashMap<TileKey, usize>,
+    drawn: Vec<TileUniforms>,
+    triangles: TileTriangles,
     levels: u8,
     grid_size: u32,
     /// Level-0 post spacing, metres east and north.
@@ -45,10 +49,17 @@ pub struct LodSurface {
 
 impl LodSurface {
     /// Indexes `list`'s tiles (drawn from `eye` with tiles of `grid_size`
-    /// cells over level-0 posts `spacing_m` apart).
-    pub fn new(list: &DrawList, grid_size: u32, spacing_m: [f64; 2], eye: DVec2) -> LodSurface {
-        let tiles: HashMap<TileKey, TileUniforms> =
-            list.tiles.iter().map(|t| (t.key, *t)).collect();
+    /// cells over level-0 posts `spacing_m` apart) and their triangles, from
+    /// their blocks in `staging`.
+    pub fn new(
+        list: &DrawList,
+        staging: &[u8],
+        grid_size: u32,
+        spacing_m: [f64; 2],
+        eye: DVec2,
+    ) -> LodSurface {
+        let tiles = list.tiles.iter().enumerate().map(|(k, t)| (t.key, k)).collect();
+        let triangles = TileTriangles::new(&list.tiles, staging, grid_size);
         let levels = list.tiles.iter().map(|t| t.key.level + 1).max().unwrap_or(0);
         let altitude = list.uniforms.map_or(0.0, |f| f.camera_altitude as f32 as f64);
         let curvature = list.uniforms.map_or(0.0, |f| {
@@ -62,7 +73,24 @@ impl LodSurface {
         let last_m = list
             .uniforms
             .map_or([f64::INFINITY; 2], |f| [0, 1].map(|k| f.last_post[k] as f64 * spacing_m[k]));
-        LodSurface { tiles, levels, grid_size, spacing_m, eye, posts, last_m, altitude, curvature }
+        LodSurface {
+            tiles,
+            drawn: list.tiles.clone(),
+            triangles,
+            levels,
+            grid_size,
+            spacing_m,
+            eye,
+            posts,
+            last_m,
+            altitude,
+            curvature,
+        }
+    }
+
+    /// Surface triangles of the drawn tiles, skirts left out.
+    pub fn surface_triangles(&self) -> u64 {
+        self.triangles.surface_triangles()
     }
 
     /// Height of the drawn surface at the local point `(x_m, y_m)`, metres
@@ -76,7 +104,7 @@ impl LodSurface {
             return None;
         }
         let (tile, local) = self.locate(x_m, y_m)?;
-        let height = self.tile_surface(staging, tile, local);
+        let height = self.tile_surface(staging, tile, local)?;
         height.is_finite().then_some(height)
     }
 
@@ -93,9 +121,10 @@ impl LodSurface {
             .is_some_and(|(_, [u, v])| u.min(g - u).min(v).min(g - v) < EDGE_TOLERANCE_POSTS)
     }
 
-    /// The drawn tile over `(x_m, y_m)` and the point's position in it, in
-    /// posts of the tile's level from its south-west corner.
-    fn locate(&self, x_m: f64, y_m: f64) -> Option<(&TileUniforms, [f64; 2])> {
+    /// The drawn tile over `(x_m, y_m)` (its place in `drawn`) and the
+    /// point's position in it, in posts of the tile's level from its
+    /// south-west corner.
+    fn locate(&self, x_m: f64, y_m: f64) -> Option<(usize, [f64; 2])> {
         let g = self.grid_size as f64;
         (0..self.levels).find_map(|level| {
             let post = [
@@ -115,31 +144,37 @@ impl LodSurface {
             let keys = [(xs[0], ys[0]), (xs[1], ys[0]), (xs[0], ys[1]), (xs[1], ys[1])];
             keys.iter().find_map(|&(x, y)| {
                 let key = TileKey::new(level, x, y);
-                self.tiles.get(&key).map(|tile| (tile, [u - x as f64 * g, v - y as f64 * g]))
+                self.tiles.get(&key).map(|&k| (k, [u - x as f64 * g, v - y as f64 * g]))
             })
         })
     }
 
-    /// The tile's morphed surface at `local` posts from its south-west corner.
-    fn tile_surface(&self, staging: &[u8], tile: &TileUniforms, local: [f64; 2]) -> f64 {
-        let last = self.grid_size - 1;
-        let (i, j) = ((local[0].floor() as u32).min(last), (local[1].floor() as u32).min(last));
-        let (fu, fv) = (local[0] - i as f64, local[1] - j as f64);
-        let h = |i: u32, j: u32| self.vertex_height(staging, tile, i, j);
-        cell_surface(h(i, j), h(i + 1, j), h(i, j + 1), h(i + 1, j + 1), fu, fv)
+    /// Tile `k`'s morphed surface at `local` posts from its south-west
+    /// corner: its triangle there, interpolated. NaN where that triangle
+    /// touches a vertex without data; `None` where the tile has no triangle.
+    fn tile_surface(&self, staging: &[u8], k: usize, local: [f64; 2]) -> Option<f64> {
+        let tile = &self.drawn[k];
+        let block = tile.block(staging);
+        let (corners, [_, wb, wc]) = self.triangles.at(k, &block, local)?;
+        let [a, b, c] = corners.map(|(post, v)| self.vertex_height(&block, tile, post, v));
+        Some(a + wb * (b - a) + wc * (c - a))
     }
 
-    /// Post `(i, j)`'s drawn height: the shader's morph and curvature drop,
-    /// with its f32 inputs (the altitude is added back).
-    fn vertex_height(&self, staging: &[u8], tile: &TileUniforms, i: u32, j: u32) -> f64 {
-        let index = (i + j * (self.grid_size + 1)) as usize;
-        let at = tile.byte_offset as usize + index * std::mem::size_of::<TileVertex>();
-        let vertex: TileVertex =
-            bytemuck::pod_read_unaligned(&staging[at..at + std::mem::size_of::<TileVertex>()]);
+    /// Vertex `v`'s drawn height, at `post` in the tile: the shader's morph
+    /// and curvature drop, with its f32 inputs (the altitude is added back).
+    fn vertex_height(
+        &self,
+        block: &TileBlock<'_>,
+        tile: &TileUniforms,
+        post: [f64; 2],
+        v: usize,
+    ) -> f64 {
+        let vertex = block.vertex(v);
         if is_no_data(vertex.height) {
             return f64::NAN;
         }
-        let [x, y] = tile.post_position(&self.posts, i as f32, j as f32).map(f64::from);
+        let [i, j] = post.map(|p| p as f32);
+        let [x, y] = tile.post_position(&self.posts, i, j).map(f64::from);
         let distance = (x * x + y * y + (vertex.height as f64 - self.altitude).powi(2)).sqrt();
         let factor = morph_factor(distance, tile.morph[0] as f64, tile.morph[1] as f64);
         morphed_height(vertex.height, vertex.target, factor) - (x * x + y * y) * self.curvature

@@ -31,6 +31,7 @@
 //! |---|---|
 //! | `positions` | [`PositionImage`]: a camera-relative surface point per pixel, read back from the GPU |
 //! | `lod_surface` | [`LodSurface`]: the drawn LOD surface evaluated on the CPU, morph included |
+//! | `tile_triangles` | the drawn tiles' surface triangles from their blocks, by cell, for `lod_surface` |
 //! | `pixel_error` | [`measure_view`]: per-pixel error and coverage of one view |
 //! | `summary` | [`ErrorSummary`]: percentiles over all views |
 //! | `heat_map` | the error image of a view as colours |
@@ -40,6 +41,7 @@ mod lod_surface;
 mod pixel_error;
 mod positions;
 mod summary;
+mod tile_triangles;
 
 pub use heat_map::{heat_map, HEAT_MISMATCH, HEAT_SKY};
 pub use lod_surface::LodSurface;

@@ -386,7 +386,7 @@ mod tests {
             None,
         ]);
         let truth = image([Some([0.0, 2000.0, -1000.0]), None, None, Some([0.0, 2000.0, -1000.0])]);
-        let surface = LodSurface::new(&DrawList::default(), 32, [90.0, 90.0], DVec2::ZERO);
+        let surface = LodSurface::new(&DrawList::default(), &[], 32, [90.0, 90.0], DVec2::ZERO);
         let sea = |_: f64, y: f64| (y < 7500.0).then_some(0.0f32);
         let mut out = ViewErrors::default();
         measure_view(&geometry, &lod, &truth, &surface, &[], &sea, &mut out);

@@ -201,13 +201,9 @@ fn measure_one(
     let scene = display.pipeline.scene();
     let list = scene.draw_list();
     let grid_size = scene.config().lod.grid_size;
-    let surface = LodSurface::new(
-        list,
-        grid_size,
-        spacing_m,
-        DVec2::new(camera.position.x, camera.position.y),
-    );
     let (staging, _) = scene.uploads();
+    let eye = DVec2::new(camera.position.x, camera.position.y);
+    let surface = LodSurface::new(list, staging, grid_size, spacing_m, eye);
     measure_view(&geometry, lod, truth_positions, &surface, staging, exact, errors);
     let mut view_errors: Vec<f32> =
         errors.errors_px.iter().copied().filter(|e| !e.is_nan()).collect();
@@ -231,7 +227,7 @@ fn measure_one(
         skirt_pixels: errors.skirt_pixels,
         max_surface_px: errors.max_surface_px,
         mirror_p99_m: if mirror.is_empty() { 0.0 } else { percentile(&mirror, 0.99) },
-        triangles_lod: list.tiles.len() as u64 * 2 * grid_size as u64 * grid_size as u64,
+        triangles_lod: surface.surface_triangles(),
         triangles_truth: truth_stats.triangles,
         draw_calls_lod: lod_stats.draw_calls as usize,
         draw_calls_truth: truth_stats.draw_calls,

@@ -114,7 +114,7 @@ impl DisplayParts {
         let context = GlContext::new(&request)?;
         let pipeline = FramePipeline::new(&config.pipeline(), source, summary)?;
         let scene = config.scene;
-        let mut renderer = GlRenderer::new(context.gl(), scene.lod.grid_size, scene.buffer_bytes)?;
+        let mut renderer = GlRenderer::new(context.gl(), scene.buffer_bytes)?;
         renderer.set_sentinel(config.sentinel);
         Ok(DisplayParts { renderer, context, pipeline })
     }

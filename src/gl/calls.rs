@@ -13,7 +13,7 @@
 use glow::HasContext;
 
 use super::handle::Gl;
-use super::objects::{Buffer, Program, VertexArray};
+use super::objects::{Buffer, BufferTarget, Program, VertexArray};
 use crate::render::CallStats;
 
 /// Counting access to one context's calls.
@@ -108,6 +108,13 @@ impl<'a> Calls<'a> {
         buffer.bind();
     }
 
+    /// glBindBuffer of `buffer` to `target`, whichever it was made for (a
+    /// tile buffer holds vertices and indices).
+    pub unsafe fn bind_buffer_to(&self, buffer: &Buffer, target: BufferTarget) {
+        self.tally(|c| c.buffer_binds += 1);
+        buffer.bind_to(target);
+    }
+
     /// glBufferSubData into `buffer` (bound by the caller) at `offset`.
     pub unsafe fn buffer_sub_data(&self, buffer: &Buffer, offset: usize, bytes: &[u8]) {
         self.tally(|c| {
@@ -168,14 +175,19 @@ impl<'a> Calls<'a> {
         self.gl.vertex_attrib_pointer_f32(index, size, kind, normalized, stride, offset);
     }
 
-    /// glDrawElements of 16-bit indices from byte 0 of the bound index
-    /// buffer, triangles.
-    pub unsafe fn draw_triangles(&self, index_count: i32) {
+    /// glDrawElements of `index_count` 16-bit indices from byte
+    /// `index_byte_offset` of the bound index buffer, triangles.
+    pub unsafe fn draw_triangles(&self, index_count: i32, index_byte_offset: i32) {
         self.tally(|c| {
             c.draw_calls += 1;
             c.triangles += index_count as u64 / 3;
         });
-        self.gl.draw_elements(glow::TRIANGLES, index_count, glow::UNSIGNED_SHORT, 0);
+        self.gl.draw_elements(
+            glow::TRIANGLES,
+            index_count,
+            glow::UNSIGNED_SHORT,
+            index_byte_offset,
+        );
     }
 
     /// glDrawArrays of `vertices` vertices as triangles.

@@ -1,10 +1,11 @@
 //! [`ChunkedBaseline`]: plain Chunked LOD (Ulrich), the baseline that Polok's
 //! batching is measured against by `benches/lod.rs`. It draws the same tiles
-//! as the display, with the same shaders, but each tile's vertices live in a
-//! vertex buffer of their own: created and uploaded by its own call when the
-//! tile first appears, deleted when it is no longer drawn, and bound before
-//! each tile's draw. Nothing else differs, so the comparison isolates the
-//! one contiguous buffer and the one transfer per frame.
+//! as the display, with the same shaders, but each tile's block (vertices
+//! and indices) lives in a buffer of its own: created and uploaded by its
+//! own call when the tile first appears, deleted when it is no longer drawn,
+//! and bound (as vertex and as index buffer) before each tile's draw.
+//! Nothing else differs, so the comparison isolates the one contiguous
+//! buffer and the one transfer per frame.
 
 use std::collections::{HashMap, HashSet};
 use std::ops::Range;
@@ -14,10 +15,10 @@ use super::error::GlError;
 use super::handle::Gl;
 use super::objects::{Buffer, BufferTarget, BufferUsage};
 use super::renderer::GlRenderer;
-use super::terrain_pass::{TerrainOutput, TerrainPass, TileVertices};
+use super::terrain_pass::{TerrainOutput, TerrainPass, TileBlocks};
 use crate::lod::TileKey;
-use crate::render::{check_uploads, CallStats, DrawList, FrameOutput, RenderBackend};
-use crate::tiles::vertex::tile_bytes;
+use crate::render::{check_uploads, CallStats, DrawList, FrameOutput, RenderBackend, TileUniforms};
+use crate::tiles::grid::tile_bytes;
 
 /// What one baseline frame transferred.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
@@ -30,17 +31,20 @@ pub struct BaselineFrameStats {
     pub buffers: usize,
 }
 
-/// One vertex buffer per drawn tile. A tile regenerated from better data may
-/// land at its old offset, so the frame's dirty ranges (what the batched
-/// renderer would upload) tell which existing buffers to rewrite.
+/// Where a tile's block is in the scene's staging copy: its key, what
+/// names its buffer.
+type BlockKey = (TileKey, Range<u32>);
+
+/// One buffer per drawn tile. A tile regenerated from better data may land
+/// at its old offset, so the frame's dirty ranges (what the batched renderer
+/// would upload) tell which existing buffers to rewrite.
 pub struct ChunkedBaseline {
     gl: Rc<Gl>,
     /// Clear and sky, as the display draws them.
     background: GlRenderer,
     pass: TerrainPass,
-    buffers: HashMap<(TileKey, u32), Buffer>,
-    wanted: HashSet<(TileKey, u32)>,
-    tile_bytes: usize,
+    buffers: HashMap<BlockKey, Buffer>,
+    wanted: HashSet<BlockKey>,
     /// What the last frame transferred.
     last: BaselineFrameStats,
 }
@@ -48,15 +52,14 @@ pub struct ChunkedBaseline {
 impl ChunkedBaseline {
     /// The baseline for tiles of `grid_size` cells a side; no tile buffers yet.
     pub fn new(gl: &Rc<Gl>, grid_size: u32) -> Result<ChunkedBaseline, GlError> {
+        // The passes' own tile buffers are unused: one regular tile's worth.
         let tile_bytes = tile_bytes(grid_size);
         Ok(ChunkedBaseline {
             gl: Rc::clone(gl),
-            background: GlRenderer::new(gl, grid_size, tile_bytes)?,
-            // The pass's own height buffer is unused: one tile's worth.
-            pass: TerrainPass::new(gl, grid_size, tile_bytes)?,
+            background: GlRenderer::new(gl, tile_bytes)?,
+            pass: TerrainPass::new(gl, tile_bytes)?,
             buffers: HashMap::new(),
             wanted: HashSet::new(),
-            tile_bytes: tile_bytes as usize,
             last: BaselineFrameStats::default(),
         })
     }
@@ -77,24 +80,24 @@ impl ChunkedBaseline {
         dirty: &[Range<u32>],
     ) -> Result<BaselineFrameStats, GlError> {
         self.wanted.clear();
-        self.wanted.extend(list.tiles.iter().map(|t| (t.key, t.byte_offset)));
+        self.wanted.extend(list.tiles.iter().map(block_key));
         self.buffers.retain(|key, _| self.wanted.contains(key));
         let mut stats = BaselineFrameStats::default();
         for tile in &list.tiles {
-            let key = (tile.key, tile.byte_offset);
-            let (start, end) = (tile.byte_offset, tile.byte_offset + self.tile_bytes as u32);
-            let rewritten = dirty.iter().any(|range| range.start < end && start < range.end);
+            let key = block_key(tile);
+            let block = key.1.clone();
+            let rewritten = dirty.iter().any(|r| r.start < block.end && block.start < r.end);
             if self.buffers.contains_key(&key) && !rewritten {
                 continue;
             }
-            let bytes = &staging[start as usize..end as usize];
+            let bytes = &staging[block.start as usize..block.end as usize];
             match self.buffers.get(&key) {
                 Some(buffer) => self.upload(buffer, bytes)?,
                 None => {
                     let buffer = Buffer::new(
                         &self.gl,
                         BufferTarget::Vertices,
-                        self.tile_bytes,
+                        bytes.len(),
                         BufferUsage::Static,
                     )?;
                     self.upload(&buffer, bytes)?;
@@ -102,25 +105,27 @@ impl ChunkedBaseline {
                 }
             }
             stats.uploads += 1;
-            stats.bytes_uploaded += self.tile_bytes as u64;
+            stats.bytes_uploaded += bytes.len() as u64;
         }
         let buffers = &self.buffers;
-        let buffer_of =
-            |tile: &crate::render::TileUniforms| buffers.get(&(tile.key, tile.byte_offset));
-        self.pass.draw_from(list, TerrainOutput::Colour, TileVertices::PerTile(&buffer_of))?;
+        let buffer_of = |tile: &TileUniforms| buffers.get(&block_key(tile));
+        self.pass.draw_from(list, TerrainOutput::Colour, TileBlocks::PerTile(&buffer_of))?;
         stats.buffers = self.buffers.len();
         Ok(stats)
     }
 }
 
+fn block_key(tile: &TileUniforms) -> BlockKey {
+    (tile.key, tile.block_range())
+}
+
 impl ChunkedBaseline {
-    /// One tile's bytes into its own buffer (counted as the GL calls it
-    /// makes: an unbound vertex array, a bind, a glBufferSubData).
+    /// One tile's block into its own buffer (counted as the GL calls it
+    /// makes: a bind as vertex buffer, which no vertex array records, and a
+    /// glBufferSubData).
     fn upload(&self, buffer: &Buffer, bytes: &[u8]) -> Result<(), GlError> {
         buffer.upload_range(0, bytes)?;
-        let vertex_arrays = self.gl.caps().vertex_array_objects as u64;
         self.gl.tally(|c| {
-            c.vertex_array_binds += vertex_arrays;
             c.buffer_binds += 1;
             c.upload_calls += 1;
             c.bytes_uploaded += bytes.len() as u64;

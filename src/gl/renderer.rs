@@ -13,10 +13,11 @@
 //!   colour writes on; back faces culled, counter-clockwise front faces;
 //!   blending and the scissor test off; all other state (stencil, dithering,
 //!   polygon offset, pixel storage) as the caller left it;
-//! - the terrain program in use, `GL_ARRAY_BUFFER` bound to the height
-//!   buffer, every vertex attribute array disabled;
+//! - the terrain program in use, `GL_ARRAY_BUFFER` bound to the tile
+//!   buffer (every tile's vertices and indices), every vertex attribute
+//!   array disabled;
 //! - no vertex array object bound where the context has them (where it has
-//!   none, `GL_ELEMENT_ARRAY_BUFFER` of the default one is the tile indices);
+//!   none, `GL_ELEMENT_ARRAY_BUFFER` of the default one is the tile buffer too);
 //! - clear colour the sky's horizon colour, clear depth 1.
 
 use std::rc::Rc;
@@ -41,12 +42,12 @@ pub struct GlRenderer {
 }
 
 impl GlRenderer {
-    /// The passes for tiles of `grid_size` cells over a height buffer of
-    /// `buffer_bytes` (the tile allocator's capacity).
-    pub fn new(gl: &Rc<Gl>, grid_size: u32, buffer_bytes: u32) -> Result<GlRenderer, GlError> {
+    /// The passes over a tile buffer of `buffer_bytes` (the tile
+    /// allocator's capacity).
+    pub fn new(gl: &Rc<Gl>, buffer_bytes: u32) -> Result<GlRenderer, GlError> {
         Ok(GlRenderer {
             gl: Rc::clone(gl),
-            terrain: TerrainPass::new(gl, grid_size, buffer_bytes)?,
+            terrain: TerrainPass::new(gl, buffer_bytes)?,
             sky: SkyPass::new(gl)?,
             sentinel: None,
         })
@@ -108,7 +109,7 @@ impl GlRenderer {
 }
 
 impl GlRenderer {
-    /// Copies `ranges` of `staging` into the height buffer at the same
+    /// Copies `ranges` of `staging` into the tile buffer at the same
     /// offsets, one glBufferSubData each.
     pub fn upload(
         &mut self,
@@ -118,7 +119,7 @@ impl GlRenderer {
         self.terrain.upload(staging, ranges)
     }
 
-    /// Clears, draws the sky and the tiles of `list` from the height buffer.
+    /// Clears, draws the sky and the tiles of `list` from the tile buffer.
     pub fn draw(&mut self, list: &DrawList) -> Result<(), GlError> {
         let Some(frame) = list.uniforms else { return Ok(()) };
         self.gl.tally(|c| c.frames += 1);

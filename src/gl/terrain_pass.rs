@@ -1,6 +1,9 @@
-//! The terrain pass: shared grid positions and indices, one vertex buffer
-//! mirroring the tile allocator's staging copy, and per tile only uniforms
-//! and an attribute offset (Polok). Vertex shaders read no textures.
+//! The terrain pass: one buffer mirroring the tile allocator's staging copy,
+//! bound both as vertex and as index buffer (OpenGL ES allows it), each
+//! tile's block in it holding the tile's vertices and indices
+//! ([`crate::tiles::block`]); per tile only uniforms, attribute pointers at
+//! its block and one glDrawElements of its indices (Polok). Vertex shaders
+//! read no textures.
 //!
 //! Two fragment programs share the vertex shader: the display's colours, and
 //! camera-relative positions for the accuracy tool ([`TerrainOutput`]), so
@@ -13,8 +16,10 @@ use super::error::GlError;
 use super::handle::Gl;
 use super::objects::{Buffer, BufferTarget, BufferUsage, Program, VertexArray};
 use crate::gl_check;
-use crate::render::{check_uploads, palette, DrawList, FrameUniforms, Slice, TileUniforms};
-use crate::tiles::{TileGrid, TileVertex};
+use crate::render::{
+    check_uploads, palette, DrawList, FrameUniforms, RenderError, Slice, TileUniforms,
+};
+use crate::tiles::block::{HEIGHT_OFFSET, NORMAL_OFFSET, VERTEX_BYTES};
 
 const VERTEX_SOURCE: &str = include_str!("../../shaders/gles/terrain.vert");
 const FRAGMENT_SOURCE: &str = include_str!("../../shaders/gles/terrain.frag");
@@ -23,8 +28,7 @@ const POSITION_SOURCE: &str = include_str!("../../shaders/gles/position.frag");
 const GRID: u32 = 0;
 const HEIGHT: u32 = 1;
 const NORMAL: u32 = 2;
-const VERTEX_STRIDE: i32 = std::mem::size_of::<TileVertex>() as i32;
-const NORMAL_OFFSET: i32 = 8;
+const VERTEX_STRIDE: i32 = VERTEX_BYTES as i32;
 
 struct Locations {
     view_projection: Option<glow::UniformLocation>,
@@ -46,13 +50,13 @@ pub enum TerrainOutput {
     Position,
 }
 
-/// Where each tile's vertex data is.
+/// Where each tile's block is.
 #[derive(Clone, Copy)]
-pub enum TileVertices<'a> {
-    /// At the tile's byte offset in the pass's one height buffer (Polok's batching).
+pub enum TileBlocks<'a> {
+    /// At the tile's byte offsets in the pass's one buffer (Polok's batching).
     Shared,
     /// In a buffer of the tile's own, from byte 0 (plain Chunked LOD: a
-    /// vertex buffer swap per draw); tiles without a buffer are skipped.
+    /// buffer swap per draw); tiles without a buffer are skipped.
     PerTile(&'a dyn Fn(&TileUniforms) -> Option<&'a Buffer>),
 }
 
@@ -89,17 +93,15 @@ pub struct TerrainPass {
     /// rejection, so only tiles with voids use it).
     colour: [TerrainProgram; 2],
     position: [TerrainProgram; 2],
-    grid_vertices: Buffer,
-    grid_indices: Buffer,
-    heights: Buffer,
+    /// The tiles' blocks, at the allocator's offsets.
+    blocks: Buffer,
     vertex_array: Option<VertexArray>,
-    index_count: i32,
 }
 
 impl TerrainPass {
-    /// Builds the program, the shared grid of `grid_size` and a height
-    /// buffer of `buffer_bytes` (the tile allocator's capacity).
-    pub fn new(gl: &Rc<Gl>, grid_size: u32, buffer_bytes: u32) -> Result<TerrainPass, GlError> {
+    /// Builds the programs and a tile buffer of `buffer_bytes` (the tile
+    /// allocator's capacity).
+    pub fn new(gl: &Rc<Gl>, buffer_bytes: u32) -> Result<TerrainPass, GlError> {
         let colour = [
             TerrainProgram::build(gl, "terrain", FRAGMENT_SOURCE)?,
             TerrainProgram::build(gl, "terrain with voids", &with_voids(FRAGMENT_SOURCE))?,
@@ -112,51 +114,55 @@ impl TerrainPass {
                 &with_voids(POSITION_SOURCE),
             )?,
         ];
-        let grid = TileGrid::new(grid_size);
-        let vertex_bytes: &[u8] = bytemuck::cast_slice(&grid.vertices);
-        let grid_vertices =
-            Buffer::new(gl, BufferTarget::Vertices, vertex_bytes.len(), BufferUsage::Static)?;
-        grid_vertices.upload_range(0, vertex_bytes)?;
-        let index_bytes: &[u8] = bytemuck::cast_slice(&grid.indices);
-        let grid_indices =
-            Buffer::new(gl, BufferTarget::Indices, index_bytes.len(), BufferUsage::Static)?;
-        grid_indices.upload_range(0, index_bytes)?;
-        let heights =
+        // Uploads bind it as vertex buffer, which no vertex array records.
+        let blocks =
             Buffer::new(gl, BufferTarget::Vertices, buffer_bytes as usize, BufferUsage::Dynamic)?;
         let vertex_array =
             if gl.caps().vertex_array_objects { Some(VertexArray::new(gl)?) } else { None };
-        Ok(TerrainPass {
-            gl: Rc::clone(gl),
-            colour,
-            position,
-            grid_vertices,
-            grid_indices,
-            heights,
-            vertex_array,
-            index_count: grid.indices.len() as i32,
-        })
+        Ok(TerrainPass { gl: Rc::clone(gl), colour, position, blocks, vertex_array })
     }
 
-    /// Copies the dirty ranges of the staging copy into the height buffer at
+    /// Copies the dirty ranges of the staging copy into the tile buffer at
     /// the same offsets: one glBufferSubData per range (per run piece).
     /// Refuses a range past the buffer, as the null backend does.
-    #[allow(unsafe_code)]
     pub fn upload(&self, staging: &[u8], ranges: &[std::ops::Range<u32>]) -> Result<(), GlError> {
-        check_uploads(staging, self.heights.size() as u32, ranges)?;
-        let calls = Calls::new(&self.gl);
+        check_uploads(staging, self.blocks.size() as u32, ranges)?;
         for range in ranges {
-            let bytes = &staging[range.start as usize..range.end as usize];
-            // SAFETY: the range lies inside the buffer (checked above); the
-            // vertex array is unbound first so the bind changes none.
-            unsafe {
-                if self.vertex_array.is_some() {
-                    calls.bind_vertex_array(None);
-                }
-                calls.bind_buffer(&self.heights);
-                calls.buffer_sub_data(&self.heights, range.start as usize, bytes);
-            }
+            self.sub_data(range.start, &staging[range.start as usize..range.end as usize]);
         }
         gl_check!(self.gl)
+    }
+
+    /// Writes `bytes` into the tile buffer at byte `offset`: one
+    /// glBufferSubData, counted as [`Self::upload`]'s are. Refuses bytes
+    /// past the buffer.
+    pub fn upload_at(&self, offset: u32, bytes: &[u8]) -> Result<(), GlError> {
+        let capacity = self.blocks.size() as u32;
+        let end = offset as u64 + bytes.len() as u64;
+        if end > capacity as u64 {
+            let end = end.min(u32::MAX as u64) as u32;
+            let staging = bytes.len();
+            return Err(
+                RenderError::UploadPastBuffer { start: offset, end, capacity, staging }.into()
+            );
+        }
+        self.sub_data(offset, bytes);
+        gl_check!(self.gl)
+    }
+
+    /// `bytes` into the tile buffer at `offset`, which the caller checked.
+    #[allow(unsafe_code)]
+    fn sub_data(&self, offset: u32, bytes: &[u8]) {
+        let calls = Calls::new(&self.gl);
+        // SAFETY: the range lies inside the buffer (checked by the caller);
+        // the vertex array is unbound first so the bind changes none.
+        unsafe {
+            if self.vertex_array.is_some() {
+                calls.bind_vertex_array(None);
+            }
+            calls.bind_buffer(&self.blocks);
+            calls.buffer_sub_data(&self.blocks, offset as usize, bytes);
+        }
     }
 
     /// Draws every tile of `list`, writing `output`, in the frame's depth
@@ -164,16 +170,16 @@ impl TerrainPass {
     /// relies on: depth test and writes on, back faces culled, no blending,
     /// no scissor. Mirrored call for call by [`crate::render::cost::terrain`].
     pub fn draw(&self, list: &DrawList, output: TerrainOutput) -> Result<(), GlError> {
-        self.draw_from(list, output, TileVertices::Shared)
+        self.draw_from(list, output, TileBlocks::Shared)
     }
 
-    /// [`Self::draw`] with the tiles' vertex data where `vertices` says.
+    /// [`Self::draw`] with the tiles' blocks where `blocks` says.
     #[allow(unsafe_code)]
     pub fn draw_from(
         &self,
         list: &DrawList,
         output: TerrainOutput,
-        vertices: TileVertices<'_>,
+        blocks: TileBlocks<'_>,
     ) -> Result<(), GlError> {
         let Some(frame) = list.uniforms else { return Ok(()) };
         let calls = Calls::new(&self.gl);
@@ -183,9 +189,9 @@ impl TerrainPass {
         };
         let program = &programs[0];
         // SAFETY: every object bound is live in this context; attribute
-        // pointers stay inside the buffers (grid vertices are indexed by the
-        // shared indices, each tile's offset leaves room for a whole tile, as
-        // the allocator placed it).
+        // pointers and index offsets stay inside the buffer (each tile's
+        // indices number only its own block's vertices, as the allocator
+        // placed and the tile cache filled it).
         unsafe {
             calls.viewport(frame.viewport[0], frame.viewport[1]);
             calls.enable(glow::DEPTH_TEST);
@@ -202,17 +208,18 @@ impl TerrainPass {
             if let Some(vertex_array) = &self.vertex_array {
                 calls.bind_vertex_array(Some(vertex_array));
             }
-            calls.bind_buffer(&self.grid_indices);
-            calls.bind_buffer(&self.grid_vertices);
+            // The index binding is the vertex array's state where there is
+            // one, the context's where there is none (ES 2.0): bound here,
+            // every frame, either way.
+            calls.bind_buffer_to(&self.blocks, BufferTarget::Indices);
+            calls.bind_buffer(&self.blocks);
             calls.enable_attribute(GRID);
-            calls.attribute_pointer(GRID, 3, glow::UNSIGNED_SHORT, false, 8, 0);
-            calls.bind_buffer(&self.heights);
             calls.enable_attribute(HEIGHT);
             calls.enable_attribute(NORMAL);
             // Far slice first; then a clear depth for the near slice.
             let mut on_plain = true;
             if let Some(far) = frame.slices.far {
-                on_plain = self.draw_slice(calls, programs, list, far, Slice::Far, vertices);
+                on_plain = self.draw_slice(calls, programs, list, far, Slice::Far, blocks);
                 calls.clear(glow::DEPTH_BUFFER_BIT);
             }
             if !on_plain {
@@ -220,7 +227,7 @@ impl TerrainPass {
                 set_frame_uniforms(calls, &program.at, &frame);
             }
             let near = frame.slices.near;
-            self.draw_slice(calls, programs, list, near, Slice::Near, vertices);
+            self.draw_slice(calls, programs, list, near, Slice::Near, blocks);
             calls.disable_attribute(GRID);
             calls.disable_attribute(HEIGHT);
             calls.disable_attribute(NORMAL);
@@ -244,13 +251,13 @@ impl TerrainPass {
         list: &DrawList,
         view_projection: glam::Mat4,
         slice: Slice,
-        vertices: TileVertices<'_>,
+        blocks: TileBlocks<'_>,
     ) -> bool {
         let frame = list.uniforms.expect("drawn lists have uniforms");
         let [plain, voids] = programs;
         // SAFETY: the plain program is bound and its location comes from it.
         unsafe { calls.uniform_matrix(plain.at.view_projection.as_ref(), &view_projection) };
-        self.draw_tiles(calls, &plain.at, list.tiles_with(slice, false), vertices);
+        self.draw_tiles(calls, &plain.at, list.tiles_with(slice, false), blocks);
         let mut with_voids = list.tiles_with(slice, true).peekable();
         if with_voids.peek().is_none() {
             return true;
@@ -261,7 +268,7 @@ impl TerrainPass {
             set_frame_uniforms(calls, &voids.at, &frame);
             calls.uniform_matrix(voids.at.view_projection.as_ref(), &view_projection);
         }
-        self.draw_tiles(calls, &voids.at, with_voids, vertices);
+        self.draw_tiles(calls, &voids.at, with_voids, blocks);
         false
     }
 
@@ -270,41 +277,47 @@ impl TerrainPass {
         calls: Calls<'_>,
         at: &Locations,
         tiles: impl Iterator<Item = &'t TileUniforms>,
-        vertices: TileVertices<'_>,
+        blocks: TileBlocks<'_>,
     ) {
         for tile in tiles {
-            let offset = match vertices {
-                TileVertices::Shared => tile.byte_offset,
-                TileVertices::PerTile(buffer_of) => match buffer_of(tile) {
+            let offsets = match blocks {
+                TileBlocks::Shared => [tile.byte_offset, tile.index_byte_offset],
+                TileBlocks::PerTile(buffer_of) => match buffer_of(tile) {
                     Some(buffer) => {
-                        // SAFETY: the tile's own live buffer.
+                        // SAFETY: the tile's own live buffer, its block from byte 0.
                         #[allow(unsafe_code)]
                         unsafe {
-                            calls.bind_buffer(buffer)
+                            calls.bind_buffer_to(buffer, BufferTarget::Indices);
+                            calls.bind_buffer_to(buffer, BufferTarget::Vertices);
                         };
-                        0
+                        [0, tile.index_byte_offset - tile.byte_offset]
                     }
                     None => continue,
                 },
             };
-            self.draw_tile(calls, at, tile, offset);
+            self.draw_tile(calls, at, tile, offsets);
         }
     }
 
+    /// Draws `tile` from the bound buffer, its vertices and indices at
+    /// byte `offsets`.
     #[allow(unsafe_code)]
-    fn draw_tile(&self, calls: Calls<'_>, at: &Locations, tile: &TileUniforms, byte_offset: u32) {
-        let offset = byte_offset as i32;
-        // SAFETY: the tile's vertex buffer is bound and holds a whole tile's
-        // vertices from `offset`.
+    fn draw_tile(&self, calls: Calls<'_>, at: &Locations, tile: &TileUniforms, offsets: [u32; 2]) {
+        let [vertices, indices] = offsets.map(|offset| offset as i32);
+        // SAFETY: the bound buffer holds the tile's block: its vertices
+        // from `vertices`, its indices (numbering only those vertices) from
+        // `indices`.
         unsafe {
             let [x, y] = tile.first_post;
             calls.uniform_4(at.tile.as_ref(), [x, y, tile.post_step, tile.skirt_edges as f32]);
             let [start, end] = tile.morph;
             calls.uniform_4(at.morph.as_ref(), [start, end, tile.skirt_depth, 0.0]);
-            calls.attribute_pointer(HEIGHT, 2, glow::FLOAT, false, VERTEX_STRIDE, offset);
-            let normals = offset + NORMAL_OFFSET;
+            calls.attribute_pointer(GRID, 3, glow::UNSIGNED_SHORT, false, VERTEX_STRIDE, vertices);
+            let heights = vertices + HEIGHT_OFFSET as i32;
+            calls.attribute_pointer(HEIGHT, 2, glow::FLOAT, false, VERTEX_STRIDE, heights);
+            let normals = vertices + NORMAL_OFFSET as i32;
             calls.attribute_pointer(NORMAL, 4, glow::BYTE, true, VERTEX_STRIDE, normals);
-            calls.draw_triangles(self.index_count);
+            calls.draw_triangles(tile.index_count as i32, indices);
         }
     }
 }

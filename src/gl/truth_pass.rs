@@ -25,8 +25,8 @@ use super::handle::Gl;
 use super::terrain_pass::{TerrainOutput, TerrainPass};
 use crate::lod::TileKey;
 use crate::render::{DrawList, FrameUniforms, TileUniforms};
-use crate::tiles::grid;
-use crate::tiles::vertex::tile_bytes;
+use crate::tiles::block::write_block;
+use crate::tiles::{grid, TileGrid};
 
 /// `u_morph` that never morphs: the factor is 0 at every distance a frame can have.
 const NO_MORPH: [f32; 2] = [1e30, 2e30];
@@ -46,8 +46,10 @@ struct ChunkDraw {
     key: TileKey,
     /// South-west level-0 post (numbered from the frame's anchor per frame).
     first_post: [i64; 2],
-    /// Where the chunk's vertices start in the vertex buffer.
+    /// Where the chunk's block (its vertices) starts in the tile buffer.
     byte_offset: u32,
+    /// Where its indices start there.
+    index_byte_offset: u32,
     /// Some posts have no data.
     voids: bool,
 }
@@ -56,42 +58,42 @@ struct ChunkDraw {
 pub struct TruthPass {
     terrain: TerrainPass,
     chunks: Vec<ChunkDraw>,
+    /// Indices per chunk, skirts included.
+    index_count: u32,
     triangles: u64,
 }
 
 impl TruthPass {
-    /// Uploads `mesh` into the vertex buffer of a terrain pass whose tile
-    /// grid is a chunk.
+    /// Uploads `mesh` into the tile buffer of a terrain pass, a block per
+    /// chunk laid out as a regular tile of [`CHUNK_CELLS`] cells.
     pub fn new(gl: &Rc<Gl>, mesh: &TruthMesh) -> Result<TruthPass, GlError> {
-        let vertices: Vec<_> =
-            mesh.chunks.iter().flat_map(|c| c.vertices.iter().copied()).collect();
-        let bytes: &[u8] = bytemuck::cast_slice(&vertices);
-        let too_large = || {
-            GlError::InvalidRequest(format!("truth mesh of {} bytes exceeds 2^32-1", bytes.len()))
-        };
-        let size = u32::try_from(bytes.len()).map_err(|_| too_large())?;
-        let terrain = TerrainPass::new(gl, CHUNK_CELLS, size)?;
-        terrain.upload(bytes, std::slice::from_ref(&(0..size)))?;
-        debug_assert!(mesh
-            .chunks
-            .iter()
-            .all(|c| c.vertices.len() == grid::vertex_count(CHUNK_CELLS)));
-        let chunks = mesh
-            .chunks
-            .iter()
-            .enumerate()
-            .map(|(k, chunk)| ChunkDraw {
+        let counts = grid::counts(CHUNK_CELLS);
+        let block_bytes = counts.block_bytes();
+        let bytes = block_bytes as u64 * mesh.chunks.len() as u64;
+        let too_large =
+            || GlError::InvalidRequest(format!("truth mesh of {bytes} bytes exceeds 2^32-1"));
+        let terrain = TerrainPass::new(gl, u32::try_from(bytes).map_err(|_| too_large())?)?;
+        let indices = TileGrid::new(CHUNK_CELLS).indices;
+        let mut block = vec![0; block_bytes as usize];
+        let mut chunks = Vec::with_capacity(mesh.chunks.len());
+        for (k, chunk) in mesh.chunks.iter().enumerate() {
+            debug_assert_eq!(chunk.vertices.len(), counts.vertices as usize);
+            let byte_offset = k as u32 * block_bytes;
+            write_block(&mut block, &chunk.vertices, &indices);
+            terrain.upload_at(byte_offset, &block)?;
+            chunks.push(ChunkDraw {
                 key: TileKey::new(
                     0,
                     chunk.first_post[0] / CHUNK_CELLS,
                     chunk.first_post[1] / CHUNK_CELLS,
                 ),
                 first_post: mesh.chunk_first_post(chunk),
-                byte_offset: k as u32 * tile_bytes(CHUNK_CELLS),
+                byte_offset,
+                index_byte_offset: byte_offset + counts.vertex_bytes(),
                 voids: chunk.voids,
-            })
-            .collect();
-        Ok(TruthPass { terrain, chunks, triangles: mesh.triangles() })
+            });
+        }
+        Ok(TruthPass { terrain, chunks, index_count: counts.indices, triangles: mesh.triangles() })
     }
 
     /// Surface triangles drawn per frame (all of them: nothing is culled).
@@ -119,17 +121,13 @@ impl TruthPass {
                 skirt_depth: 0.0,
                 skirt_edges: 0,
                 byte_offset: chunk.byte_offset,
+                index_byte_offset: chunk.index_byte_offset,
+                index_count: self.index_count,
                 voids: chunk.voids,
             })
             .collect();
-        let indices_per_tile = grid::index_count(CHUNK_CELLS) as u32;
-        let mut list = DrawList {
-            uniforms: Some(*frame),
-            tiles,
-            indices_per_tile,
-            grid_size: CHUNK_CELLS,
-            drawn: Vec::new(),
-        };
+        let mut list =
+            DrawList { uniforms: Some(*frame), tiles, grid_size: CHUNK_CELLS, drawn: Vec::new() };
         // As the display does: a fair brute force gets early z too.
         list.sort_front_to_back(CHUNK_CELLS);
         self.terrain.draw(&list, output)

@@ -141,13 +141,14 @@ pub fn sky(model: &CostModel) -> CallStats {
 }
 
 /// The terrain pass: nine state calls, glUseProgram, five frame uniforms, the
-/// VAO bind, the index and grid buffer binds, three attribute enables, the
-/// grid pointer, the height buffer bind; then per depth slice one matrix
-/// uniform and per tile two uniforms, two pointers and a glDrawElements, the
-/// tiles with voids last, after a switch to the program that drops their
-/// triangles (glUseProgram, five frame uniforms, the matrix) and back to the
-/// plain one for the next slice; a depth clear between slices; three
-/// attribute disables and the VAO unbind.
+/// VAO bind, the tile buffer bound as index and as vertex buffer, three
+/// attribute enables; then per depth slice one matrix uniform and per tile
+/// two uniforms, three pointers (position, heights, normals at the tile's
+/// block) and a glDrawElements of the tile's own indices, the tiles with
+/// voids last, after a switch to the program that drops their triangles
+/// (glUseProgram, five frame uniforms, the matrix) and back to the plain one
+/// for the next slice; a depth clear between slices; three attribute
+/// disables and the VAO unbind.
 pub fn terrain(model: &CostModel, list: &DrawList) -> CallStats {
     let Some(frame) = list.uniforms else { return CallStats::default() };
     let mut stats = CallStats {
@@ -155,9 +156,8 @@ pub fn terrain(model: &CostModel, list: &DrawList) -> CallStats {
         program_binds: 1,
         uniform_writes: 5,
         vertex_array_binds: 2 * model.vertex_arrays as u64,
-        buffer_binds: 3,
+        buffer_binds: 2,
         attribute_array_toggles: 6,
-        attribute_pointer_changes: 1,
         ..CallStats::default()
     };
     let slices: &[Slice] =
@@ -174,17 +174,16 @@ pub fn terrain(model: &CostModel, list: &DrawList) -> CallStats {
             switch(&mut stats);
             on_plain = true;
         }
-        let plain = list.tiles_with(slice, false).count() as u64;
-        let voids = list.tiles_with(slice, true).count() as u64;
-        if voids > 0 {
+        if list.tiles_with(slice, true).next().is_some() {
             switch(&mut stats);
             on_plain = false;
         }
-        let tiles = plain + voids;
-        stats.uniform_writes += 2 * tiles;
-        stats.attribute_pointer_changes += 2 * tiles;
-        stats.draw_calls += tiles;
-        stats.triangles += tiles * (list.indices_per_tile as u64 / 3);
+        for tile in list.tiles_in(slice) {
+            stats.uniform_writes += 2;
+            stats.attribute_pointer_changes += 3;
+            stats.draw_calls += 1;
+            stats.triangles += tile.triangles();
+        }
     }
     stats.clears += slices.len() as u64 - 1;
     stats

@@ -1,6 +1,7 @@
 //! One frame's draw data: the per-frame uniforms and, per tile, only what the
 //! shader cannot share: the tile's transform, its morph range and skirt depth,
-//! and where its vertex data starts (Polok: transforms in uniforms).
+//! and where its block's vertices and indices are (Polok: transforms in
+//! uniforms).
 //!
 //! Positions are placed on integer level-0 post numbers counted from an
 //! anchor post next to the camera ([`PostFrame`]): the shader computes a
@@ -10,7 +11,8 @@
 
 use crate::camera::Camera;
 use crate::lod::{LevelRings, TileKey};
-use crate::tiles::{TileCoverage, TileDraw};
+use crate::tiles::block::{BLOCK_ALIGNMENT, INDEX_BYTES};
+use crate::tiles::{TileBlock, TileCoverage, TileDraw};
 use glam::{DVec2, Mat4, Vec3};
 
 /// Uniforms shared by every tile of a frame.
@@ -162,14 +164,15 @@ impl PostFrame {
     }
 }
 
-/// Per-tile uniforms.
+/// Per-tile uniforms, and where the tile's block is.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TileUniforms {
     /// The tile drawn.
     pub key: TileKey,
     /// The tile's south-west post, numbered from the frame's anchor.
     pub first_post: [f32; 2],
-    /// Level-0 posts between the tile's posts (2^level).
+    /// Level-0 posts between the tile's posts (2^level): a vertex's `post`
+    /// times this is its place in level-0 posts from `first_post`.
     pub post_step: f32,
     /// Morph start and end distances (equal and huge for no morph).
     pub morph: [f32; 2],
@@ -178,8 +181,13 @@ pub struct TileUniforms {
     /// Which edges hang a skirt: bit 0 south, 1 east, 2 north, 3 west (the
     /// order of [`crate::tiles::grid::edge_posts`]). See [`skirt_edges`].
     pub skirt_edges: u8,
-    /// Where the tile's vertices start in the height buffer, bytes.
+    /// Where the tile's block (its vertices) starts in the GPU buffer, bytes.
     pub byte_offset: u32,
+    /// Where the tile's indices start in the same buffer, bytes.
+    pub index_byte_offset: u32,
+    /// The tile's indices, three per triangle, skirts included: one
+    /// glDrawElements.
+    pub index_count: u32,
     /// Some posts have no data: drawn by the program that drops the
     /// triangles touching them (after the tiles without voids, since that
     /// program cannot use early depth rejection).
@@ -195,6 +203,23 @@ impl TileUniforms {
         };
         [at(0, i), at(1, j)]
     }
+
+    /// Triangles the tile's draw call draws, skirts included.
+    pub fn triangles(&self) -> u64 {
+        self.index_count as u64 / 3
+    }
+
+    /// The bytes of the tile's block in the buffer: its vertices, its
+    /// indices and the padding after them.
+    pub fn block_range(&self) -> std::ops::Range<u32> {
+        let end = self.index_byte_offset + self.index_count * INDEX_BYTES;
+        self.byte_offset..end.next_multiple_of(BLOCK_ALIGNMENT)
+    }
+
+    /// The tile's block in `staging` (the copy the GPU buffer mirrors).
+    pub fn block<'a>(&self, staging: &'a [u8]) -> TileBlock<'a> {
+        TileBlock::new(staging, self.byte_offset, self.index_byte_offset, self.index_count)
+    }
 }
 
 /// Everything drawn in one frame; buffers are kept and reused.
@@ -204,8 +229,6 @@ pub struct DrawList {
     pub uniforms: Option<FrameUniforms>,
     /// One entry per tile drawn this frame, nearest first.
     pub tiles: Vec<TileUniforms>,
-    /// Indices per tile in the shared index buffer.
-    pub indices_per_tile: u32,
     /// Cells per tile side.
     pub grid_size: u32,
     /// The frame's tiles and the level their heights came from, sorted by
@@ -239,10 +262,14 @@ impl DrawList {
         DrawList {
             uniforms: None,
             tiles: Vec::with_capacity(tiles),
-            indices_per_tile: 0,
             grid_size: 0,
             drawn: Vec::with_capacity(tiles),
         }
+    }
+
+    /// Triangles of the list's tiles, skirts included, each tile once.
+    pub fn triangles(&self) -> u64 {
+        self.tiles.iter().map(TileUniforms::triangles).sum()
     }
 
     /// The tiles drawn in depth slice `slice` with or without `voids`, in
@@ -328,6 +355,8 @@ fn tile_uniforms(
         skirt_depth: skirt_depth(draw, geometry.delta_per_level),
         skirt_edges: ALL_EDGES,
         byte_offset: draw.byte_offset,
+        index_byte_offset: draw.index_byte_offset,
+        index_count: draw.index_count,
         voids: draw.coverage != TileCoverage::Full,
     }
 }
@@ -392,6 +421,8 @@ mod tests {
             skirt_depth: 1.0,
             skirt_edges: ALL_EDGES,
             byte_offset: 0,
+            index_byte_offset: 0,
+            index_count: 0,
             voids: false,
         }
     }

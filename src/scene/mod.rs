@@ -20,11 +20,13 @@ use crate::node::NodeLayout;
 use crate::render::draw_list::TileGeometry;
 use crate::render::draw_list::{DepthSlices, PostFrame};
 use crate::render::{palette, DrawList, FrameUniforms};
-use crate::tiles::{grid, TileCache, TileCacheConfig, TileError};
+use crate::tiles::{TileCache, TileCacheConfig, TileError};
 use std::time::Instant;
 
-/// The default longest single upload: four of Polok's 64 x 64 tiles in our
-/// 12-byte vertex format (196 608 bytes). `cargo bench --bench hwmetrics`
+/// The default longest single upload, 196 608 bytes: four of Polok's 64 x 64
+/// tiles of heights, morph targets and normals (12 bytes a vertex; a tile's
+/// block now also holds positions and indices, so about five of our regular
+/// 32-cell tiles). `cargo bench --bench hwmetrics`
 /// finds no gain from batching on llvmpipe that matters (glBufferSubData is a
 /// memcpy there: from 1 to 1024 tiles a run, 256 tiles take 0.71 to 0.96 ms,
 /// under 0.1 % of the frame), so the cap comes from the paper's Table 1,
@@ -34,12 +36,18 @@ use std::time::Instant;
 /// (see the transfer-cap table of `cargo bench --bench allocator`).
 pub const DEFAULT_TRANSFER_CAP: u32 = 4 * 64 * 64 * 12;
 
+/// The default tile buffer, 84 MiB: room for 2303 regular 32-cell tiles
+/// (38 244 bytes each), as many as the 32 MiB held when a tile's block
+/// carried only its heights (14 652 bytes). The earth-scale view of
+/// `tests/scene_precision.rs` needs 2027 tiles even at its coarsest.
+pub const DEFAULT_BUFFER_BYTES: u32 = 84 << 20;
+
 /// Everything fixed for a run of the display.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SceneConfig {
     /// Tiling parameters: grid size, view distance, morph range, tau, most tiles.
     pub lod: LodConfig,
-    /// GPU vertex buffer for tile heights, bytes.
+    /// GPU tile buffer (every tile's block: vertices and indices), bytes.
     pub buffer_bytes: u32,
     /// Longest single upload, bytes; `None` uploads each frame's run in one transfer.
     pub transfer_cap: Option<u32>,
@@ -57,7 +65,7 @@ impl Default for SceneConfig {
     fn default() -> Self {
         SceneConfig {
             lod: LodConfig::default(),
-            buffer_bytes: 32 << 20,
+            buffer_bytes: DEFAULT_BUFFER_BYTES,
             transfer_cap: Some(DEFAULT_TRANSFER_CAP),
             frames_in_flight: 0,
             curvature: true,
@@ -106,7 +114,7 @@ pub struct SceneStats {
     pub bytes_uploaded: u64,
     /// Transfers: one per run piece (dirty range).
     pub transfers: usize,
-    /// Tiles whose vertex data was made this frame.
+    /// Tiles whose block was made this frame.
     pub generated: usize,
     /// Bytes held by resident tiles.
     pub allocator_used_bytes: u64,
@@ -147,8 +155,7 @@ impl Scene {
         };
         let deltas = terrain.delta_per_level();
         let (lo, hi) = terrain.height_range();
-        let mut draw_list = DrawList::with_capacity(cache_config.max_tiles as usize);
-        draw_list.indices_per_tile = grid::index_count(config.lod.grid_size) as u32;
+        let draw_list = DrawList::with_capacity(cache_config.max_tiles as usize);
         Ok(Scene {
             config,
             selector: TileSelector::new(config.lod),
@@ -242,7 +249,7 @@ impl Scene {
         let stats = self.cache.stats();
         report.tiles = self.draw_list.tiles.len();
         report.culled = self.selector.culled();
-        report.triangles = report.tiles as u64 * grid::triangle_count(grid_size) as u64;
+        report.triangles = self.draw_list.triangles();
         report.bytes_uploaded = stats.bytes_uploaded;
         report.transfers = stats.transfers;
         report.generated = stats.generated;

@@ -1,20 +1,22 @@
-//! Which tiles have vertex data in the GPU buffer, where, and from which
+//! Which tiles have their mesh in the GPU buffer, where, and from which
 //! level of data it was made.
 //!
-//! Each tile in use owns one block of the [`ContiguousAllocator`]; its
-//! generator id is the tile's slot in a fixed table. Per frame:
+//! Each tile in use owns one block of the [`ContiguousAllocator`]: its
+//! vertices, then its indices ([`super::block`]); its generator id is the
+//! tile's slot in a fixed table. Per frame:
 //! 1. tiles the selection no longer uses give their blocks back;
 //! 2. tiles that are new, or whose best resident data is now finer than what
-//!    they were made from, announce their size (pass 1);
-//! 3. the run is placed and each such tile fills its bytes (pass 2);
+//!    they were made from, announce their size, each its own (pass 1);
+//! 3. the run is placed and each such tile fills its block (pass 2);
 //! 4. the dirty ranges, one per run piece, are what the GPU must receive.
 //!
 //! A still camera with settled data announces nothing and uploads nothing.
 //! The root level's tiles are made once and never released, so whatever
 //! happens to the buffer there is always a coarse tile to draw.
 
-use super::grid::vertex_count;
-use super::vertex::{fill_tile, tile_bytes, tile_node, PostReader, TileCoverage, TileVertex};
+use super::block::{write_block, MeshCounts, BLOCK_ALIGNMENT};
+use super::grid::{self, TileGrid};
+use super::vertex::{fill_tile, tile_node, PostReader, TileCoverage};
 use super::{best_resident, ResidentNodes};
 use crate::allocator::{
     AllocError, AllocatorConfig, ConfigError, ContiguousAllocator, GeneratorId, Request,
@@ -41,13 +43,20 @@ pub struct TileCacheConfig {
     pub frames_in_flight: u32,
 }
 
-/// A tile to draw: where its vertex data starts and what data made it.
+/// A tile to draw: where its block's vertices and indices are and what
+/// data made it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TileDraw {
     /// The tile: its level and position.
     pub key: TileKey,
-    /// Where its vertex data starts in the GPU buffer and the staging copy, bytes.
+    /// Where its block (its vertices) starts in the GPU buffer and the
+    /// staging copy, bytes.
     pub byte_offset: u32,
+    /// Where its indices start in the same buffer, bytes (right after its
+    /// vertices).
+    pub index_byte_offset: u32,
+    /// Its indices: three per triangle, skirts included.
+    pub index_count: u32,
     /// Level of the node the heights came from (above `key.level` when only
     /// coarser data was resident: best available).
     pub source_level: u8,
@@ -61,7 +70,7 @@ pub struct TileDraw {
 pub struct TileFrameStats {
     /// Tiles selected this frame.
     pub tiles: usize,
-    /// Tiles whose vertex data was made this frame: new ones and ones remade from finer data.
+    /// Tiles whose block was made this frame: new ones and ones remade from finer data.
     pub generated: usize,
     /// Tiles released this frame because the selection no longer uses them.
     pub released: usize,
@@ -114,11 +123,51 @@ pub enum TileError {
     BufferFull(AllocError),
 }
 
+/// Which mesh a tile is made as: what decides its block's size (asked per
+/// tile before placement) and what fills it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TileMeshKind {
+    /// The regular grid of `grid_size` cells with skirts ([`TileGrid`]).
+    #[default]
+    Grid,
+}
+
+impl TileMeshKind {
+    /// The vertices and indices a tile of this kind has, with tiles of
+    /// `grid_size` cells.
+    pub fn counts(self, grid_size: u32) -> MeshCounts {
+        match self {
+            TileMeshKind::Grid => grid::counts(grid_size),
+        }
+    }
+
+    /// Makes the tile's mesh from `reader` (posts `spacing_m` apart) into
+    /// `block`, [`Self::counts`] in size: vertices, then indices. `grid` is
+    /// the regular grid, its vertices the scratch the surface is made in.
+    fn fill(
+        self,
+        grid: &mut TileGrid,
+        reader: &PostReader<'_>,
+        spacing_m: [f64; 2],
+        block: &mut [u8],
+    ) -> TileCoverage {
+        match self {
+            TileMeshKind::Grid => {
+                let coverage = fill_tile(reader, grid.grid_size, spacing_m, &mut grid.vertices);
+                write_block(block, &grid.vertices, &grid.indices);
+                coverage
+            }
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug)]
 struct Resident {
     key: TileKey,
     source_level: u8,
     coverage: TileCoverage,
+    /// What its block holds.
+    mesh: MeshCounts,
     last_frame: u64,
     pinned: bool,
 }
@@ -130,6 +179,9 @@ struct Job {
     new: bool,
     /// The resident node the tile's heights come from.
     source: NodeId,
+    /// The mesh it is made as, and its size.
+    kind: TileMeshKind,
+    mesh: MeshCounts,
 }
 
 /// The tiles resident in the GPU buffer: one allocator block each, keyed by [`TileKey`],
@@ -145,7 +197,8 @@ pub struct TileCache {
     jobs: Vec<Job>,
     draws: Vec<TileDraw>,
     dirty: Vec<Range<u32>>,
-    vertices: Vec<TileVertex>,
+    /// The regular grid; its vertices are the scratch a tile is made in.
+    grid: TileGrid,
     stats: TileFrameStats,
 }
 
@@ -159,7 +212,7 @@ impl TileCache {
         let alloc_config = AllocatorConfig {
             capacity: config.capacity_bytes,
             max_generators: config.max_tiles,
-            alignment: 4,
+            alignment: BLOCK_ALIGNMENT,
             transfer_cap: config.transfer_cap,
             frames_in_flight: config.frames_in_flight,
         };
@@ -175,7 +228,7 @@ impl TileCache {
             jobs: Vec::with_capacity(max),
             draws: Vec::with_capacity(max),
             dirty: Vec::with_capacity(max),
-            vertices: vec![TileVertex::default(); vertex_count(config.grid_size)],
+            grid: TileGrid::new(config.grid_size),
             stats: TileFrameStats::default(),
         };
         cache.make_root_tiles(nodes)?;
@@ -264,7 +317,8 @@ impl TileCache {
     }
 
     /// Finds or reserves each selected tile's slot and queues the ones that
-    /// need vertex data (new, or finer data is resident now).
+    /// need their block made (new, or finer data is resident now), each
+    /// with its own size.
     fn mark_selected(
         &mut self,
         selected: &[SelectedTile],
@@ -279,7 +333,6 @@ impl TileCache {
             });
         }
         let layout = *nodes.layout();
-        let size = tile_bytes(self.config.grid_size);
         for tile in selected {
             let (node, _) = tile_node(tile.key, self.config.grid_size, layout.node_size);
             let (source, _) = best_resident(nodes, node).ok_or(TileError::NoData(tile.key))?;
@@ -290,12 +343,14 @@ impl TileCache {
             let resident = self.slots[slot as usize].as_mut().expect("reserved");
             resident.last_frame = self.frame;
             if new || source.level < resident.source_level {
+                let kind = TileMeshKind::Grid;
+                let mesh = kind.counts(self.config.grid_size);
                 self.requests.push(Request {
                     generator: GeneratorId(slot),
                     format: VertexFormat(0),
-                    size,
+                    size: mesh.block_bytes(),
                 });
-                self.jobs.push(Job { slot, new, source });
+                self.jobs.push(Job { slot, new, source, kind, mesh });
             }
         }
         Ok(())
@@ -310,6 +365,7 @@ impl TileCache {
             key,
             source_level,
             coverage: TileCoverage::Full,
+            mesh: MeshCounts::default(),
             last_frame: 0,
             pinned: false,
         });
@@ -339,29 +395,30 @@ impl TileCache {
         }
     }
 
-    /// Places the run, fills every queued tile's bytes, and keeps the dirty
+    /// Places the run, fills every queued tile's block, and keeps the dirty
     /// ranges for the upload.
     fn generate(&mut self, nodes: &dyn ResidentNodes) -> Result<(), TileError> {
         let requests = std::mem::take(&mut self.requests);
         let layout = *nodes.layout();
         let grid_size = self.config.grid_size;
-        let (slots, vertices, dirty, jobs) =
-            (&mut self.slots, &mut self.vertices, &mut self.dirty, &self.jobs);
+        let (slots, grid, dirty, jobs) =
+            (&mut self.slots, &mut self.grid, &mut self.dirty, &self.jobs);
         let outcome = self.allocator.allocate(&requests).map(|mut plan| {
             let mut bytes_uploaded = 0u64;
-            plan.fill(|index, request, bytes| {
+            plan.fill(|index, request, block| {
                 let resident = slots[request.generator.0 as usize]
                     .as_mut()
                     .expect("queued tiles are reserved");
-                let source = jobs[index].source;
-                let data = nodes.resident(source).expect("resident since mark_selected");
-                let reader = PostReader::new(&layout, resident.key, grid_size, source, data);
+                let job = jobs[index];
+                let data = nodes.resident(job.source).expect("resident since mark_selected");
+                let reader = PostReader::new(&layout, resident.key, grid_size, job.source, data);
                 let scale = 2f64.powi(resident.key.level as i32);
                 let spacing = [layout.spacing_m[0] * scale, layout.spacing_m[1] * scale];
-                resident.coverage = fill_tile(&reader, grid_size, spacing, vertices);
-                bytes.copy_from_slice(bytemuck::cast_slice(vertices));
-                resident.source_level = source.level;
-                bytes_uploaded += bytes.len() as u64;
+                debug_assert_eq!(block.len(), job.mesh.block_bytes() as usize);
+                resident.coverage = job.kind.fill(grid, &reader, spacing, block);
+                resident.mesh = job.mesh;
+                resident.source_level = job.source.level;
+                bytes_uploaded += block.len() as u64;
             });
             dirty.extend(plan.dirty_ranges().iter().cloned());
             bytes_uploaded
@@ -407,6 +464,8 @@ impl TileCache {
             self.draws.push(TileDraw {
                 key: tile.key,
                 byte_offset: range.start,
+                index_byte_offset: range.start + resident.mesh.vertex_bytes(),
+                index_count: resident.mesh.indices,
                 source_level: resident.source_level,
                 coverage: resident.coverage,
             });

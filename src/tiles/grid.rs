@@ -1,6 +1,7 @@
-//! The mesh every tile shares: grid positions and indices, built once for a
-//! grid size (Polok: positions and indices are shared, only heights are per
-//! tile). Per-tile vertex data is indexed by the same vertex numbers.
+//! The regular grid mesh: a tile of `grid_size` cells a side, every post a
+//! vertex, with skirts. The tile cache writes it into each regular tile's
+//! block ([`super::block`]): the positions and indices below, the heights
+//! made per tile.
 //!
 //! Vertex numbering: the `(g + 1)^2` posts row by row from the south-west
 //! corner (`i + j * (g + 1)`), then the skirt: for each edge (south, east,
@@ -10,49 +11,29 @@
 //! Cells are split from their south-west to their north-east corner, the same
 //! diagonal the pyramid's delta is measured on.
 
-/// One shared vertex: its post coordinates in the tile and, for a skirt
-/// vertex, its edge (1 south, 2 east, 3 north, 4 west; 0 for a post), as
-/// `u16` so grids may have up to 256 cells a side.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct GridVertex {
-    /// Post column in the tile, 0..=grid_size from the west edge.
-    pub i: u16,
-    /// Post row in the tile, 0..=grid_size from the south edge.
-    pub j: u16,
-    /// The edge of a skirt vertex, 1 to 4 (lowered by the tile's skirt
-    /// depth when that edge hangs a skirt), or 0.
-    pub skirt: u16,
-    /// Always 0; pads the vertex to 8 bytes.
-    pub _pad: u16,
-}
+use super::block::{MeshCounts, TileVertex};
 
-/// The shared mesh of one grid size.
+/// The regular grid of one grid size: the vertices with their positions
+/// (surfaces zero, for the tile fill to write) and the indices.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TileGrid {
     /// Cells per tile side (1..=256).
     pub grid_size: u32,
     /// The `(g + 1)^2` posts row by row, then the skirt vertices of each edge.
-    pub vertices: Vec<GridVertex>,
+    pub vertices: Vec<TileVertex>,
     /// Triangles, counter-clockwise seen from above.
     pub indices: Vec<u16>,
 }
 
 impl TileGrid {
-    /// Builds the shared mesh for tiles of `grid_size` cells a side (1..=256).
+    /// Builds the mesh for tiles of `grid_size` cells a side (1..=256; its
+    /// vertices must number in 16 bits).
     pub fn new(grid_size: u32) -> Self {
         debug_assert!((1..=256).contains(&grid_size));
         let g = grid_size;
-        let mut vertices = Vec::with_capacity(vertex_count(g));
-        for j in 0..=g {
-            for i in 0..=g {
-                vertices.push(GridVertex { i: i as u16, j: j as u16, skirt: 0, _pad: 0 });
-            }
-        }
-        for (k, (i, j)) in edge_posts(g).enumerate() {
-            let edge = (k as u32 / (g + 1) + 1) as u16;
-            vertices.push(GridVertex { i: i as u16, j: j as u16, skirt: edge, _pad: 0 });
-        }
+        let vertices = positions(g)
+            .map(|(post, skirt)| TileVertex { post, skirt, ..TileVertex::default() })
+            .collect();
         let mut indices = Vec::with_capacity(index_count(g));
         let post = |i: u32, j: u32| (i + j * (g + 1)) as u16;
         for j in 0..g {
@@ -73,10 +54,29 @@ impl TileGrid {
                 indices.extend_from_slice(&[top0, low0, low1, top0, low1, top1]);
             }
         }
-        debug_assert_eq!(vertices.len(), vertex_count(g));
         debug_assert_eq!(indices.len(), index_count(g));
         TileGrid { grid_size, vertices, indices }
     }
+}
+
+/// Every vertex's position in grid numbering: its post and its skirt edge
+/// (1 to 4, or 0 for a post of the surface).
+pub fn positions(g: u32) -> impl Iterator<Item = ([u16; 2], u16)> {
+    let posts = (0..=g).flat_map(move |j| (0..=g).map(move |i| ([i as u16, j as u16], 0)));
+    let skirts = edge_posts(g)
+        .enumerate()
+        .map(move |(k, (i, j))| ([i as u16, j as u16], (k as u32 / (g + 1) + 1) as u16));
+    posts.chain(skirts)
+}
+
+/// Vertices and indices of a regular tile of `grid_size` cells.
+pub fn counts(grid_size: u32) -> MeshCounts {
+    MeshCounts { vertices: vertex_count(grid_size) as u32, indices: index_count(grid_size) as u32 }
+}
+
+/// Bytes of a regular tile's block of `grid_size` cells (vertices, indices, padding).
+pub fn tile_bytes(grid_size: u32) -> u32 {
+    counts(grid_size).block_bytes()
 }
 
 /// Vertices per tile, skirt included.
@@ -125,8 +125,8 @@ mod tests {
     fn grid_triangles_face_up_and_cover_each_cell_once() {
         let grid = TileGrid::new(4);
         let pos = |v: u16| {
-            let g = grid.vertices[v as usize];
-            (g.i as f64, g.j as f64)
+            let [i, j] = grid.vertices[v as usize].post;
+            (i as f64, j as f64)
         };
         let mut area = 0.0;
         for tri in grid.indices[..6 * 16].chunks(3) {
@@ -136,6 +136,7 @@ mod tests {
             area += cross / 2.0;
         }
         assert_eq!(area, 16.0);
+        assert_eq!(tile_bytes(4), (45 * 20 + (96 + 96) * 2) as u32);
         assert!(grid.indices.iter().all(|&i| (i as usize) < grid.vertices.len()));
     }
 
@@ -144,13 +145,12 @@ mod tests {
         let grid = TileGrid::new(8);
         let skirt = &grid.vertices[81..];
         assert_eq!(skirt.len(), 36);
-        assert!(skirt
-            .iter()
-            .all(|v| (1..=4).contains(&v.skirt) && (v.i == 0 || v.j == 0 || v.i == 8 || v.j == 8)));
+        assert!(grid.vertices[..81].iter().all(|v| v.skirt == 0));
         // Each skirt vertex names the edge it hangs from.
         for v in skirt {
-            let on = [v.j == 0, v.i == 8, v.j == 8, v.i == 0];
-            assert!(on[v.skirt as usize - 1], "{v:?}");
+            let [i, j] = v.post;
+            let on = [j == 0, i == 8, j == 8, i == 0];
+            assert!((1..=4).contains(&v.skirt) && on[v.skirt as usize - 1], "{v:?}");
         }
     }
 }

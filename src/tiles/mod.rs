@@ -1,16 +1,20 @@
-//! Per-tile height buffers (Polok): the shared grid mesh, the vertex data each
-//! tile carries, and the cache that keeps tiles resident in the contiguous
-//! allocator, regenerating a tile only when it is new or its source data got
-//! finer, and uploading everything a frame changed in one batched transfer per
-//! run piece.
+//! Per-tile mesh blocks (Polok's per-tile height buffers, grown to whole
+//! meshes): each tile's block holds its vertices (positions, heights, morph
+//! targets and normals as vertex attributes) and its indices; the regular
+//! grid mesh the tiles are made as today; and the cache that keeps tiles
+//! resident in the contiguous allocator, regenerating a tile only when it
+//! is new or its source data got finer, and uploading everything a frame
+//! changed in one batched transfer per run piece.
 
+pub mod block;
 pub mod cache;
 pub mod grid;
 pub mod vertex;
 
-pub use cache::{TileCache, TileCacheConfig, TileDraw, TileError, TileFrameStats};
+pub use block::{MeshCounts, TileBlock, TileVertex};
+pub use cache::{TileCache, TileCacheConfig, TileDraw, TileError, TileFrameStats, TileMeshKind};
 pub use grid::TileGrid;
-pub use vertex::{TileCoverage, TileVertex, NO_DATA};
+pub use vertex::{TileCoverage, NO_DATA};
 
 use crate::node::{NodeData, NodeId, NodeLayout};
 

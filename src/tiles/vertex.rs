@@ -3,6 +3,7 @@
 //! place) and both normals. This is what replaces vertex texturing (Polok):
 //! heights reach the shader as attributes.
 
+use super::block::TileVertex;
 use super::grid::{edge_posts, vertex_count};
 use crate::lod::TileKey;
 use crate::node::{cell_surface, NodeData, NodeId, NodeLayout};
@@ -31,24 +32,6 @@ pub enum TileCoverage {
     Partial,
     /// No post has data: nothing to draw.
     Empty,
-}
-
-/// Twelve bytes per vertex.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct TileVertex {
-    /// Height of this level's post, metres.
-    pub height: f32,
-    /// Height of the parent level's surface here, metres.
-    pub target: f32,
-    /// Unit normals, x and y scaled to -127..127 (z is positive, derived):
-    /// this level's, then the parent level's.
-    pub normal: [i8; 4],
-}
-
-/// Byte size of one tile's vertex data for `grid_size`.
-pub fn tile_bytes(grid_size: u32) -> u32 {
-    (vertex_count(grid_size) * std::mem::size_of::<TileVertex>()) as u32
 }
 
 /// The node of the tile's own level that contains it, and the tile's first
@@ -201,8 +184,9 @@ pub fn sample_node(layout: &NodeLayout, data: &NodeData, fx: f64, fy: f64) -> f3
     cell_surface(h(x0, y0), h(x0 + 1, y0), h(x0, y0 + 1), h(x0 + 1, y0 + 1), tx, ty) as f32
 }
 
-/// Fills `out` (one tile's vertices, skirt included) from `reader`, and
-/// says how much of the tile has data. `spacing_m` is the distance between
+/// Fills the surface of `out` (one regular tile's vertices, skirt included,
+/// in [`super::grid`] numbering, their positions already set) from
+/// `reader`, and says how much of the tile has data. `spacing_m` is the distance between
 /// the tile's posts, east and north. A post without data gets [`NO_DATA`];
 /// a morph target or normal that would need a missing neighbour falls back
 /// to what the post's own data gives (no morph, one-sided slopes).
@@ -232,7 +216,7 @@ pub fn fill_tile(
             let index = (i + j * (g + 1)) as usize;
             if own.is_nan() {
                 without += 1;
-                out[index] = TileVertex { height: NO_DATA, target: f32::NAN, normal: [0; 4] };
+                out[index] = out[index].with_surface(NO_DATA, f32::NAN, [0; 4]);
                 continue;
             }
             if reader.is_beyond(i, j) {
@@ -245,16 +229,8 @@ pub fn fill_tile(
             let (target, parent) = parent_surface(i, j, &hp, &|i, j| normal(&hp, i, j, 2));
             let (target, parent) =
                 if target.is_nan() { (own, slope_here) } else { (target, parent) };
-            out[index] = TileVertex {
-                height: own as f32,
-                target: target as f32,
-                normal: [
-                    quantize(slope_here[0]),
-                    quantize(slope_here[1]),
-                    quantize(parent[0]),
-                    quantize(parent[1]),
-                ],
-            };
+            let normal = [slope_here[0], slope_here[1], parent[0], parent[1]].map(quantize);
+            out[index] = out[index].with_surface(own as f32, target as f32, normal);
         }
     }
     // Vertices without data still need a place for the rasteriser: a real
@@ -287,11 +263,12 @@ fn fill_skirts(reader: &PostReader<'_>, grid_size: u32, out: &mut [TileVertex]) 
         let edge_post = out[(i + j * grid_size + j) as usize];
         let [di, dj] = OUTWARD[k / (grid_size as usize + 1)];
         let across = reader.post(i as i64 + di, j as i64 + dj);
+        let skirt = out[posts + k].with_surface_of(edge_post);
         out[posts + k] = if across.is_nan() && !is_no_data(edge_post.height) {
             dropped += 1;
-            TileVertex { height: NO_DATA, target: edge_post.height, ..edge_post }
+            TileVertex { height: NO_DATA, target: edge_post.height, ..skirt }
         } else {
-            edge_post
+            skirt
         };
     }
     dropped
@@ -340,7 +317,7 @@ mod tests {
     use super::*;
     use crate::lod::TileKey;
     use crate::node::{NodeData, NodeId, NodeLayout};
-    use crate::tiles::grid::{edge_posts, vertex_count};
+    use crate::tiles::grid::{edge_posts, TileGrid};
 
     /// One node of 8 cells whose data end at post `last` east: the tile is
     /// the whole node at level 0.
@@ -362,7 +339,7 @@ mod tests {
         };
         let reader =
             PostReader::new(&layout, TileKey::new(0, 0, 0), 8, NodeId::new(0, 0, 0), &data);
-        let mut out = vec![TileVertex::default(); vertex_count(8)];
+        let mut out = TileGrid::new(8).vertices;
         let coverage = fill_tile(&reader, 8, layout.spacing_m, &mut out);
         (out, coverage)
     }
@@ -432,7 +409,7 @@ mod tests {
     #[test]
     fn a_tile_past_the_data_edge_is_partial_with_heights_to_clip() {
         reader_test(|reader| {
-            let mut out = vec![TileVertex::default(); vertex_count(8)];
+            let mut out = TileGrid::new(8).vertices;
             let coverage = fill_tile(reader, 8, [180.0, 180.0], &mut out);
             assert_eq!(coverage, TileCoverage::Partial);
             assert!(!is_no_data(out[5 + 9 * 4].height), "one post past the edge has a height");
@@ -454,6 +431,7 @@ mod tests {
         for (k, (i, j)) in edge_posts(8).enumerate() {
             let own = out[(i + 9 * j) as usize];
             assert_eq!(out[posts + k].target, own.height, "skirt vertex {k} placed at its post");
+            assert_eq!(out[posts + k].post, own.post, "and keeps its position");
         }
     }
 

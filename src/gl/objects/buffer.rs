@@ -92,10 +92,18 @@ impl Buffer {
 
     /// Binds the buffer to its target. For index buffers the vertex array
     /// bound at the time records the binding.
-    #[allow(unsafe_code)]
     pub fn bind(&self) {
+        self.bind_to(self.target);
+    }
+
+    /// Binds the buffer to `target`, which may be the other one than it was
+    /// made for: OpenGL ES lets one buffer hold vertices and indices (a
+    /// tile's block) and be bound as both. The vertex array bound at the
+    /// time records an index binding.
+    #[allow(unsafe_code)]
+    pub fn bind_to(&self, target: BufferTarget) {
         // SAFETY: `raw` is a live buffer name of this context.
-        unsafe { self.gl.bind_buffer(self.target.gl_enum(), Some(self.raw)) };
+        unsafe { self.gl.bind_buffer(target.gl_enum(), Some(self.raw)) };
     }
 
     /// Writes `bytes` at `offset` (glBufferSubData). Refuses a range past the

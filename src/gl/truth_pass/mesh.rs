@@ -2,8 +2,9 @@
 //! from a node source, with the normal a level-0 tile would give it, cut into
 //! chunks of [`CHUNK_CELLS`] cells a side that share their edge posts.
 //!
-//! A chunk is laid out as a tile of that grid size ([`crate::tiles::TileGrid`] numbering,
-//! 16-bit indices), with the morph target equal to the height, the parent
+//! A chunk is laid out as a regular tile of that grid size
+//! ([`crate::tiles::TileGrid`]'s vertices and 16-bit indices, one block per
+//! chunk), with the morph target equal to the height, the parent
 //! normal equal to its own, and skirt vertices that copy the edge posts (drawn
 //! with depth 0 they have no area), so the terrain pass draws it as a big
 //! unmorphed level-0 tile. The region is widened to whole chunks; posts
@@ -13,11 +14,12 @@
 
 use crate::lod::select::tiles_at;
 use crate::node::{NodeData, NodeError, NodeId, NodeLayout, NodeSource};
-use crate::tiles::grid::{edge_posts, vertex_count};
+use crate::tiles::grid::{positions, vertex_count};
 use crate::tiles::vertex::slope;
 use crate::tiles::{TileVertex, NO_DATA};
 
-/// Most posts a truth mesh may hold (4096^2: 200 MB of vertices on the GPU).
+/// Most posts a truth mesh may hold (4096^2; 961 chunks at most, whose
+/// blocks take 525 MB on the GPU).
 pub const MAX_TRUTH_POSTS: u64 = 1 << 24;
 /// Cells per chunk side: the largest power of two whose tile grid,
 /// skirts included, numbers its vertices in `u16`.
@@ -139,8 +141,9 @@ pub enum TruthError {
 pub struct TruthChunk {
     /// The south-west post, counted from the region's first post.
     pub first_post: [u32; 2],
-    /// `vertex_count(CHUNK_CELLS)` vertices: posts row by row from the
-    /// south-west, then the skirt's copies of the edge posts.
+    /// `vertex_count(CHUNK_CELLS)` vertices, their positions in the chunk
+    /// set: posts row by row from the south-west, then the skirt's copies
+    /// of the edge posts.
     pub vertices: Vec<TileVertex>,
     /// Some posts have no data ([`crate::tiles::NO_DATA`]).
     pub voids: bool,
@@ -311,30 +314,33 @@ impl MarginGrid {
 
     fn chunk(&self, first_post: [u32; 2], spacing_m: [f64; 2]) -> TruthChunk {
         let g = CHUNK_CELLS;
-        let mut vertices = Vec::with_capacity(vertex_count(g));
+        let mut vertices: Vec<TileVertex> = positions(g)
+            .map(|(post, skirt)| TileVertex { post, skirt, ..TileVertex::default() })
+            .collect();
+        let posts = ((g + 1) * (g + 1)) as usize;
         let mut nearest = f32::NAN;
-        for j in 0..=g {
-            for i in 0..=g {
-                let (i, j) = ((first_post[0] + i) as i64, (first_post[1] + j) as i64);
-                let height = self.at(i, j) as f32;
-                if height.is_nan() {
-                    // As tiles mark a post without data (`tiles::NO_DATA`).
-                    vertices.push(TileVertex { height: NO_DATA, target: f32::NAN, normal: [0; 4] });
-                    continue;
-                }
+        for vertex in &mut vertices[..posts] {
+            let [i, j] = vertex.post.map(i64::from);
+            let (i, j) = (first_post[0] as i64 + i, first_post[1] as i64 + j);
+            let height = self.at(i, j) as f32;
+            *vertex = if height.is_nan() {
+                // As tiles mark a post without data (`tiles::NO_DATA`).
+                vertex.with_surface(NO_DATA, f32::NAN, [0; 4])
+            } else {
                 nearest = height;
                 let [nx, ny] = self.normal(i, j, spacing_m);
-                vertices.push(TileVertex { height, target: height, normal: [nx, ny, nx, ny] });
-            }
+                vertex.with_surface(height, height, [nx, ny, nx, ny])
+            };
         }
         let voids = vertices.iter().any(|v| v.target.is_nan());
-        for vertex in &mut vertices {
+        for vertex in &mut vertices[..posts] {
             if vertex.target.is_nan() {
                 vertex.target = if nearest.is_nan() { 0.0 } else { nearest };
             }
         }
-        for (i, j) in edge_posts(g) {
-            vertices.push(vertices[(i + j * (g + 1)) as usize]);
+        for k in posts..vertices.len() {
+            let [i, j] = vertices[k].post.map(usize::from);
+            vertices[k] = vertices[k].with_surface_of(vertices[i + j * (g as usize + 1)]);
         }
         debug_assert_eq!(vertices.len(), vertex_count(g));
         TruthChunk { first_post, vertices, voids }
@@ -350,6 +356,7 @@ fn quantize(x: f64) -> i8 {
 mod tests {
     use super::*;
     use crate::procedural::{EarthParams, ProceduralEarth};
+    use crate::tiles::grid::edge_posts;
 
     fn earth() -> ProceduralEarth {
         // 16 << 5 = 512 cells: 513 samples a side, four chunks a side.
@@ -402,7 +409,9 @@ mod tests {
                 assert_eq!(vertex.normal, [expected[0], expected[1], expected[0], expected[1]]);
             }
             for (skirt, (i, j)) in chunk.vertices[posts..].iter().zip(edge_posts(CHUNK_CELLS)) {
-                assert_eq!(*skirt, chunk.vertices[(i + j * (CHUNK_CELLS + 1)) as usize]);
+                let post = chunk.vertices[(i + j * (CHUNK_CELLS + 1)) as usize];
+                assert_eq!(*skirt, TileVertex { skirt: skirt.skirt, ..post });
+                assert!(skirt.skirt > 0);
             }
         }
         let last = mesh.chunks.last().unwrap();

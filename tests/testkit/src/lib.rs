@@ -12,7 +12,8 @@
 //! | [`render`] | displays over the built-in terrain, the fixed views, image comparison ([`compare`]) and hole detection ([`coverage`]) |
 //!
 //! Everything a test writes goes under [`target_tmp`]; the built-in terrain
-//! is built there once ([`builtin_pyramid`]) and shared by every binary.
+//! is built there once ([`builtin_pyramid`], with its node meshes:
+//! [`builtin_terrain`]) and shared by every binary.
 
 pub mod alloc;
 pub mod clipmap;
@@ -29,7 +30,9 @@ use std::sync::{Arc, OnceLock};
 
 use glam::DVec3;
 use ridgeline::camera::Camera;
+use ridgeline::meshes::{MeshOptions, MeshedSource};
 use ridgeline::pyramid::{Pyramid, Silent};
+use ridgeline::scene::TerrainSummary;
 
 /// The target folder's `tmp` (Cargo's `CARGO_TARGET_TMPDIR` for tests):
 /// the running test binary is `target/<profile>/deps/<name>`.
@@ -63,6 +66,26 @@ pub fn builtin_pyramid() -> Arc<Pyramid> {
         Arc::new(ridgeline::dataset::open(None, &cache, &Silent).expect("built-in terrain"))
     });
     Arc::clone(pyramid)
+}
+
+/// The built-in terrain with each node's adaptive mesh, as `fly` draws it
+/// (the mesh file is built once beside [`builtin_pyramid`]'s).
+pub fn builtin_terrain() -> Arc<MeshedSource> {
+    static TERRAIN: OnceLock<Arc<MeshedSource>> = OnceLock::new();
+    let terrain = TERRAIN.get_or_init(|| Arc::new(meshed(builtin_pyramid())));
+    Arc::clone(terrain)
+}
+
+/// `pyramid` with its node meshes at the default options, built beside it
+/// when missing.
+pub fn meshed(pyramid: Arc<Pyramid>) -> MeshedSource {
+    MeshedSource::open_or_build(pyramid, MeshOptions::default(), &Silent).expect("node meshes")
+}
+
+/// What the rings of a display over `source` are computed from.
+pub fn summary_of(source: &MeshedSource) -> TerrainSummary {
+    let info = source.pyramid().info();
+    TerrainSummary { delta_per_level: source.delta_per_level(), ..TerrainSummary::from_pyramid(info) }
 }
 
 /// The built-in SRTM tile alone, without any layer under it: a real tile

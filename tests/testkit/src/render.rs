@@ -63,11 +63,24 @@ pub fn config(backend: GlBackend, version: GlesVersion) -> DisplayConfig {
 }
 
 pub fn open(config: &DisplayConfig) -> Result<DisplayParts, DisplayError> {
-    open_over(config, builtin_pyramid())
+    let terrain = crate::builtin_terrain();
+    let summary = crate::summary_of(&terrain);
+    DisplayParts::open(config, terrain, summary)
 }
 
-/// A display over `pyramid`.
+/// A display over `pyramid` with its node meshes, as `fly` draws it.
 pub fn open_over(
+    config: &DisplayConfig,
+    pyramid: Arc<Pyramid>,
+) -> Result<DisplayParts, DisplayError> {
+    let terrain = crate::meshed(pyramid);
+    let summary = crate::summary_of(&terrain);
+    DisplayParts::open(config, Arc::new(terrain), summary)
+}
+
+/// A display over `pyramid` drawn as regular grids of its posts (the
+/// subsampled baseline, `fly --regular-grid`).
+pub fn open_regular(
     config: &DisplayConfig,
     pyramid: Arc<Pyramid>,
 ) -> Result<DisplayParts, DisplayError> {

@@ -11,7 +11,6 @@ use ridgeline::render::DrawList;
 use ridgeline::render::{CostModel, NullBackend, RenderBackend};
 use ridgeline::scene::PreloadedTerrain;
 use ridgeline::scene::{SceneConfig, TerrainSummary};
-use ridgeline::tiles::grid::{edge_posts, vertex_count};
 use ridgeline::tiles::vertex::is_no_data;
 use ridgeline::tiles::TileVertex;
 use std::collections::HashMap;
@@ -76,6 +75,9 @@ pub fn camera(x: f64, y: f64, altitude: f64, heading: f64, pitch: f64) -> Camera
 
 /// Drawn height at every edge post and edge-segment midpoint of every tile,
 /// keyed by level-0 post coordinates (doubled, so midpoints are integers).
+/// Read from each tile's block: its surface triangles' edges that lie on
+/// the tile's sides, each side walked counter-clockwise (each edge point
+/// once per tile), whatever the tile's mesh.
 pub fn edge_heights(
     list: &DrawList,
     staging: &[u8],
@@ -83,22 +85,16 @@ pub fn edge_heights(
     grid: u32,
 ) -> HashMap<(i64, i64), Vec<f64>> {
     let mut heights: HashMap<(i64, i64), Vec<f64>> = HashMap::new();
-    let count = vertex_count(grid);
+    let posts = list.uniforms.expect("a built list has its frame").posts;
     for tile in &list.tiles {
-        let start = tile.byte_offset as usize;
-        let bytes = &staging[start..start + count * std::mem::size_of::<TileVertex>()];
-        let vertices: Vec<TileVertex> = bytes
-            .chunks_exact(std::mem::size_of::<TileVertex>())
-            .map(bytemuck::pod_read_unaligned)
-            .collect();
-        let drawn = |i: u32, j: u32| {
-            let v = vertices[(i + j * (grid + 1)) as usize];
+        let block = tile.block(staging);
+        let drawn = |v: TileVertex| {
             if is_no_data(v.height) {
                 // Triangles touching it are not drawn: no edge to agree on.
                 return f64::NAN;
             }
-            let posts = list.uniforms.expect("a built list has its frame").posts;
-            let [x, y] = tile.post_position(&posts, i as f32, j as f32).map(f64::from);
+            let [i, j] = v.post.map(f32::from);
+            let [x, y] = tile.post_position(&posts, i, j).map(f64::from);
             let distance = (x * x + y * y + (v.height as f64 - altitude).powi(2)).sqrt();
             morphed_height(
                 v.height,
@@ -109,23 +105,29 @@ pub fn edge_heights(
         let stride = 1i64 << tile.key.level;
         let base =
             (tile.key.x as i64 * grid as i64 * stride, tile.key.y as i64 * grid as i64 * stride);
-        let at =
-            |i: u32, j: u32| (2 * (base.0 + i as i64 * stride), 2 * (base.1 + j as i64 * stride));
-        let posts: Vec<(u32, u32)> = edge_posts(grid).collect();
-        for edge in posts.chunks(grid as usize + 1) {
-            for pair in edge.windows(2) {
-                let ((i0, j0), (i1, j1)) = (pair[0], pair[1]);
-                let (a, b) = (drawn(i0, j0), drawn(i1, j1));
-                if a.is_nan() || b.is_nan() {
+        let at = |[i, j]: [u16; 2]| {
+            (2 * (base.0 + i as i64 * stride), 2 * (base.1 + j as i64 * stride))
+        };
+        for t in (0..block.triangle_count()).filter(|&t| !block.is_skirt(t)) {
+            let corners = block.triangle(t).map(|v| block.vertex(v as usize));
+            for k in 0..3 {
+                let (p, q) = (corners[k], corners[(k + 1) % 3]);
+                let (a, b) = (drawn(p), drawn(q));
+                if !on_one_side(p.post, q.post, grid) || a.is_nan() || b.is_nan() {
                     continue;
                 }
-                heights.entry(at(i0, j0)).or_default().push(a);
-                let (p, q) = (at(i0, j0), at(i1, j1));
+                heights.entry(at(p.post)).or_default().push(a);
+                let (p, q) = (at(p.post), at(q.post));
                 heights.entry(((p.0 + q.0) / 2, (p.1 + q.1) / 2)).or_default().push((a + b) / 2.0);
             }
         }
     }
     heights
+}
+
+/// Whether posts `p` and `q` of a tile of `grid` cells lie on the same side of it.
+fn on_one_side(p: [u16; 2], q: [u16; 2], grid: u32) -> bool {
+    (0..2).any(|axis| p[axis] == q[axis] && (p[axis] == 0 || u32::from(p[axis]) == grid))
 }
 
 /// The largest disagreement, metres, between tiles sharing an edge point.
