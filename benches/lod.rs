@@ -43,9 +43,9 @@ use ridgeline::gl::{
     BaselineFrameStats, ChunkedBaseline, GlBackend, TruthMesh, TruthPass, TruthRegion,
 };
 use ridgeline::lod::LodConfig;
+use ridgeline::meshes::{MeshOptions, MeshedSource};
 use ridgeline::node::NodeSource;
 use ridgeline::pipeline::FrameStats;
-use ridgeline::meshes::{MeshOptions, MeshedSource};
 use ridgeline::pyramid::{Pyramid, Silent};
 use ridgeline::render::RenderBackend;
 use ridgeline::scene::{clip_planes, TerrainSummary};

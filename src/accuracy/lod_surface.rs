@@ -156,25 +156,20 @@ impl LodSurface {
         let tile = &self.drawn[k];
         let block = tile.block(staging);
         let (corners, [_, wb, wc]) = self.triangles.at(k, &block, local)?;
-        let [a, b, c] = corners.map(|(post, v)| self.vertex_height(&block, tile, post, v));
+        let [a, b, c] = corners.map(|(_, v)| self.vertex_height(&block, tile, v));
         Some(a + wb * (b - a) + wc * (c - a))
     }
 
-    /// Vertex `v`'s drawn height, at `post` in the tile: the shader's morph
+    /// Vertex `v`'s drawn height: the shader's morph
     /// and curvature drop, with its f32 inputs (the altitude is added back).
-    fn vertex_height(
-        &self,
-        block: &TileBlock<'_>,
-        tile: &TileUniforms,
-        post: [f64; 2],
-        v: usize,
-    ) -> f64 {
+    fn vertex_height(&self, block: &TileBlock<'_>, tile: &TileUniforms, v: usize) -> f64 {
         let vertex = block.vertex(v);
         if is_no_data(vertex.height) {
             return f64::NAN;
         }
-        let [i, j] = post.map(|p| p as f32);
-        let [x, y] = tile.post_position(&self.posts, i, j).map(f64::from);
+        // The shader's own f32 inputs: the vertex's post and step.
+        let [i, j] = vertex.post.map(f32::from);
+        let [x, y] = tile.vertex_position(&self.posts, i, j).map(f64::from);
         let distance = (x * x + y * y + (vertex.height as f64 - self.altitude).powi(2)).sqrt();
         let factor = morph_factor(distance, tile.morph[0] as f64, tile.morph[1] as f64);
         morphed_height(vertex.height, vertex.target, factor) - (x * x + y * y) * self.curvature

@@ -23,6 +23,9 @@ pub(super) struct TileTriangles {
     triangles: Vec<u32>,
     /// Surface triangles of all tiles, each once.
     surface: u64,
+    /// Per tile: its posts per vertex post (`vertex_step / post_step`; a
+    /// node mesh's vertices may lie on a finer lattice than the tile's).
+    scales: Vec<f64>,
 }
 
 /// A triangle's vertices, as read from the block: post positions and numbers.
@@ -36,6 +39,7 @@ impl TileTriangles {
         let mut index = TileTriangles {
             grid_size,
             starts: vec![0; tiles.len() * cells + 1],
+            scales: tiles.iter().map(|t| t.vertex_step as f64 / t.post_step as f64).collect(),
             ..TileTriangles::default()
         };
         // Counting sort: count per cell, then place.
@@ -75,7 +79,7 @@ impl TileTriangles {
                 if block.is_skirt(t) {
                     continue;
                 }
-                let [x, y] = cell_span(&corners(&block, t), g);
+                let [x, y] = cell_span(&corners(&block, t, self.scales[k]), g);
                 for j in y[0]..y[1] {
                     for i in x[0]..x[1] {
                         let cell = k * (g * g) as usize + (i + j * g) as usize;
@@ -101,7 +105,7 @@ impl TileTriangles {
         let range = self.starts[cell] as usize..self.starts[cell + 1] as usize;
         let mut best: Option<(Corners, [f64; 3])> = None;
         for &t in &self.triangles[range] {
-            let corners = corners(block, t as usize);
+            let corners = corners(block, t as usize, self.scales[k]);
             let weights = barycentric(&corners, local);
             let least = |w: &[f64; 3]| w[0].min(w[1]).min(w[2]);
             if least(&weights) >= -INSIDE_TOLERANCE {
@@ -115,11 +119,12 @@ impl TileTriangles {
     }
 }
 
-/// Triangle `t` of `block`: each vertex's post position and number.
-fn corners(block: &TileBlock<'_>, t: usize) -> Corners {
+/// Triangle `t` of `block`: each vertex's position in the tile's posts
+/// (`scale` of them per vertex post) and number.
+fn corners(block: &TileBlock<'_>, t: usize, scale: f64) -> Corners {
     block.triangle(t).map(|v| {
         let post = block.vertex(v as usize).post;
-        ([post[0] as f64, post[1] as f64], v as usize)
+        ([post[0] as f64 * scale, post[1] as f64 * scale], v as usize)
     })
 }
 
@@ -163,6 +168,7 @@ mod tests {
             key: TileKey::new(0, 0, 0),
             first_post: [0.0; 2],
             post_step: 1.0,
+            vertex_step: 1.0,
             morph: [0.0; 2],
             skirt_depth: 0.0,
             skirt_edges: 0,

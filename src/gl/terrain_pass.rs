@@ -309,7 +309,7 @@ impl TerrainPass {
         // `indices`.
         unsafe {
             let [x, y] = tile.first_post;
-            calls.uniform_4(at.tile.as_ref(), [x, y, tile.post_step, tile.skirt_edges as f32]);
+            calls.uniform_4(at.tile.as_ref(), [x, y, tile.vertex_step, tile.skirt_edges as f32]);
             let [start, end] = tile.morph;
             calls.uniform_4(at.morph.as_ref(), [start, end, tile.skirt_depth, 0.0]);
             calls.attribute_pointer(GRID, 3, glow::UNSIGNED_SHORT, false, VERTEX_STRIDE, vertices);

@@ -117,6 +117,7 @@ impl TruthPass {
                 key: chunk.key,
                 first_post: frame.posts.number(chunk.first_post),
                 post_step: 1.0,
+                vertex_step: 1.0,
                 morph: NO_MORPH,
                 skirt_depth: 0.0,
                 skirt_edges: 0,

@@ -110,14 +110,17 @@ pub fn build_node(
     parent: Option<(NodeId, &BuiltMesh)>,
     options: &MeshOptions,
 ) -> Result<BuiltMesh, MeshesError> {
-    let post_level = id.level - id.level.min(options.depth);
+    // A node none of whose children is stored is drawn however near the
+    // camera comes: exact, on its own posts (the best data there).
+    let leaf = is_leaf(source, id);
+    let post_level = if leaf { id.level } else { id.level - id.level.min(options.depth) };
     let reference = reference_grid(source, id, post_level)?;
     let grid = HeightGrid::with_voids(reference.side, &reference.heights)
         .map_err(|e| MeshesError::Mesh { id, source: e })?;
     let diagonal = Diagonal::of_node(id.x, id.y);
     // Half cells are redrawn along the data's diagonal only on the data's
     // own lattice (see `RtinOptions::hierarchy_leaves`).
-    let hierarchy_leaves = post_level > 0;
+    let hierarchy_leaves = post_level > 0 && !leaf;
     let rtin_options = RtinOptions {
         metric: Metric::Surface,
         diagonal,
@@ -131,7 +134,7 @@ pub fn build_node(
     let placement =
         parent.map(|(pid, p)| (Placement { id, parent: pid, node_size, post_level }, p));
     let keep = |m: [u32; 2]| placement.as_ref().is_some_and(|(at, p)| parent_has(at, p, m));
-    let mut error = options.level_error(id.level) as f64;
+    let mut error = if leaf { 0.0 } else { options.level_error(id.level) as f64 };
     let mesh = loop {
         match rtin.extract_with(error, extent, keep) {
             Ok(mesh) => break mesh,
@@ -147,6 +150,17 @@ pub fn build_node(
     let node_mesh = NodeMesh { post_level, vertices, indices: mesh.indices };
     node_mesh.debug_check();
     Ok(BuiltMesh { mesh: node_mesh, delta, error_m: error as f32, sampler })
+}
+
+/// Whether no child of node `id` is stored (level 0 included): no finer
+/// data anywhere under it.
+fn is_leaf(source: &dyn NodeSource, id: NodeId) -> bool {
+    let layout = source.layout();
+    id.level == 0
+        || [(0, 0), (1, 0), (0, 1), (1, 1)].iter().all(|&(dx, dy)| {
+            let child = NodeId::new(id.level - 1, 2 * id.x + dx, 2 * id.y + dy);
+            !(layout.contains(child) && source.has_node(child))
+        })
 }
 
 /// Whether the parent's mesh has a vertex at the child's reference post `m`.

@@ -34,7 +34,7 @@ compile_error!("the mesh file is read by casting little-endian bytes");
 /// The mesh file's name in a pyramid's cache directory.
 pub const MESH_FILE_NAME: &str = "meshes.rlm";
 const MAGIC: [u8; 8] = *b"RIDGEMSH";
-const VERSION: u32 = 1;
+const VERSION: u32 = 3;
 const FIXED_LEN: usize = 40;
 const ENTRY_LEN: usize = 24;
 const ABSENT: u64 = u64::MAX;

@@ -47,7 +47,7 @@ pub struct MeshOptions {
 
 impl Default for MeshOptions {
     fn default() -> Self {
-        MeshOptions { error_m: 2.0, depth: 5, tile_cells: 8 }
+        MeshOptions { error_m: 16.0, depth: 5, tile_cells: 8 }
     }
 }
 

@@ -171,9 +171,12 @@ pub struct TileUniforms {
     pub key: TileKey,
     /// The tile's south-west post, numbered from the frame's anchor.
     pub first_post: [f32; 2],
-    /// Level-0 posts between the tile's posts (2^level): a vertex's `post`
-    /// times this is its place in level-0 posts from `first_post`.
+    /// Level-0 posts between the tile's posts (2^level).
     pub post_step: f32,
+    /// Level-0 posts between its vertices' posts: a vertex's `post` times
+    /// this is its place in level-0 posts from `first_post` (`post_step`
+    /// for a regular grid, the node mesh's step for a mesh tile).
+    pub vertex_step: f32,
     /// Morph start and end distances (equal and huge for no morph).
     pub morph: [f32; 2],
     /// How far skirt vertices hang below the edge, metres.
@@ -198,9 +201,19 @@ impl TileUniforms {
     /// Camera-relative position of the tile's post `(i, j)`, metres, as
     /// `terrain.vert` computes it.
     pub fn post_position(&self, posts: &PostFrame, i: f32, j: f32) -> [f32; 2] {
-        let at = |k: usize, n: f32| {
-            (self.first_post[k] + n * self.post_step) * posts.spacing[k] - posts.offset[k]
-        };
+        self.position(posts, self.post_step, i, j)
+    }
+
+    /// Camera-relative position of a vertex of the tile's block whose
+    /// `post` is `(i, j)`, metres, as `terrain.vert` computes it (`u_tile.z`
+    /// is the vertex step).
+    pub fn vertex_position(&self, posts: &PostFrame, i: f32, j: f32) -> [f32; 2] {
+        self.position(posts, self.vertex_step, i, j)
+    }
+
+    fn position(&self, posts: &PostFrame, step: f32, i: f32, j: f32) -> [f32; 2] {
+        let at =
+            |k: usize, n: f32| (self.first_post[k] + n * step) * posts.spacing[k] - posts.offset[k];
         [at(0, i), at(1, j)]
     }
 
@@ -250,6 +263,8 @@ pub enum Slice {
 pub struct TileGeometry<'a> {
     /// Cells per tile side.
     pub grid_size: u32,
+    /// Cells per node side.
+    pub node_size: u32,
     /// Level-0 post spacing, metres.
     pub spacing_m: [f64; 2],
     /// Largest geometric error per level, metres.
@@ -313,7 +328,8 @@ impl DrawList {
         self.drawn.sort_unstable_by_key(|&(key, _)| key);
         for draw in draws {
             let mut tile = tile_uniforms(draw, &frame.posts, rings, &geometry);
-            tile.skirt_edges = skirt_edges(draw, &self.drawn);
+            let node_tiles = (geometry.node_size / geometry.grid_size).max(1);
+            tile.skirt_edges = skirt_edges(draw, &self.drawn, node_tiles);
             self.tiles.push(tile);
         }
         self.sort_front_to_back(geometry.grid_size);
@@ -351,6 +367,7 @@ fn tile_uniforms(
         key,
         first_post,
         post_step: step as f32,
+        vertex_step: draw.vertex_step as f32,
         morph,
         skirt_depth: skirt_depth(draw, geometry.delta_per_level),
         skirt_edges: ALL_EDGES,
@@ -374,7 +391,11 @@ pub const ALL_EDGES: u8 = 0b1111;
 /// them from showing where nothing hides them: beneath the last strip of
 /// data, seen from beyond the data's edge. Edges whose neighbour is not in
 /// the frame (culled, past the data, or split finer) keep their skirt.
-pub fn skirt_edges(draw: &TileDraw, drawn: &[(TileKey, u8)]) -> u8 {
+///
+/// Tiles cut from node meshes share their edge vertices only with tiles cut
+/// from the same node's mesh (`node_tiles` tiles of a level a node side);
+/// across nodes each mesh chose its own edge vertices.
+pub fn skirt_edges(draw: &TileDraw, drawn: &[(TileKey, u8)], node_tiles: u32) -> u8 {
     let TileKey { level, x, y } = draw.key;
     let neighbours = [
         y.checked_sub(1).map(|y| (x, y)),
@@ -386,15 +407,25 @@ pub fn skirt_edges(draw: &TileDraw, drawn: &[(TileKey, u8)]) -> u8 {
     for (bit, neighbour) in neighbours.into_iter().enumerate() {
         let watertight = neighbour.is_some_and(|(x, y)| {
             let key = TileKey::new(level, x, y);
-            drawn
+            let same_source = drawn
                 .binary_search_by_key(&key, |&(key, _)| key)
-                .is_ok_and(|at| drawn[at].1 == draw.source_level)
+                .is_ok_and(|at| drawn[at].1 == draw.source_level);
+            // Node meshes share their edge vertices only inside one node mesh.
+            same_source && (!draw.node_mesh || same_node(draw, key, node_tiles))
         });
         if !watertight {
             edges |= 1 << bit;
         }
     }
     edges
+}
+
+/// Whether tile `key` (of `draw`'s level) lies in the same node of
+/// `draw`'s source level as `draw`.
+fn same_node(draw: &TileDraw, key: TileKey, node_tiles: u32) -> bool {
+    let shift = draw.source_level.saturating_sub(key.level).min(31);
+    let per_node = node_tiles << shift;
+    draw.key.x / per_node == key.x / per_node && draw.key.y / per_node == key.y / per_node
 }
 
 /// Skirts must reach below any surface a neighbour may show along the edge:
@@ -417,6 +448,7 @@ mod tests {
             key,
             first_post,
             post_step: 1.0,
+            vertex_step: 1.0,
             morph: [0.0, 1.0],
             skirt_depth: 1.0,
             skirt_edges: ALL_EDGES,

@@ -47,6 +47,10 @@ impl ResidentNodes for ClipmapTerrain<'_> {
         let slot = atlas.slot_of(id)?;
         (atlas.state(slot) != SlotState::Empty).then(|| atlas.data(slot))
     }
+
+    fn is_stored(&self, id: NodeId) -> bool {
+        self.clipmap.has_node(id)
+    }
 }
 
 impl TileBounds for ClipmapTerrain<'_> {

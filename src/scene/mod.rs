@@ -241,8 +241,12 @@ impl Scene {
         let near_m = (nearest_m * NEAR_SHARE).min(f32::MAX as f64) as f32;
         let uniforms = frame_uniforms(&self.config, camera, terrain, near_m);
         let start = Instant::now();
-        let geometry =
-            TileGeometry { grid_size, spacing_m: layout.spacing_m, delta_per_level: &self.deltas };
+        let geometry = TileGeometry {
+            grid_size,
+            node_size: layout.node_size,
+            spacing_m: layout.spacing_m,
+            delta_per_level: &self.deltas,
+        };
         let draws = self.cache.draws();
         self.draw_list.build(uniforms, draws, &self.rings, geometry);
         report.cpu_ms.draw_list_ms = ms(start, Instant::now());

@@ -79,6 +79,10 @@ impl ResidentNodes for PreloadedTerrain {
     fn resident(&self, id: NodeId) -> Option<&NodeData> {
         self.nodes.get(&id)
     }
+
+    fn is_stored(&self, id: NodeId) -> bool {
+        self.nodes.contains_key(&id)
+    }
 }
 
 impl TileBounds for PreloadedTerrain {

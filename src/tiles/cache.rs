@@ -14,17 +14,19 @@
 //! The root level's tiles are made once and never released, so whatever
 //! happens to the buffer there is always a coarse tile to draw.
 
+use super::block::TileVertex;
 use super::block::{write_block, MeshCounts, BLOCK_ALIGNMENT};
 use super::grid::{self, TileGrid};
-use super::vertex::{fill_tile, tile_node, PostReader, TileCoverage};
+use super::mesh_tile::{CutInputs, MeshCutter, TileSquare};
+use super::vertex::{fill_tile, is_no_data, tile_node, PostReader, TileCoverage};
 use super::{best_resident, ResidentNodes};
 use crate::allocator::{
     AllocError, AllocatorConfig, ConfigError, ContiguousAllocator, GeneratorId, Request,
     VertexFormat,
 };
-use crate::lod::select::tiles_at;
+use crate::lod::select::{children_node_stored, tiles_at};
 use crate::lod::{SelectedTile, TileKey};
-use crate::node::NodeId;
+use crate::node::{NodeData, NodeId, NodeLayout};
 use std::collections::HashMap;
 use std::ops::Range;
 
@@ -57,6 +59,12 @@ pub struct TileDraw {
     pub index_byte_offset: u32,
     /// Its indices: three per triangle, skirts included.
     pub index_count: u32,
+    /// Level-0 posts between its vertices' posts (`u_tile.z`): `2^level`
+    /// for a regular grid, the node mesh's post step for a mesh tile.
+    pub vertex_step: u32,
+    /// Made from a node's mesh (its edges are shared only with tiles cut
+    /// from the same node mesh), not as a regular grid of posts.
+    pub node_mesh: bool,
     /// Level of the node the heights came from (above `key.level` when only
     /// coarser data was resident: best available).
     pub source_level: u8,
@@ -127,34 +135,122 @@ pub enum TileError {
 /// tile before placement) and what fills it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum TileMeshKind {
-    /// The regular grid of `grid_size` cells with skirts ([`TileGrid`]).
+    /// The regular grid of `grid_size` cells with skirts ([`TileGrid`]), of
+    /// the source node's posts.
     #[default]
     Grid,
+    /// The triangles of the source node's mesh inside the tile's square
+    /// ([`super::mesh_tile`]).
+    NodeMesh(TileSquare),
 }
 
 impl TileMeshKind {
-    /// The vertices and indices a tile of this kind has, with tiles of
-    /// `grid_size` cells.
-    pub fn counts(self, grid_size: u32) -> MeshCounts {
+    /// Level-0 posts between the tile's vertex posts (`u_tile.z`).
+    pub fn vertex_step(self, key: TileKey) -> u32 {
         match self {
-            TileMeshKind::Grid => grid::counts(grid_size),
+            TileMeshKind::Grid => 1 << key.level,
+            TileMeshKind::NodeMesh(square) => square.step,
         }
     }
+}
 
-    /// Makes the tile's mesh from `reader` (posts `spacing_m` apart) into
-    /// `block`, [`Self::counts`] in size: vertices, then indices. `grid` is
-    /// the regular grid, its vertices the scratch the surface is made in.
+/// Whether tile `key` has finer data: its child node is stored.
+fn has_finer_data(nodes: &dyn ResidentNodes, key: TileKey, grid_size: u32) -> bool {
+    let layout = nodes.layout();
+    children_node_stored(key, grid_size, layout, |id| nodes.is_stored(id))
+}
+
+/// What tiles are made with: the regular grid (its vertices the scratch a
+/// grid tile is made in), the cutter of node meshes and its scratch.
+struct TileMaker {
+    grid: TileGrid,
+    cutter: MeshCutter,
+    vertices: Vec<TileVertex>,
+    indices: Vec<u16>,
+}
+
+impl TileMaker {
+    /// How tile `key` is made from `source`'s `data`, and its size: from
+    /// the node's mesh where it has one whose triangles fit the tile, else
+    /// as the regular grid of the node's posts.
+    fn plan(
+        &mut self,
+        layout: &NodeLayout,
+        key: TileKey,
+        source: NodeId,
+        data: &NodeData,
+        has_finer_data: bool,
+    ) -> (TileMeshKind, MeshCounts) {
+        let grid_size = self.grid.grid_size;
+        // No finer data under the tile: it is drawn however near the camera
+        // comes, so it must be exact. A node simplified on a finer lattice
+        // (some of its children are stored) is not; its own posts are.
+        let exact = data.mesh.post_level == source.level;
+        let mesh_fits = has_finer_data || exact || source.level != key.level;
+        let square = (mesh_fits && !data.mesh.is_empty())
+            .then(|| TileSquare::of(layout, key, grid_size, source, &data.mesh))
+            .flatten();
+        if let Some(square) = square {
+            if let Some(size) = self.cutter.cut(&data.mesh, square) {
+                let counts =
+                    MeshCounts { vertices: size.vertices as u32, indices: size.indices as u32 };
+                if counts.vertices <= 1 << 16 {
+                    return (TileMeshKind::NodeMesh(square), counts);
+                }
+            }
+        }
+        (TileMeshKind::Grid, grid::counts(grid_size))
+    }
+
+    /// Makes the tile's mesh into `block` (its planned size): vertices,
+    /// then indices.
     fn fill(
-        self,
-        grid: &mut TileGrid,
-        reader: &PostReader<'_>,
-        spacing_m: [f64; 2],
+        &mut self,
+        job: &Job,
+        key: TileKey,
+        layout: &NodeLayout,
+        data: &NodeData,
         block: &mut [u8],
     ) -> TileCoverage {
-        match self {
+        let grid_size = self.grid.grid_size;
+        let reader = PostReader::new(layout, key, grid_size, job.source, data);
+        match job.kind {
             TileMeshKind::Grid => {
-                let coverage = fill_tile(reader, grid.grid_size, spacing_m, &mut grid.vertices);
+                let scale = 2f64.powi(key.level as i32);
+                let spacing = [layout.spacing_m[0] * scale, layout.spacing_m[1] * scale];
+                let grid = &mut self.grid;
+                let coverage = fill_tile(&reader, grid.grid_size, spacing, &mut grid.vertices);
+                if !data.mesh.is_empty() {
+                    // The parent level is drawn from its node mesh, not from
+                    // these posts' parent lattice (whose error can be far
+                    // larger than the mesh's, which the rings allow for):
+                    // unmorphed, the tile switches to its parent within the
+                    // bound instead of morphing outside it.
+                    for v in grid.vertices.iter_mut().filter(|v| !is_no_data(v.height)) {
+                        v.target = v.height;
+                        v.normal = [v.normal[0], v.normal[1], v.normal[0], v.normal[1]];
+                    }
+                }
                 write_block(block, &grid.vertices, &grid.indices);
+                coverage
+            }
+            TileMeshKind::NodeMesh(square) => {
+                let mesh = &data.mesh;
+                let size = self.cutter.cut(mesh, square).expect("planned from the same mesh");
+                self.vertices.resize(size.vertices, TileVertex::default());
+                self.indices.resize(size.indices, 0);
+                let span = (layout.node_size as u64) << job.source.level;
+                let inputs = CutInputs {
+                    mesh,
+                    square,
+                    reader: &reader,
+                    tile_step: 1 << key.level,
+                    node_origin: [job.source.x as u64 * span, job.source.y as u64 * span],
+                    last_post: layout.posts.map(|p| p as u64 - 1),
+                    own_level: job.source.level == key.level,
+                };
+                let coverage = self.cutter.fill(&inputs, &mut self.vertices, &mut self.indices);
+                write_block(block, &self.vertices, &self.indices);
                 coverage
             }
         }
@@ -168,6 +264,8 @@ struct Resident {
     coverage: TileCoverage,
     /// What its block holds.
     mesh: MeshCounts,
+    /// How it was made.
+    kind: TileMeshKind,
     last_frame: u64,
     pinned: bool,
 }
@@ -198,7 +296,7 @@ pub struct TileCache {
     draws: Vec<TileDraw>,
     dirty: Vec<Range<u32>>,
     /// The regular grid; its vertices are the scratch a tile is made in.
-    grid: TileGrid,
+    maker: TileMaker,
     stats: TileFrameStats,
 }
 
@@ -228,7 +326,12 @@ impl TileCache {
             jobs: Vec::with_capacity(max),
             draws: Vec::with_capacity(max),
             dirty: Vec::with_capacity(max),
-            grid: TileGrid::new(config.grid_size),
+            maker: TileMaker {
+                grid: TileGrid::new(config.grid_size),
+                cutter: MeshCutter::default(),
+                vertices: Vec::new(),
+                indices: Vec::new(),
+            },
             stats: TileFrameStats::default(),
         };
         cache.make_root_tiles(nodes)?;
@@ -343,8 +446,9 @@ impl TileCache {
             let resident = self.slots[slot as usize].as_mut().expect("reserved");
             resident.last_frame = self.frame;
             if new || source.level < resident.source_level {
-                let kind = TileMeshKind::Grid;
-                let mesh = kind.counts(self.config.grid_size);
+                let data = nodes.resident(source).expect("best_resident found it");
+                let finer = has_finer_data(nodes, tile.key, self.config.grid_size);
+                let (kind, mesh) = self.maker.plan(&layout, tile.key, source, data, finer);
                 self.requests.push(Request {
                     generator: GeneratorId(slot),
                     format: VertexFormat(0),
@@ -366,6 +470,7 @@ impl TileCache {
             source_level,
             coverage: TileCoverage::Full,
             mesh: MeshCounts::default(),
+            kind: TileMeshKind::Grid,
             last_frame: 0,
             pinned: false,
         });
@@ -400,9 +505,8 @@ impl TileCache {
     fn generate(&mut self, nodes: &dyn ResidentNodes) -> Result<(), TileError> {
         let requests = std::mem::take(&mut self.requests);
         let layout = *nodes.layout();
-        let grid_size = self.config.grid_size;
-        let (slots, grid, dirty, jobs) =
-            (&mut self.slots, &mut self.grid, &mut self.dirty, &self.jobs);
+        let (slots, maker, dirty, jobs) =
+            (&mut self.slots, &mut self.maker, &mut self.dirty, &self.jobs);
         let outcome = self.allocator.allocate(&requests).map(|mut plan| {
             let mut bytes_uploaded = 0u64;
             plan.fill(|index, request, block| {
@@ -411,12 +515,10 @@ impl TileCache {
                     .expect("queued tiles are reserved");
                 let job = jobs[index];
                 let data = nodes.resident(job.source).expect("resident since mark_selected");
-                let reader = PostReader::new(&layout, resident.key, grid_size, job.source, data);
-                let scale = 2f64.powi(resident.key.level as i32);
-                let spacing = [layout.spacing_m[0] * scale, layout.spacing_m[1] * scale];
                 debug_assert_eq!(block.len(), job.mesh.block_bytes() as usize);
-                resident.coverage = job.kind.fill(grid, &reader, spacing, block);
+                resident.coverage = maker.fill(&job, resident.key, &layout, data, block);
                 resident.mesh = job.mesh;
+                resident.kind = job.kind;
                 resident.source_level = job.source.level;
                 bytes_uploaded += block.len() as u64;
             });
@@ -466,6 +568,8 @@ impl TileCache {
                 byte_offset: range.start,
                 index_byte_offset: range.start + resident.mesh.vertex_bytes(),
                 index_count: resident.mesh.indices,
+                vertex_step: resident.kind.vertex_step(tile.key),
+                node_mesh: resident.kind != TileMeshKind::Grid,
                 source_level: resident.source_level,
                 coverage: resident.coverage,
             });

@@ -9,6 +9,7 @@
 pub mod block;
 pub mod cache;
 pub mod grid;
+pub mod mesh_tile;
 pub mod vertex;
 
 pub use block::{MeshCounts, TileBlock, TileVertex};
@@ -24,6 +25,12 @@ pub trait ResidentNodes {
     fn layout(&self) -> &NodeLayout;
     /// The node's data if it is resident now.
     fn resident(&self, id: NodeId) -> Option<&NodeData>;
+    /// Whether the source stores node `id` (resident or not): a tile whose
+    /// child node is not stored has no finer data and is drawn however near
+    /// the camera comes. The default: every node of the layout is stored.
+    fn is_stored(&self, id: NodeId) -> bool {
+        self.layout().contains(id)
+    }
 }
 
 /// The finest resident node that contains node `id`: itself or an ancestor.

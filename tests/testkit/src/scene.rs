@@ -1,7 +1,6 @@
 //! The built-in terrain, built once into a cache under the target folder,
 //! and cameras over it.
 
-use crate::builtin_pyramid;
 use ridgeline::camera::Camera;
 use ridgeline::clipmap::LoaderMode;
 use ridgeline::lod::morph::{morph_factor, morphed_height};
@@ -37,9 +36,9 @@ pub fn pipeline_over(
 
 /// [`pipeline_over`] the built-in terrain.
 pub fn pipeline(config: SceneConfig) -> FramePipeline {
-    let pyramid = builtin_pyramid();
-    let summary = TerrainSummary::from_pyramid(pyramid.info());
-    pipeline_over(pyramid, summary, config)
+    let terrain = crate::builtin_terrain();
+    let summary = crate::summary_of(&terrain);
+    pipeline_over(terrain, summary, config)
 }
 
 /// A null backend standing for an ES 3 context with the sky on.
@@ -62,7 +61,7 @@ pub fn fly<B: RenderBackend>(
 pub fn terrain() -> &'static PreloadedTerrain {
     static TERRAIN: OnceLock<PreloadedTerrain> = OnceLock::new();
     TERRAIN
-        .get_or_init(|| PreloadedTerrain::load(builtin_pyramid().as_ref()).expect("all nodes read"))
+        .get_or_init(|| PreloadedTerrain::load(crate::builtin_terrain().as_ref()).expect("all nodes read"))
 }
 
 /// A camera over the scene tests' viewport ([`VIEWPORT`]) at `(x, y)`
@@ -94,7 +93,7 @@ pub fn edge_heights(
                 return f64::NAN;
             }
             let [i, j] = v.post.map(f32::from);
-            let [x, y] = tile.post_position(&posts, i, j).map(f64::from);
+            let [x, y] = tile.vertex_position(&posts, i, j).map(f64::from);
             let distance = (x * x + y * y + (v.height as f64 - altitude).powi(2)).sqrt();
             morphed_height(
                 v.height,
