@@ -145,6 +145,12 @@ fn points() -> Vec<Point> {
         points.push(Point::new("coarse", tau, keep, false));
     }
     for tau in [1.0, 4.0] {
+        let small = |l: &mut LodConfig| {
+            l.grid_size = 16;
+            l.morph_range = 0.15;
+        };
+        let point = Point::new("grid 16 morph 0.15", tau, small, false);
+        points.push(Point { floors: true, ..point });
         points.push(Point::new("grid 16", tau, |l| l.grid_size = 16, false));
         points.push(Point::new("grid 64", tau, |l| l.grid_size = 64, false));
     }

@@ -12,10 +12,10 @@
 //!
 //! | module | owns |
 //! |---|---|
-//! | [`reference`] | the best data under a node on a finer level's lattice |
-//! | [`build`] | per node: RTIN mesh, exact delta, morph targets, normals |
-//! | [`file`] | the mesh file: versioned, checksummed, memory-mapped, written atomically |
-//! | [`source`] | [`MeshedSource`]: a pyramid whose nodes come with their meshes |
+//! | [`mod@reference`] | the best data under a node on a finer level's lattice |
+//! | [`mod@build`] | per node: RTIN mesh, exact delta, morph targets, normals |
+//! | [`mod@file`] | the mesh file: versioned, checksummed, memory-mapped, written atomically |
+//! | [`mod@source`] | [`MeshedSource`]: a pyramid whose nodes come with their meshes |
 
 pub mod build;
 pub mod file;
@@ -47,7 +47,7 @@ pub struct MeshOptions {
 
 impl Default for MeshOptions {
     fn default() -> Self {
-        MeshOptions { error_m: 16.0, depth: 5, tile_cells: 8 }
+        MeshOptions { error_m: 12.0, depth: 5, tile_cells: 8 }
     }
 }
 
