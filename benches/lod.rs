@@ -85,10 +85,26 @@ enum Tiles {
     RegularGrid,
 }
 
-/// The built-in terrain, with and without its node meshes.
+/// The built-in terrain, with and without its node meshes (those of each
+/// tau, built on first use).
 struct Terrain {
     pyramid: Arc<Pyramid>,
-    meshed: Arc<MeshedSource>,
+    meshed: std::cell::RefCell<Vec<(u64, Arc<MeshedSource>)>>,
+}
+
+impl Terrain {
+    fn meshed(&self, tau_px: f64) -> Arc<MeshedSource> {
+        let key = tau_px.to_bits();
+        let mut all = self.meshed.borrow_mut();
+        if let Some((_, source)) = all.iter().find(|(k, _)| *k == key) {
+            return Arc::clone(source);
+        }
+        let options = MeshOptions::for_tau(tau_px);
+        let source = MeshedSource::open_or_build(Arc::clone(&self.pyramid), options, &Silent)
+            .expect("the built-in terrain's node meshes");
+        all.push((key, Arc::new(source)));
+        Arc::clone(&all.last().expect("just pushed").1)
+    }
 }
 
 #[derive(Clone, Copy, serde::Serialize)]
@@ -264,9 +280,7 @@ fn main() {
     let (view_count, flight_frames) = if args.quick { (4, 20) } else { (16, 60) };
     let pyramid =
         Arc::new(dataset::open(None, Path::new("cache"), &Silent).expect("the built-in terrain"));
-    let meshed = MeshedSource::open_or_build(Arc::clone(&pyramid), MeshOptions::default(), &Silent)
-        .expect("the built-in terrain's node meshes");
-    let terrain = Terrain { pyramid: Arc::clone(&pyramid), meshed: Arc::new(meshed) };
+    let terrain = Terrain { pyramid: Arc::clone(&pyramid), meshed: Default::default() };
     let layout = *pyramid.layout();
     let path = default_flight(&pyramid);
     let views: Vec<(f64, Camera)> =
@@ -308,8 +322,9 @@ fn display_for(point: &Point, terrain: &Terrain) -> DisplayParts {
     let mut summary = TerrainSummary::from_pyramid(terrain.pyramid.info());
     let source: Arc<dyn NodeSource> = match point.tiles {
         Tiles::NodeMeshes => {
-            summary.delta_per_level = terrain.meshed.delta_per_level();
-            terrain.meshed.clone()
+            let meshed = terrain.meshed(point.lod.tau_px);
+            summary.delta_per_level = meshed.delta_per_level();
+            meshed
         }
         Tiles::RegularGrid => terrain.pyramid.clone(),
     };

@@ -199,7 +199,8 @@ fn the_pipeline_flies_over_a_damaged_node_on_its_ancestor() {
         );
         let stats = testkit::scene::fly(&mut pipeline, &mut backend, &camera).expect("a frame");
         assert!(stats.calls.draw_calls > 1, "frame {k} draws terrain");
-        for &(key, source_level) in &pipeline.draw_list().drawn {
+        for drawn in &pipeline.draw_list().drawn {
+            let (key, source_level) = (drawn.key, drawn.source_level);
             if key.level != 0 {
                 continue;
             }

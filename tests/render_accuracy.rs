@@ -8,7 +8,7 @@
 use ridgeline::camera::Camera;
 use ridgeline::display::measure::AccuracyRun;
 use testkit::builtin_pyramid;
-use testkit::render::{measure_accuracy, VIEWS};
+use testkit::render::{measure_accuracy, measure_accuracy_of, VIEWS};
 
 fn measure(tau_px: f64) -> AccuracyRun {
     let views: Vec<(f64, Camera)> =
@@ -73,4 +73,31 @@ fn measured_error_confirms_tau_and_grows_with_it() {
     assert!(coarse.summary.max_px > fine.summary.max_px);
     let triangles = |run: &AccuracyRun| run.views.iter().map(|v| v.triangles_lod).sum::<u64>();
     assert!(triangles(coarse) * 2 < triangles(fine));
+}
+
+/// Node meshes (issue 11) keep the bound with fewer triangles than the
+/// regular grids, and still measurably coarsen with tau (their error is
+/// built per tau: `MeshOptions::for_tau`).
+#[test]
+fn node_meshes_keep_the_bound_with_fewer_triangles() {
+    let views: Vec<(f64, Camera)> =
+        VIEWS.iter().enumerate().map(|(k, v)| (k as f64, v.camera())).collect();
+    let triangles = |run: &AccuracyRun| run.views.iter().map(|v| v.triangles_lod).sum::<u64>();
+    let grid = measure_accuracy_of(builtin_pyramid(), &views, 1.0, false);
+    let [fine, coarse] =
+        [1.0, 4.0].map(|tau| measure_accuracy_of(builtin_pyramid(), &views, tau, true));
+    for run in [&fine, &coarse] {
+        print(run);
+        assert_eq!(run.holes, 0);
+        assert!(run.coverage_mismatch <= 1e-4, "coverage agrees: {}", run.coverage_mismatch);
+        assert!(run.views.iter().all(|v| v.mirror_p99_m < 0.05), "the CPU mirror reads the meshes");
+    }
+    assert!(fine.summary.p999_px <= 1.0 && coarse.summary.p999_px <= 4.0, "the bound holds");
+    assert!(
+        triangles(&fine) * 2 < triangles(&grid),
+        "{} against {}",
+        triangles(&fine),
+        triangles(&grid)
+    );
+    assert!(triangles(&coarse) < triangles(&fine));
 }

@@ -7,14 +7,12 @@ use ridgeline::camera::Camera;
 use ridgeline::display::DisplayParts;
 use ridgeline::gl::{ChunkedBaseline, GlBackend, GlesVersion};
 use ridgeline::pipeline::{FramePipeline, FrameStats};
-use ridgeline::scene::TerrainSummary;
-use testkit::builtin_pyramid;
 use testkit::render::{config, open, render, VIEWS};
 
 /// A second pipeline over the built-in terrain, for the baseline backend.
 fn baseline_pipeline(config: &ridgeline::display::DisplayConfig) -> FramePipeline {
-    let pyramid = builtin_pyramid();
-    let summary = TerrainSummary::from_pyramid(pyramid.info());
+    let pyramid = testkit::builtin_pyramid();
+    let summary = ridgeline::scene::TerrainSummary::from_pyramid(pyramid.info());
     FramePipeline::new(&config.pipeline(), pyramid, summary).expect("baseline pipeline")
 }
 

@@ -8,7 +8,7 @@ use ridgeline::render::{
 };
 use ridgeline::scene::{Scene, SceneConfig};
 use ridgeline::tiles::grid::tile_bytes;
-use ridgeline::tiles::{TileGrid, TileVertex};
+use ridgeline::tiles::TileGrid;
 use testkit::scene::{camera, fly, null_backend, pipeline, terrain};
 
 /// A scripted flight through the whole pipeline (clipmap paging included)
@@ -160,47 +160,63 @@ fn tiles_stop_where_finer_data_stop() {
     let cam = camera(5_000.0, 45_000.0, 4_000.0, 270.0, -4.0);
     let stats = fly(&mut pipeline, &mut backend, &cam).unwrap();
     let drawn = &pipeline.draw_list().drawn;
-    let resampled: Vec<_> = drawn.iter().filter(|(key, source)| *source != key.level).collect();
+    let resampled: Vec<_> = drawn.iter().filter(|d| d.source_level != d.key.level).collect();
     assert!(resampled.is_empty(), "tiles drawn from coarser nodes: {resampled:?}");
-    let levels: std::collections::BTreeSet<u8> = drawn.iter().map(|(key, _)| key.level).collect();
+    let levels: std::collections::BTreeSet<u8> = drawn.iter().map(|d| d.key.level).collect();
     assert!(levels.contains(&0), "the SRTM tile near the camera at level 0: {levels:?}");
     let base_native = 6;
     assert!(
-        drawn.iter().any(|(key, _)| key.level >= base_native),
+        drawn.iter().any(|d| d.key.level >= base_native),
         "the base beyond at its own levels: {levels:?}"
     );
     println!("{} tiles at levels {levels:?}", stats.scene.tiles);
 }
 
-/// Every drawn tile's block holds its whole mesh: the regular grid's
-/// positions and indices, its own heights, indices right after the
-/// vertices, blocks apart; the frame's triangles are the tiles' indices.
+/// Every drawn tile's block holds its whole mesh: vertices on the tile's
+/// square, indices right after them naming only its own vertices, surface
+/// triangles counter-clockwise from above, blocks apart; tiles cut from node
+/// meshes have fewer triangles than the regular grid, and the frame's
+/// triangles are the tiles' indices.
 #[test]
 fn every_tile_carries_its_mesh_in_its_block() {
     let config = SceneConfig::default();
-    let mut scene = Scene::new(config, terrain()).unwrap();
+    let terrain = testkit::scene::terrain_meshed();
+    let mut scene = Scene::new(config, terrain).unwrap();
     let cam = camera(30_000.0, 30_000.0, 2_600.0, 10.0, -10.0);
-    let report = scene.frame(&cam, terrain()).unwrap();
+    let report = scene.frame(&cam, terrain).unwrap();
     let (staging, _) = scene.uploads();
     let list = scene.draw_list();
     let grid = TileGrid::new(config.lod.grid_size);
     let mut blocks: Vec<_> = list.tiles.iter().map(|t| t.block_range()).collect();
     blocks.sort_unstable_by_key(|r| r.start);
     assert!(blocks.windows(2).all(|w| w[0].end <= w[1].start), "blocks do not overlap");
-    assert!(blocks.iter().all(|r| r.start % 4 == 0 && r.len() as u32 == tile_bytes(32)));
+    assert!(blocks.iter().all(|r| r.start % 4 == 0 && r.len() % 4 == 0));
+    let (mut cut, mut cut_triangles) = (0, 0);
     for tile in &list.tiles {
         let block = tile.block(staging);
-        assert_eq!(tile.index_byte_offset, tile.byte_offset + 20 * grid.vertices.len() as u32);
-        assert_eq!(block.vertex_count(), grid.vertices.len());
-        let positions = |v: TileVertex| (v.post, v.skirt);
-        assert!(block.vertices().map(positions).eq(grid.vertices.iter().copied().map(positions)));
-        let indices = (0..block.triangle_count()).flat_map(|t| block.triangle(t));
-        assert!(
-            indices.eq(grid.indices.iter().copied()),
-            "tile {:?}: the grid's triangles",
-            tile.key
-        );
+        let vertices = block.vertex_count();
+        assert_eq!(tile.index_byte_offset, tile.byte_offset + 20 * vertices as u32);
+        let side = (config.lod.grid_size as f32 * tile.post_step / tile.vertex_step) as u16;
+        assert!(block.vertices().all(|v| v.post[0] <= side && v.post[1] <= side), "{:?}", tile.key);
+        for t in 0..block.triangle_count() {
+            let corners = block.triangle(t);
+            assert!(corners.iter().all(|&v| (v as usize) < vertices));
+            if block.is_skirt(t) {
+                continue;
+            }
+            let p = corners.map(|v| block.vertex(v as usize).post.map(|c| c as i64));
+            let area = (p[1][0] - p[0][0]) * (p[2][1] - p[0][1])
+                - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]);
+            assert!(area > 0, "tile {:?} triangle {t} faces up", tile.key);
+        }
+        if tile.vertex_step != tile.post_step || vertices != grid.vertices.len() {
+            cut += 1;
+            cut_triangles += block.triangle_count();
+        }
     }
+    assert!(cut > list.tiles.len() / 2, "{cut} of {} tiles cut from node meshes", list.tiles.len());
+    // A mesh is finer than its level's grid where the data are rough, but
+    // coarser over all.
+    assert!(cut_triangles < cut * grid.indices.len() / 3, "{cut_triangles} triangles");
     assert_eq!(report.triangles, list.triangles());
-    assert_eq!(report.triangles, list.tiles.len() as u64 * grid.indices.len() as u64 / 3);
 }

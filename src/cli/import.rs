@@ -3,7 +3,7 @@
 //! node pyramid over all of them on every core with a progress bar (finer
 //! layers win, see `ridgeline::pyramid::layers`), and writes
 //! `cache/NAME/pyramid.rlp` atomically, then each node's adaptive mesh
-//! beside it (`meshes.rlm`, see `ridgeline::chunks`).
+//! beside it (`meshes-12m.rlm` for the default tau, see `ridgeline::meshes`).
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -31,7 +31,8 @@ pub struct ImportArgs {
     /// Posts repeated from the neighbours on each side of a node.
     #[arg(long, default_value_t = BuildOptions::default().border)]
     pub border: u32,
-    /// The adaptive meshes' error at level 1, metres (see `fly --mesh-error`).
+    /// The node meshes' error at level 1, metres (see `fly --mesh-error`;
+    /// default: those of tau 1 px, 12 m).
     #[arg(long, default_value_t = MeshOptions::default().error_m)]
     pub mesh_error: f32,
     /// Build from a deterministic synthetic SIZE x SIZE grid instead of

@@ -112,15 +112,20 @@ pub fn build_node(
 ) -> Result<BuiltMesh, MeshesError> {
     // A node none of whose children is stored is drawn however near the
     // camera comes: exact, on its own posts (the best data there).
-    let leaf = is_leaf(source, id);
-    let post_level = if leaf { id.level } else { id.level - id.level.min(options.depth) };
+    // The reference lattice is never finer than the best data under the
+    // node: over a coarse layer (the base) it is that layer's own lattice,
+    // whose cells are then drawn along the data's diagonal as the child
+    // nodes draw them, so the meshes still nest.
+    let finest = finest_stored_level(source, id, options.depth);
+    let leaf = finest == id.level;
+    let post_level = (id.level - id.level.min(options.depth)).max(finest);
     let reference = reference_grid(source, id, post_level)?;
     let grid = HeightGrid::with_voids(reference.side, &reference.heights)
         .map_err(|e| MeshesError::Mesh { id, source: e })?;
     let diagonal = Diagonal::of_node(id.x, id.y);
     // Half cells are redrawn along the data's diagonal only on the data's
     // own lattice (see `RtinOptions::hierarchy_leaves`).
-    let hierarchy_leaves = post_level > 0 && !leaf;
+    let hierarchy_leaves = post_level > finest;
     let rtin_options = RtinOptions {
         metric: Metric::Surface,
         diagonal,
@@ -152,15 +157,26 @@ pub fn build_node(
     Ok(BuiltMesh { mesh: node_mesh, delta, error_m: error as f32, sampler })
 }
 
-/// Whether no child of node `id` is stored (level 0 included): no finer
-/// data anywhere under it.
-fn is_leaf(source: &dyn NodeSource, id: NodeId) -> bool {
+/// The finest level with a stored node under node `id` (`id.level` for a
+/// leaf: no child stored), looking at most `depth` levels down.
+fn finest_stored_level(source: &dyn NodeSource, id: NodeId, depth: u8) -> u8 {
     let layout = source.layout();
-    id.level == 0
-        || [(0, 0), (1, 0), (0, 1), (1, 1)].iter().all(|&(dx, dy)| {
-            let child = NodeId::new(id.level - 1, 2 * id.x + dx, 2 * id.y + dy);
-            !(layout.contains(child) && source.has_node(child))
-        })
+    let mut finest = id.level;
+    for down in 1..=id.level.min(depth) {
+        let level = id.level - down;
+        let n = 1u32 << down;
+        let any = (0..n).any(|dy| {
+            (0..n).any(|dx| {
+                let child = NodeId::new(level, id.x * n + dx, id.y * n + dy);
+                layout.contains(child) && source.has_node(child)
+            })
+        });
+        if !any {
+            break;
+        }
+        finest = level;
+    }
+    finest
 }
 
 /// Whether the parent's mesh has a vertex at the child's reference post `m`.

@@ -1,4 +1,4 @@
-//! The mesh file, `meshes.rlm` beside the pyramid: little-endian, versioned,
+//! A mesh file, `meshes-12m.rlm` beside the pyramid (one per error): little-endian, versioned,
 //! checksummed per record, memory-mapped, written atomically.
 //!
 //! ```text
@@ -31,10 +31,13 @@ use crate::pyramid::replace_file;
 #[cfg(target_endian = "big")]
 compile_error!("the mesh file is read by casting little-endian bytes");
 
-/// The mesh file's name in a pyramid's cache directory.
-pub const MESH_FILE_NAME: &str = "meshes.rlm";
+/// The mesh file's name in a pyramid's cache directory, for meshes of
+/// `error_m` at level 1 (files of several errors live side by side).
+pub fn mesh_file_name(error_m: f32) -> String {
+    format!("meshes-{error_m}m.rlm")
+}
 const MAGIC: [u8; 8] = *b"RIDGEMSH";
-const VERSION: u32 = 3;
+const VERSION: u32 = 4;
 const FIXED_LEN: usize = 40;
 const ENTRY_LEN: usize = 24;
 const ABSENT: u64 = u64::MAX;

@@ -1,7 +1,7 @@
 //! Node meshes (Ulrich's chunks on Polok's buffers, issue 11): every node a pyramid
 //! stores gets an adaptive mesh of the best data under it, simplified to its
 //! level's error, instead of the regular grid of its own posts. Built once
-//! beside the pyramid (`meshes.rlm`), read with each node by the loader, and
+//! per error beside the pyramid (`meshes-12m.rlm`), read with each node by the loader, and
 //! drawn by the tiles from vertex buffers (no texture reads).
 //!
 //! Why: a regular grid of level `l` subsamples every `2^l`-th post, and on
@@ -23,7 +23,7 @@ pub mod reference;
 pub mod source;
 
 pub use build::{build_meshes, BuiltMeshes};
-pub use file::{write_meshes, MeshFile, MESH_FILE_NAME};
+pub use file::{mesh_file_name, write_meshes, MeshFile};
 pub use source::MeshedSource;
 
 use crate::mesh::MeshError;
@@ -47,11 +47,26 @@ pub struct MeshOptions {
 
 impl Default for MeshOptions {
     fn default() -> Self {
-        MeshOptions { error_m: 12.0, depth: 5, tile_cells: 8 }
+        MeshOptions { error_m: ERROR_PER_PIXEL_M, depth: 5, tile_cells: 8 }
     }
 }
 
+/// Level 1's mesh error per pixel of tau, metres: meshes are built for the
+/// display's tau (see [`MeshOptions::for_tau`]).
+pub const ERROR_PER_PIXEL_M: f32 = 12.0;
+
 impl MeshOptions {
+    /// The meshes for a display of screen-space error bound `tau_px`:
+    /// level 1's error `ERROR_PER_PIXEL_M * tau_px`. Ulrich's rings are
+    /// `delta K / tau`, so every level then appears at the same distance
+    /// whatever tau is, and a larger tau draws coarser meshes there. With
+    /// one fixed set of meshes the rings soon fall below the floor that
+    /// keeps neighbours within one level, and tau stops mattering.
+    pub fn for_tau(tau_px: f64) -> MeshOptions {
+        let error_m = (ERROR_PER_PIXEL_M as f64 * tau_px) as f32;
+        MeshOptions { error_m, ..MeshOptions::default() }
+    }
+
     /// The error level `level`'s meshes are simplified to, metres.
     pub fn level_error(&self, level: u8) -> f32 {
         if level == 0 {

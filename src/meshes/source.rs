@@ -6,7 +6,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use super::build::build_meshes;
-use super::file::{pyramid_identity, write_meshes, MeshFile, MESH_FILE_NAME};
+use super::file::{mesh_file_name, pyramid_identity, write_meshes, MeshFile};
 use super::{MeshOptions, MeshesError};
 use crate::node::{NodeData, NodeError, NodeId, NodeLayout, NodeSource};
 use crate::pyramid::{Progress, Pyramid};
@@ -25,7 +25,7 @@ impl MeshedSource {
         options: MeshOptions,
         progress: &dyn Progress,
     ) -> Result<MeshedSource, MeshesError> {
-        let path = mesh_path(pyramid.path());
+        let path = mesh_path(pyramid.path(), &options);
         let layout = *pyramid.layout();
         let identity = pyramid_identity(pyramid.path())
             .map_err(|source| MeshesError::Io { path: pyramid.path().to_path_buf(), source })?;
@@ -57,9 +57,10 @@ impl MeshedSource {
     }
 }
 
-/// The mesh file beside the pyramid file at `pyramid_file`.
-pub fn mesh_path(pyramid_file: &Path) -> std::path::PathBuf {
-    pyramid_file.with_file_name(MESH_FILE_NAME)
+/// The file of meshes built with `options` beside the pyramid file at
+/// `pyramid_file`.
+pub fn mesh_path(pyramid_file: &Path, options: &MeshOptions) -> std::path::PathBuf {
+    pyramid_file.with_file_name(mesh_file_name(options.error_m))
 }
 
 impl NodeSource for MeshedSource {

@@ -244,9 +244,20 @@ pub struct DrawList {
     pub tiles: Vec<TileUniforms>,
     /// Cells per tile side.
     pub grid_size: u32,
-    /// The frame's tiles and the level their heights came from, sorted by
-    /// tile: what [`skirt_edges`] looks neighbours up in.
-    pub drawn: Vec<(TileKey, u8)>,
+    /// The frame's tiles, sorted by tile: what [`skirt_edges`] looks
+    /// neighbours up in.
+    pub drawn: Vec<DrawnTile>,
+}
+
+/// What [`skirt_edges`] needs of a neighbour.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DrawnTile {
+    /// The tile.
+    pub key: TileKey,
+    /// The level its heights came from.
+    pub source_level: u8,
+    /// Cut from its source node's mesh (else a regular grid of its posts).
+    pub node_mesh: bool,
 }
 
 /// One of a frame's depth slices ([`DepthSlices`]).
@@ -324,8 +335,12 @@ impl DrawList {
         self.grid_size = geometry.grid_size;
         self.tiles.clear();
         self.drawn.clear();
-        self.drawn.extend(draws.iter().map(|draw| (draw.key, draw.source_level)));
-        self.drawn.sort_unstable_by_key(|&(key, _)| key);
+        self.drawn.extend(draws.iter().map(|draw| DrawnTile {
+            key: draw.key,
+            source_level: draw.source_level,
+            node_mesh: draw.node_mesh,
+        }));
+        self.drawn.sort_unstable_by_key(|d| d.key);
         for draw in draws {
             let mut tile = tile_uniforms(draw, &frame.posts, rings, &geometry);
             let node_tiles = (geometry.node_size / geometry.grid_size).max(1);
@@ -395,7 +410,7 @@ pub const ALL_EDGES: u8 = 0b1111;
 /// Tiles cut from node meshes share their edge vertices only with tiles cut
 /// from the same node's mesh (`node_tiles` tiles of a level a node side);
 /// across nodes each mesh chose its own edge vertices.
-pub fn skirt_edges(draw: &TileDraw, drawn: &[(TileKey, u8)], node_tiles: u32) -> u8 {
+pub fn skirt_edges(draw: &TileDraw, drawn: &[DrawnTile], node_tiles: u32) -> u8 {
     let TileKey { level, x, y } = draw.key;
     let neighbours = [
         y.checked_sub(1).map(|y| (x, y)),
@@ -407,11 +422,13 @@ pub fn skirt_edges(draw: &TileDraw, drawn: &[(TileKey, u8)], node_tiles: u32) ->
     for (bit, neighbour) in neighbours.into_iter().enumerate() {
         let watertight = neighbour.is_some_and(|(x, y)| {
             let key = TileKey::new(level, x, y);
-            let same_source = drawn
-                .binary_search_by_key(&key, |&(key, _)| key)
-                .is_ok_and(|at| drawn[at].1 == draw.source_level);
-            // Node meshes share their edge vertices only inside one node mesh.
-            same_source && (!draw.node_mesh || same_node(draw, key, node_tiles))
+            let Ok(at) = drawn.binary_search_by_key(&key, |d| d.key) else { return false };
+            let other = drawn[at];
+            // Node meshes share their edge vertices only inside one node
+            // mesh, and with no regular grid.
+            other.source_level == draw.source_level
+                && other.node_mesh == draw.node_mesh
+                && (!draw.node_mesh || same_node(draw, key, node_tiles))
         });
         if !watertight {
             edges |= 1 << bit;

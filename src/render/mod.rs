@@ -9,7 +9,9 @@ pub mod null;
 pub mod palette;
 
 pub use cost::{CallStats, CostModel};
-pub use draw_list::{DepthSlices, DrawList, FrameUniforms, PostFrame, Slice, TileUniforms};
+pub use draw_list::{
+    DepthSlices, DrawList, DrawnTile, FrameUniforms, PostFrame, Slice, TileUniforms,
+};
 pub use null::NullBackend;
 
 use std::ops::Range;

@@ -18,7 +18,7 @@ use super::block::TileVertex;
 use super::block::{write_block, MeshCounts, BLOCK_ALIGNMENT};
 use super::grid::{self, TileGrid};
 use super::mesh_tile::{CutInputs, MeshCutter, TileSquare};
-use super::vertex::{fill_tile, is_no_data, tile_node, PostReader, TileCoverage};
+use super::vertex::{fill_tile, tile_node, PostReader, TileCoverage};
 use super::{best_resident, ResidentNodes};
 use crate::allocator::{
     AllocError, AllocatorConfig, ConfigError, ContiguousAllocator, GeneratorId, Request,
@@ -220,17 +220,6 @@ impl TileMaker {
                 let spacing = [layout.spacing_m[0] * scale, layout.spacing_m[1] * scale];
                 let grid = &mut self.grid;
                 let coverage = fill_tile(&reader, grid.grid_size, spacing, &mut grid.vertices);
-                if !data.mesh.is_empty() {
-                    // The parent level is drawn from its node mesh, not from
-                    // these posts' parent lattice (whose error can be far
-                    // larger than the mesh's, which the rings allow for):
-                    // unmorphed, the tile switches to its parent within the
-                    // bound instead of morphing outside it.
-                    for v in grid.vertices.iter_mut().filter(|v| !is_no_data(v.height)) {
-                        v.target = v.height;
-                        v.normal = [v.normal[0], v.normal[1], v.normal[0], v.normal[1]];
-                    }
-                }
                 write_block(block, &grid.vertices, &grid.indices);
                 coverage
             }

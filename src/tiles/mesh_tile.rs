@@ -145,6 +145,11 @@ impl MeshCutter {
                 self.indices.push(number);
             }
         }
+        if self.indices.is_empty() {
+            // No triangle of the mesh is centred in the square: an
+            // ancestor's triangles are all larger than the tile.
+            return None;
+        }
         self.gather_edges(mesh, square);
         let skirt_vertices: usize = self.edges.iter().map(Vec::len).sum();
         let skirt_indices: usize = self.edges.iter().map(|e| 6 * e.len().saturating_sub(1)).sum();

@@ -71,15 +71,28 @@ pub fn builtin_pyramid() -> Arc<Pyramid> {
 /// The built-in terrain with each node's adaptive mesh, as `fly` draws it
 /// (the mesh file is built once beside [`builtin_pyramid`]'s).
 pub fn builtin_terrain() -> Arc<MeshedSource> {
-    static TERRAIN: OnceLock<Arc<MeshedSource>> = OnceLock::new();
-    let terrain = TERRAIN.get_or_init(|| Arc::new(meshed(builtin_pyramid())));
-    Arc::clone(terrain)
+    builtin_terrain_for(1.0)
 }
 
-/// `pyramid` with its node meshes at the default options, built beside it
+/// [`builtin_terrain`] with the meshes a display of `tau_px` uses
+/// ([`MeshOptions::for_tau`]), each opened once per binary.
+pub fn builtin_terrain_for(tau_px: f64) -> Arc<MeshedSource> {
+    static TERRAINS: std::sync::Mutex<Vec<(u64, Arc<MeshedSource>)>> =
+        std::sync::Mutex::new(Vec::new());
+    let mut terrains = TERRAINS.lock().unwrap_or_else(|e| e.into_inner());
+    let key = tau_px.to_bits();
+    if let Some((_, terrain)) = terrains.iter().find(|(k, _)| *k == key) {
+        return Arc::clone(terrain);
+    }
+    let terrain = Arc::new(meshed(builtin_pyramid(), tau_px));
+    terrains.push((key, Arc::clone(&terrain)));
+    terrain
+}
+
+/// `pyramid` with the node meshes of a display of `tau_px`, built beside it
 /// when missing.
-pub fn meshed(pyramid: Arc<Pyramid>) -> MeshedSource {
-    MeshedSource::open_or_build(pyramid, MeshOptions::default(), &Silent).expect("node meshes")
+pub fn meshed(pyramid: Arc<Pyramid>, tau_px: f64) -> MeshedSource {
+    MeshedSource::open_or_build(pyramid, MeshOptions::for_tau(tau_px), &Silent).expect("meshes")
 }
 
 /// What the rings of a display over `source` are computed from.

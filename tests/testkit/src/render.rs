@@ -63,29 +63,24 @@ pub fn config(backend: GlBackend, version: GlesVersion) -> DisplayConfig {
 }
 
 pub fn open(config: &DisplayConfig) -> Result<DisplayParts, DisplayError> {
-    let terrain = crate::builtin_terrain();
-    let summary = crate::summary_of(&terrain);
-    DisplayParts::open(config, terrain, summary)
+    open_over(config, builtin_pyramid())
 }
 
-/// A display over `pyramid` with its node meshes, as `fly` draws it.
+/// A display over `pyramid`, tiles drawn as regular grids of its posts.
 pub fn open_over(
-    config: &DisplayConfig,
-    pyramid: Arc<Pyramid>,
-) -> Result<DisplayParts, DisplayError> {
-    let terrain = crate::meshed(pyramid);
-    let summary = crate::summary_of(&terrain);
-    DisplayParts::open(config, Arc::new(terrain), summary)
-}
-
-/// A display over `pyramid` drawn as regular grids of its posts (the
-/// subsampled baseline, `fly --regular-grid`).
-pub fn open_regular(
     config: &DisplayConfig,
     pyramid: Arc<Pyramid>,
 ) -> Result<DisplayParts, DisplayError> {
     let summary = TerrainSummary::from_pyramid(pyramid.info());
     DisplayParts::open(config, pyramid, summary)
+}
+
+/// A display over the built-in terrain with its node meshes for the
+/// config's tau (`fly --node-meshes`).
+pub fn open_meshed(config: &DisplayConfig) -> Result<DisplayParts, DisplayError> {
+    let terrain = crate::builtin_terrain_for(config.scene.lod.tau_px);
+    let summary = crate::summary_of(&terrain);
+    DisplayParts::open(config, terrain, summary)
 }
 
 /// A camera over the render tests' viewport ([`SIZE`]) at `(x, y)` metres
@@ -194,11 +189,27 @@ pub fn measure_accuracy(
     views: &[(f64, Camera)],
     tau_px: f64,
 ) -> ridgeline::display::measure::AccuracyRun {
+    measure_accuracy_of(pyramid, views, tau_px, false)
+}
+
+/// [`measure_accuracy`], the tiles drawn from node meshes when `meshed`.
+pub fn measure_accuracy_of(
+    pyramid: Arc<Pyramid>,
+    views: &[(f64, Camera)],
+    tau_px: f64,
+    meshed: bool,
+) -> ridgeline::display::measure::AccuracyRun {
     use ridgeline::gl::{TruthMesh, TruthPass, TruthRegion};
     let mut config = config(GlBackend::Egl, GlesVersion::Es3);
     config.scene.lod.tau_px = tau_px;
     config.scene.lod.view_distance = 1.0;
-    let mut display = open_over(&config, pyramid.clone()).expect("headless EGL display");
+    let mut display = if meshed {
+        let terrain = Arc::new(crate::meshed(pyramid.clone(), tau_px));
+        let summary = crate::summary_of(&terrain);
+        DisplayParts::open(&config, terrain, summary).expect("headless EGL display")
+    } else {
+        open_over(&config, pyramid.clone()).expect("headless EGL display")
+    };
     let layout = pyramid.info().layout;
     let positions = views.iter().map(|(_, c)| [c.position.x, c.position.y]);
     let region = TruthRegion::around_positions(&layout, config.scene.lod.grid_size, positions);

@@ -36,7 +36,14 @@ pub fn pipeline_over(
 
 /// [`pipeline_over`] the built-in terrain.
 pub fn pipeline(config: SceneConfig) -> FramePipeline {
-    let terrain = crate::builtin_terrain();
+    let pyramid = crate::builtin_pyramid();
+    let summary = TerrainSummary::from_pyramid(pyramid.info());
+    pipeline_over(pyramid, summary, config)
+}
+
+/// [`pipeline_over`] the built-in terrain with its node meshes.
+pub fn pipeline_meshed(config: SceneConfig) -> FramePipeline {
+    let terrain = crate::builtin_terrain_for(config.lod.tau_px);
     let summary = crate::summary_of(&terrain);
     pipeline_over(terrain, summary, config)
 }
@@ -61,7 +68,15 @@ pub fn fly<B: RenderBackend>(
 pub fn terrain() -> &'static PreloadedTerrain {
     static TERRAIN: OnceLock<PreloadedTerrain> = OnceLock::new();
     TERRAIN
-        .get_or_init(|| PreloadedTerrain::load(crate::builtin_terrain().as_ref()).expect("all nodes read"))
+        .get_or_init(|| PreloadedTerrain::load(crate::builtin_pyramid().as_ref()).expect("all nodes read"))
+}
+
+/// [`terrain`] with each node's mesh (the meshes of tau 1 px).
+pub fn terrain_meshed() -> &'static PreloadedTerrain {
+    static TERRAIN: OnceLock<PreloadedTerrain> = OnceLock::new();
+    TERRAIN.get_or_init(|| {
+        PreloadedTerrain::load(crate::builtin_terrain().as_ref()).expect("all nodes read")
+    })
 }
 
 /// A camera over the scene tests' viewport ([`VIEWPORT`]) at `(x, y)`
@@ -72,18 +87,30 @@ pub fn camera(x: f64, y: f64, altitude: f64, heading: f64, pitch: f64) -> Camera
     crate::camera(VIEWPORT, origin.x + x, origin.y + y, altitude, heading, pitch)
 }
 
-/// Drawn height at every edge post and edge-segment midpoint of every tile,
+/// One tile's drawn height at an edge point, and how far the skirt hung
+/// from that edge reaches below it (0 where the edge hangs none).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EdgeHeight {
+    /// The morphed height the shader draws there, metres.
+    pub height: f64,
+    /// The tile's skirt depth on that side, or 0.
+    pub skirt_m: f64,
+}
+
+/// For every point of a tile side, the drawn heights of all tiles there,
 /// keyed by level-0 post coordinates (doubled, so midpoints are integers).
-/// Read from each tile's block: its surface triangles' edges that lie on
-/// the tile's sides, each side walked counter-clockwise (each edge point
-/// once per tile), whatever the tile's mesh.
+/// Each side is read from the tile's block (its surface triangles' edges
+/// on the side, whatever the mesh) and sampled every `2^(level-1)` level-0
+/// posts, so a tile's samples include those of a neighbour one level
+/// coarser: every shared point is compared, T-junctions of irregular meshes
+/// included.
 pub fn edge_heights(
     list: &DrawList,
     staging: &[u8],
     altitude: f64,
     grid: u32,
-) -> HashMap<(i64, i64), Vec<f64>> {
-    let mut heights: HashMap<(i64, i64), Vec<f64>> = HashMap::new();
+) -> HashMap<(i64, i64), Vec<EdgeHeight>> {
+    let mut heights: HashMap<(i64, i64), Vec<EdgeHeight>> = HashMap::new();
     let posts = list.uniforms.expect("a built list has its frame").posts;
     for tile in &list.tiles {
         let block = tile.block(staging);
@@ -101,42 +128,71 @@ pub fn edge_heights(
                 morph_factor(distance, tile.morph[0] as f64, tile.morph[1] as f64),
             )
         };
-        let stride = 1i64 << tile.key.level;
-        let base =
-            (tile.key.x as i64 * grid as i64 * stride, tile.key.y as i64 * grid as i64 * stride);
-        let at = |[i, j]: [u16; 2]| {
-            (2 * (base.0 + i as i64 * stride), 2 * (base.1 + j as i64 * stride))
-        };
+        // Tile sides in level-0 posts from its south-west corner.
+        let side = (grid as i64) << tile.key.level;
+        let base = (tile.key.x as i64 * side, tile.key.y as i64 * side);
+        let scale = tile.vertex_step as i64;
+        let step = (1i64 << tile.key.level) / 2;
+        let step = step.max(1);
         for t in (0..block.triangle_count()).filter(|&t| !block.is_skirt(t)) {
             let corners = block.triangle(t).map(|v| block.vertex(v as usize));
             for k in 0..3 {
                 let (p, q) = (corners[k], corners[(k + 1) % 3]);
                 let (a, b) = (drawn(p), drawn(q));
-                if !on_one_side(p.post, q.post, grid) || a.is_nan() || b.is_nan() {
+                let at = |v: TileVertex| [v.post[0] as i64 * scale, v.post[1] as i64 * scale];
+                let (pa, pb) = (at(p), at(q));
+                let Some(edge) = side_of(pa, pb, side) else { continue };
+                if a.is_nan() || b.is_nan() {
                     continue;
                 }
-                heights.entry(at(p.post)).or_default().push(a);
-                let (p, q) = (at(p.post), at(q.post));
-                heights.entry(((p.0 + q.0) / 2, (p.1 + q.1) / 2)).or_default().push((a + b) / 2.0);
+                let skirt_m = if tile.skirt_edges & (1 << edge) != 0 { tile.skirt_depth as f64 } else { 0.0 };
+                // Samples on the segment, both ends included.
+                let axis = if pa[0] == pb[0] { 1 } else { 0 };
+                let (lo, hi) = (pa[axis].min(pb[axis]), pa[axis].max(pb[axis]));
+                let mut u = lo.div_euclid(step) * step;
+                while u <= hi {
+                    if u >= lo {
+                        let f = (u - pa[axis]) as f64 / (pb[axis] - pa[axis]) as f64;
+                        let mut point = pa;
+                        point[axis] = u;
+                        let key = (2 * (base.0 + point[0]), 2 * (base.1 + point[1]));
+                        let height = a + f * (b - a);
+                        let entry = heights.entry(key).or_default();
+                        // Each tile once per point (segments share their ends).
+                        if entry.last().is_none_or(|e| e.height != height || e.skirt_m != skirt_m) {
+                            entry.push(EdgeHeight { height, skirt_m });
+                        }
+                    }
+                    u += step;
+                }
             }
         }
     }
     heights
 }
 
-/// Whether posts `p` and `q` of a tile of `grid` cells lie on the same side of it.
-fn on_one_side(p: [u16; 2], q: [u16; 2], grid: u32) -> bool {
-    (0..2).any(|axis| p[axis] == q[axis] && (p[axis] == 0 || u32::from(p[axis]) == grid))
+/// The side (0 south, 1 east, 2 north, 3 west: the skirt bits' order) of
+/// a tile `side` level-0 posts wide that the segment `p`-`q` lies on.
+fn side_of(p: [i64; 2], q: [i64; 2], side: i64) -> Option<usize> {
+    match () {
+        _ if p[1] == 0 && q[1] == 0 => Some(0),
+        _ if p[0] == side && q[0] == side => Some(1),
+        _ if p[1] == side && q[1] == side => Some(2),
+        _ if p[0] == 0 && q[0] == 0 => Some(3),
+        _ => None,
+    }
 }
 
-/// The largest disagreement, metres, between tiles sharing an edge point.
+/// The largest disagreement, metres, between tiles sharing an edge point
+/// where none of them hangs a skirt.
 pub fn worst_edge_disagreement(list: &DrawList, staging: &[u8], altitude: f64, grid: u32) -> f64 {
     edge_heights(list, staging, altitude, grid)
         .values()
-        .filter(|values| values.len() > 1)
+        .filter(|values| values.len() > 1 && values.iter().all(|v| v.skirt_m == 0.0))
         .map(|values| {
-            let (lo, hi) =
-                values.iter().fold((f64::MAX, f64::MIN), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+            let (lo, hi) = values
+                .iter()
+                .fold((f64::MAX, f64::MIN), |(lo, hi), v| (lo.min(v.height), hi.max(v.height)));
             hi - lo
         })
         .fold(0.0, f64::max)
