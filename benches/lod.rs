@@ -47,7 +47,7 @@ use ridgeline::meshes::{MeshOptions, MeshedSource};
 use ridgeline::node::NodeSource;
 use ridgeline::pipeline::FrameStats;
 use ridgeline::pyramid::{Pyramid, Silent};
-use ridgeline::render::RenderBackend;
+use ridgeline::render::{RenderBackend, TileUniforms};
 use ridgeline::scene::{clip_planes, TerrainSummary};
 use serde_json::json;
 use support::rtin_floor::{FloorCount, FloorGrid, FloorView};
@@ -494,23 +494,29 @@ impl Floors {
         run: &AccuracyRun,
     ) -> FloorRow {
         let grid_size = point.lod.grid_size;
-        let per_tile = 2 * grid_size as u64 * grid_size as u64;
         let curvature = display.pipeline.scene().config().curvature;
         let mut rows = Vec::with_capacity(views.len());
         for (v, (t, camera)) in views.iter().enumerate() {
             display.pipeline.settle(camera, 10_000).expect("settle");
             let stats = display.frame(camera).expect("LOD frame");
             let tiles = &display.pipeline.draw_list().tiles;
-            let share: f64 =
-                tiles.iter().map(|tile| self.grid.tile_share(tile.key, grid_size)).sum();
+            // Surface triangles, skirts left out, tile by tile (node mesh
+            // tiles have their own counts).
+            let (staging, _) = display.pipeline.scene().uploads();
+            let surface = |tile: &TileUniforms| tile.block(staging).surface_triangle_count() as f64;
+            let share: f64 = tiles
+                .iter()
+                .map(|tile| self.grid.tile_share(tile.key, grid_size) * surface(tile))
+                .sum();
+            let drawn: f64 = tiles.iter().map(surface).sum();
             let view =
                 self.grid.view(camera, clip_planes(camera, &display.pipeline.terrain()), curvature);
             self.checked.get_or_init(|| self.check(views, &view));
             let full_res = *self.full_res[v].get_or_init(|| self.grid.full_res_in_frustum(&view));
             let row = FloorViewRow {
                 t: *t,
-                triangles_lod: tiles.len() as u64 * per_tile,
-                triangles_lod_square: share * per_tile as f64,
+                triangles_lod: drawn as u64,
+                triangles_lod_square: share,
                 coarsened: stats.scene.coarsened,
                 rtin: self.grid.rtin_floor(&view, point.lod.tau_px),
                 full_res_in_frustum: full_res,

@@ -116,7 +116,7 @@ pub fn build_node(
     // node: over a coarse layer (the base) it is that layer's own lattice,
     // whose cells are then drawn along the data's diagonal as the child
     // nodes draw them, so the meshes still nest.
-    let finest = finest_stored_level(source, id, options.depth);
+    let finest = finest_stored_level(source, id);
     let leaf = finest == id.level;
     let post_level = (id.level - id.level.min(options.depth)).max(finest);
     let reference = reference_grid(source, id, post_level)?;
@@ -158,11 +158,11 @@ pub fn build_node(
 }
 
 /// The finest level with a stored node under node `id` (`id.level` for a
-/// leaf: no child stored), looking at most `depth` levels down.
-fn finest_stored_level(source: &dyn NodeSource, id: NodeId, depth: u8) -> u8 {
+/// leaf: no child stored).
+fn finest_stored_level(source: &dyn NodeSource, id: NodeId) -> u8 {
     let layout = source.layout();
     let mut finest = id.level;
-    for down in 1..=id.level.min(depth) {
+    for down in 1..=id.level {
         let level = id.level - down;
         let n = 1u32 << down;
         let any = (0..n).any(|dy| {
