@@ -77,10 +77,20 @@ impl NodeSource for MeshedSource {
     }
 
     /// The node's posts from the pyramid and its mesh from the mesh file;
-    /// its delta is the mesh's.
+    /// its delta is the mesh's, and its height range takes in every height
+    /// and morph target of the mesh: a mesh takes posts finer than the
+    /// node's own, whose peaks its posts' range does not hold, and the
+    /// tiles' boxes (range widened by delta) must hold what is drawn, or a
+    /// tile nearer than its box says is still morphing when it switches.
     fn read_node(&self, id: NodeId, out: &mut NodeData) -> Result<(), NodeError> {
         self.pyramid.read_node(id, out)?;
         out.delta = self.file.read(self.pyramid.layout(), id, &mut out.mesh)?;
+        for v in &out.mesh.vertices {
+            for h in [v.height, v.target].into_iter().filter(|h| h.is_finite()) {
+                out.min = out.min.min(h);
+                out.max = out.max.max(h);
+            }
+        }
         Ok(())
     }
 }
