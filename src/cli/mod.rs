@@ -59,7 +59,7 @@ pub struct ViewArgs {
     pub mesh_error: Option<f32>,
     /// Draw tiles from node meshes (Ulrich's chunks, issue 11) instead of
     /// the regular grid of each level's posts. Not yet the default: at tau
-    /// 32 one level switch along the render tests' slow flight still pops.
+    /// 32 some level switches along the render tests' slow flight still pop.
     #[arg(long)]
     pub node_meshes: bool,
 }
