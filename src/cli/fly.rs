@@ -44,7 +44,17 @@ pub struct FlyArgs {
     /// PNG snapshots written along a headless flight (the last frame always is).
     #[arg(long, default_value_t = 6)]
     pub snapshots: u32,
+    /// Ridgeline's own memory, MB (its heap and its GPU tile buffer): sizes
+    /// the node atlas, the staging copy and the GPU buffer at start. A small
+    /// budget draws coarser tiles, never holes.
+    #[arg(long, default_value_t = DEFAULT_MEMORY_MB)]
+    pub memory_mb: u32,
 }
+
+/// The default `--memory-mb`: a quarter of a 256 MB board.
+pub const DEFAULT_MEMORY_MB: u32 = 64;
+/// The smallest and largest `--memory-mb`.
+const MEMORY_MB_RANGE: std::ops::RangeInclusive<u32> = 4..=65_536;
 
 pub fn run(args: &FlyArgs) -> Result<()> {
     args.view.check()?;
@@ -54,13 +64,24 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     {
         bail!("--warning-above and --caution-below must be finite metres, the caution band not negative");
     }
+    if !MEMORY_MB_RANGE.contains(&args.memory_mb) {
+        bail!(
+            "--memory-mb {} must be between {} and {} MB",
+            args.memory_mb,
+            MEMORY_MB_RANGE.start(),
+            MEMORY_MB_RANGE.end()
+        );
+    }
     let bar = Bar::new();
     let terrain = args.view.open_terrain(&bar)?;
     bar.finish();
-    let path = super::flight_path(args.view.path.as_deref(), &terrain.pyramid)?;
-    let dataset_name = terrain.pyramid.path().display().to_string();
+    let path = terrain.flight_path(args.view.path.as_deref(), args.view.flight)?;
+    let dataset_name = terrain.name.clone();
+    let gapless = terrain.gapless;
     let (source, summary) = (terrain.source, terrain.summary);
     let mut config = DisplayConfig::new(args.backend, args.view.size);
+    config.scene.horizon_culling = gapless;
+    config.memory_budget_bytes = Some(args.memory_mb as u64 * MB);
     config.version = if args.es2 { GlesVersion::Es2 } else { GlesVersion::Es3 };
     config.scene.lod.tau_px = args.view.tau;
     config.scene.warning_above_m = args.warning_above;
@@ -86,10 +107,56 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     } else {
         fly_headless(args, &mut display, &path)?
     };
+    let memory = memory_report(&display);
     if info.backend != OpenedBackend::Window {
-        write_stats(args, &info, &dataset_name, &rows)?;
+        write_stats(args, &info, &dataset_name, &rows, &memory)?;
     }
-    print_summary(&rows)
+    print_summary(&rows, &memory)
+}
+
+const MB: u64 = 1 << 20;
+
+/// What the run took of the board's memory (stats.json's `memory`).
+#[derive(serde::Serialize)]
+struct MemoryReport {
+    /// `--memory-mb`, bytes.
+    budget_bytes: u64,
+    /// Ridgeline's own heap at its peak (the counting allocator).
+    heap_peak_bytes: u64,
+    /// Ridgeline's own heap at the end of the run.
+    heap_bytes: u64,
+    /// The GPU tile buffer.
+    gpu_buffer_bytes: u64,
+    /// Heap peak plus GPU buffer: what the budget bounds.
+    own_bytes: u64,
+    /// Node atlas slots the budget allowed.
+    atlas_slots: u32,
+    /// The process's peak and current resident memory (VmHWM, VmRSS).
+    resident_peak_bytes: u64,
+    resident_bytes: u64,
+    /// Resident peak minus Ridgeline's heap peak: the GL driver (on
+    /// llvmpipe the GPU buffer too, and every buffer the driver keeps),
+    /// code and memory-mapped data.
+    driver_and_rest_bytes: u64,
+}
+
+fn memory_report(display: &Display) -> MemoryReport {
+    let pipeline = display.pipeline();
+    let heap_peak_bytes = super::heap::peak() as u64;
+    let gpu_buffer_bytes = pipeline.scene().config().buffer_bytes as u64;
+    let (resident_peak_bytes, resident_bytes) = super::heap::resident().unwrap_or((0, 0));
+    let plan = pipeline.memory_plan();
+    MemoryReport {
+        budget_bytes: plan.map_or(0, |p| p.budget_bytes),
+        heap_peak_bytes,
+        heap_bytes: super::heap::in_use() as u64,
+        gpu_buffer_bytes,
+        own_bytes: heap_peak_bytes + gpu_buffer_bytes,
+        atlas_slots: pipeline.clipmap().atlas().slot_count(),
+        resident_peak_bytes,
+        resident_bytes,
+        driver_and_rest_bytes: resident_peak_bytes.saturating_sub(heap_peak_bytes),
+    }
 }
 
 /// One row of stats.json.
@@ -153,6 +220,7 @@ fn write_stats(
     info: &ridgeline::gl::GlInfo,
     dataset: &str,
     rows: &[Row],
+    memory: &MemoryReport,
 ) -> Result<()> {
     let frames: Vec<serde_json::Value> = rows
         .iter()
@@ -174,6 +242,8 @@ fn write_stats(
                 "resident_nodes": s.resident_nodes,
                 "nodes_loaded": s.nodes_loaded,
                 "coarsened": s.scene.coarsened,
+                "culled": s.scene.culled,
+                "horizon_culled": s.scene.horizon_culled,
                 "cpu_ms": {
                     "clipmap": s.clipmap_ms,
                     "select": s.scene.cpu_ms.select_ms,
@@ -195,6 +265,8 @@ fn write_stats(
         "size": [args.view.size.x, args.view.size.y],
         "tau_px": args.view.tau,
         "fov_x_deg": args.view.fov,
+        "flight": format!("{:?}", args.view.flight).to_lowercase(),
+        "memory": memory,
         "frames": frames,
     });
     let path = args.out.join("stats.json");
@@ -203,7 +275,7 @@ fn write_stats(
     Ok(())
 }
 
-fn print_summary(rows: &[Row]) -> Result<()> {
+fn print_summary(rows: &[Row], memory: &MemoryReport) -> Result<()> {
     use std::fmt::Write as _;
     if rows.is_empty() {
         return Ok(());
@@ -260,5 +332,24 @@ fn print_summary(rows: &[Row]) -> Result<()> {
         last.stats.scene.allocator_used_bytes as f64 / 1e6
     )?;
     writeln!(out, "  resident nodes    {} at the end", last.stats.resident_nodes)?;
+    let kept = mean(&|s| s.scene.tiles as f64);
+    let hidden = mean(&|s| s.scene.horizon_culled as f64);
+    writeln!(
+        out,
+        "  horizon culled    mean {hidden:.0} tiles a frame ({:.1} % of the tiles the frustum kept)",
+        100.0 * hidden / (hidden + kept).max(1.0)
+    )?;
+    let mb = |b: u64| b as f64 / MB as f64;
+    writeln!(
+        out,
+        "  memory            own {:.1} MB of {:.0} MB (heap peak {:.1}, GPU buffer {:.1}); \
+         resident peak {:.1} MB, of which the driver and the rest {:.1} MB",
+        mb(memory.own_bytes),
+        mb(memory.budget_bytes),
+        mb(memory.heap_peak_bytes),
+        mb(memory.gpu_buffer_bytes),
+        mb(memory.resident_peak_bytes),
+        mb(memory.driver_and_rest_bytes)
+    )?;
     super::print(&out)
 }

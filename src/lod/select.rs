@@ -2,10 +2,14 @@
 //! on the CPU with an explicit stack, culling each tile against the terrain's
 //! extent and the view frustum before deciding to split it.
 //!
+//! Tiles the frustum keeps may still lie below the horizon: those are
+//! dropped too (see [`super::horizon`]) and counted apart.
+//!
 //! Both lists are allocated once, at `max_tiles`; a frame never allocates.
 //! When refining further would exceed `max_tiles`, the tile is kept whole:
 //! the view gets coarser, never a hole.
 
+use super::horizon::Horizon;
 use super::{LevelRings, LodConfig, TileKey};
 use crate::camera::{curvature_drop, Frustum};
 use crate::node::{NodeId, NodeLayout};
@@ -42,6 +46,8 @@ pub struct TileSelector {
     selected: Vec<SelectedTile>,
     /// Tiles dropped by the frustum in the last frame (for statistics).
     culled: usize,
+    /// Tiles inside the frustum dropped below the horizon in the last frame.
+    horizon_culled: usize,
 }
 
 /// A view to select tiles for: camera position, frustum and rings.
@@ -54,6 +60,18 @@ pub struct View<'a> {
     pub rings: &'a LevelRings,
     /// Apply the earth's curvature to bounding boxes.
     pub curvature: bool,
+    /// Cull tiles below this horizon (`None`: no horizon culling).
+    pub horizon: Option<Horizon>,
+}
+
+/// Why a tile is not drawn, or how far it is.
+enum Visibility {
+    /// Inside the frustum and above the horizon, this far from the eye.
+    Visible(f64),
+    /// Outside the frustum.
+    Outside,
+    /// Inside the frustum but hidden below the horizon.
+    BelowHorizon,
 }
 
 impl TileSelector {
@@ -64,6 +82,7 @@ impl TileSelector {
             stack: Vec::with_capacity(config.max_tiles + 4),
             selected: Vec::with_capacity(config.max_tiles),
             culled: 0,
+            horizon_culled: 0,
         }
     }
 
@@ -77,12 +96,18 @@ impl TileSelector {
         self.culled
     }
 
+    /// Tiles the frustum kept but the horizon hid, in the last selection.
+    pub fn horizon_culled(&self) -> usize {
+        self.horizon_culled
+    }
+
     /// Selects the tiles for `view` over `terrain`; the result is valid until
     /// the next call.
     pub fn select(&mut self, view: &View<'_>, terrain: &dyn TileBounds) -> &[SelectedTile] {
         self.selected.clear();
         self.stack.clear();
         self.culled = 0;
+        self.horizon_culled = 0;
         let root = (view.rings.levels() - 1) as u8;
         let [nx, ny] = tiles_at(terrain.posts(), self.config.grid_size, root);
         for y in (0..ny).rev() {
@@ -91,9 +116,16 @@ impl TileSelector {
             }
         }
         while let Some(key) = self.stack.pop() {
-            let Some(distance) = self.visible_distance(key, view, terrain) else {
-                self.culled += 1;
-                continue;
+            let distance = match self.visibility(key, view, terrain) {
+                Visibility::Visible(distance) => distance,
+                Visibility::Outside => {
+                    self.culled += 1;
+                    continue;
+                }
+                Visibility::BelowHorizon => {
+                    self.horizon_culled += 1;
+                    continue;
+                }
             };
             // Children replace this tile on the stack; keep room for the worst case.
             let room = self.selected.len() + self.stack.len() + 4 <= self.config.max_tiles;
@@ -112,13 +144,8 @@ impl TileSelector {
         &self.selected
     }
 
-    /// Distance to the tile's box, or `None` if the frustum excludes it.
-    fn visible_distance(
-        &self,
-        key: TileKey,
-        view: &View<'_>,
-        terrain: &dyn TileBounds,
-    ) -> Option<f64> {
+    /// Distance to the tile's box, or why it is not drawn.
+    fn visibility(&self, key: TileKey, view: &View<'_>, terrain: &dyn TileBounds) -> Visibility {
         let (min, max) = tile_box(key, self.config.grid_size, terrain, view.eye);
         let distance = box_distance(min, max);
         let (mut lo, hi) = (min, max);
@@ -129,7 +156,18 @@ impl TileSelector {
                 .length();
             lo.z -= curvature_drop(far);
         }
-        view.frustum.intersects_box(lo.as_vec3(), hi.as_vec3()).then_some(distance)
+        if !view.frustum.intersects_box(lo.as_vec3(), hi.as_vec3()) {
+            return Visibility::Outside;
+        }
+        let hidden = view.horizon.is_some_and(|horizon| {
+            let nearest = glam::DVec2::ZERO.clamp(min.truncate(), max.truncate()).length();
+            horizon.hides(nearest, max.z + view.eye.z)
+        });
+        if hidden {
+            Visibility::BelowHorizon
+        } else {
+            Visibility::Visible(distance)
+        }
     }
 }
 

@@ -11,7 +11,7 @@
 
 mod sizing;
 
-pub use sizing::clipmap_view;
+pub use sizing::{clipmap_view, plan_memory, MemoryPlan};
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -38,6 +38,10 @@ pub struct PipelineConfig {
     /// Load nodes on a thread (flying) or inline up to the budget (tests that
     /// want every frame complete and repeatable).
     pub loader: LoaderMode,
+    /// Ridgeline's own heap and GPU buffer together, bytes: sizes the node
+    /// atlas, the staging copy and the GPU buffer at start ([`plan_memory`]);
+    /// `None` sizes them for the view and takes `scene.buffer_bytes`.
+    pub memory_budget_bytes: Option<u64>,
 }
 
 impl PipelineConfig {
@@ -49,6 +53,7 @@ impl PipelineConfig {
             viewport,
             load_budget: 32,
             loader: LoaderMode::Thread { queue: 256 },
+            memory_budget_bytes: None,
         }
     }
 }
@@ -103,6 +108,7 @@ pub struct FramePipeline {
     scene: Scene,
     view: ViewId,
     summary: TerrainSummary,
+    memory: Option<MemoryPlan>,
 }
 
 impl FramePipeline {
@@ -115,16 +121,24 @@ impl FramePipeline {
     ) -> Result<FramePipeline, PipelineError> {
         let layout = *source.layout();
         let view_config = clipmap_view(config, &summary, &layout)?;
+        let wanted = sizing::atlas_slots(&view_config, layout.levels);
+        let mut scene_config = config.scene;
+        let memory = config
+            .memory_budget_bytes
+            .map(|budget| plan_memory(budget, &layout, wanted, config.scene.buffer_bytes));
+        if let Some(plan) = memory {
+            scene_config.buffer_bytes = plan.buffer_bytes;
+        }
         let clipmap_config = ClipmapConfig {
-            atlas_slots: sizing::atlas_slots(&view_config, layout.levels),
+            atlas_slots: memory.map_or(wanted, |plan| plan.atlas_slots),
             budget: config.load_budget,
             loader: config.loader,
         };
         let mut clipmap = Clipmap::new(source, clipmap_config)?;
         let view = clipmap.add_view(view_config, DVec3::ZERO)?;
         let terrain = ClipmapTerrain { clipmap: &clipmap, summary: &summary };
-        let scene = Scene::new(config.scene, &terrain)?;
-        Ok(FramePipeline { clipmap, scene, view, summary })
+        let scene = Scene::new(scene_config, &terrain)?;
+        Ok(FramePipeline { clipmap, scene, view, summary, memory })
     }
 
     /// Pages, tiles, uploads and draws one frame for `camera` on `backend`,
@@ -202,6 +216,11 @@ impl FramePipeline {
     /// The clipmap (its atlas and views).
     pub fn clipmap(&self) -> &Clipmap {
         &self.clipmap
+    }
+
+    /// How the memory budget was shared, if one was given.
+    pub fn memory_plan(&self) -> Option<MemoryPlan> {
+        self.memory
     }
 
     /// The data's per-level error and height range.

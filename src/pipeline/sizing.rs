@@ -51,3 +51,54 @@ pub fn atlas_slots(view: &ViewConfig, levels: u8) -> u32 {
     let disc = std::f64::consts::PI * (view.load_distance + 1.5).powi(2);
     (2.0 * disc * levels as f64).ceil() as u32 + 64
 }
+
+/// Bytes of Ridgeline's heap the memory budget keeps for everything but
+/// the atlas and the staging copy (tile cache tables, draw list, loader
+/// queue, meshes of loaded nodes), as a share of the budget.
+pub const RESERVE_SHARE: f64 = 0.125;
+/// Most of what is left after the reserve that the node atlas may take.
+pub const ATLAS_SHARE: f64 = 0.25;
+/// Bytes an atlas slot is counted at, per height it holds: the heights
+/// themselves and room for a node mesh's vertices and indices.
+pub const SLOT_BYTES_PER_HEIGHT: u64 = 12;
+
+/// How a memory budget is shared: the node atlas, and the GPU tile buffer
+/// with its staging copy (the same size, one on each side of the bus).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct MemoryPlan {
+    /// The budget, bytes: Ridgeline's own heap and its GPU buffer.
+    pub budget_bytes: u64,
+    /// Atlas slots (fewer than the view wants: coarser data, never holes).
+    pub atlas_slots: u32,
+    /// Bytes an atlas slot is counted at.
+    pub slot_bytes: u64,
+    /// The GPU tile buffer and its staging copy, bytes each.
+    pub buffer_bytes: u32,
+}
+
+/// Shares `budget_bytes` for `layout`'s nodes when the view wants
+/// `wanted_slots` atlas slots: [`RESERVE_SHARE`] kept for the rest of the
+/// heap, the atlas up to [`ATLAS_SHARE`] of what is left (never more slots
+/// than wanted), and half of the remainder each to the GPU buffer and its
+/// staging copy (never more than `max_buffer_bytes`). A smaller buffer
+/// makes the scene coarsen its tiles, a smaller atlas makes tiles fall
+/// back to coarser resident nodes: the display degrades, never leaves holes.
+pub fn plan_memory(
+    budget_bytes: u64,
+    layout: &NodeLayout,
+    wanted_slots: u32,
+    max_buffer_bytes: u32,
+) -> MemoryPlan {
+    let side = layout.stored_side() as u64;
+    let slot_bytes = side * side * SLOT_BYTES_PER_HEIGHT;
+    let usable = budget_bytes as f64 * (1.0 - RESERVE_SHARE);
+    let atlas_cap = (usable * ATLAS_SHARE) as u64 / slot_bytes.max(1);
+    let atlas_slots = (wanted_slots as u64).min(atlas_cap) as u32;
+    let left = usable as u64 - atlas_slots as u64 * slot_bytes;
+    let buffer_bytes = (left / 2).min(max_buffer_bytes as u64) as u32 & !3;
+    debug_assert!(
+        atlas_slots as u64 * slot_bytes + 2 * buffer_bytes as u64 <= budget_bytes,
+        "the plan fits its budget"
+    );
+    MemoryPlan { budget_bytes, atlas_slots, slot_bytes, buffer_bytes }
+}

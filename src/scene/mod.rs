@@ -13,6 +13,8 @@ pub use clipmap_terrain::{ClipmapTerrain, TerrainSummary};
 pub use terrain::{PreloadedTerrain, TerrainData};
 
 use crate::camera::{Camera, CameraError, Frustum, EARTH_RADIUS_M};
+use crate::lod::census::{frustum_census, Census, CensusView};
+use crate::lod::horizon::Horizon;
 use crate::lod::rings::RingInputs;
 use crate::lod::select::View;
 use crate::lod::{LevelRings, LodConfig, LodError, TileSelector};
@@ -55,6 +57,10 @@ pub struct SceneConfig {
     pub frames_in_flight: u32,
     /// Whether the earth's curvature lowers distant terrain (in culling and drawing).
     pub curvature: bool,
+    /// Cull tiles hidden below the horizon (with the curvature, and only while
+    /// the camera is over the data). Holes do not hide what is behind them:
+    /// leave it off for data with no-data posts.
+    pub horizon_culling: bool,
     /// Terrain this many metres above the aircraft, or higher, is red.
     pub warning_above_m: f32,
     /// Terrain less than this many metres below the aircraft is amber.
@@ -69,6 +75,7 @@ impl Default for SceneConfig {
             transfer_cap: Some(DEFAULT_TRANSFER_CAP),
             frames_in_flight: 0,
             curvature: true,
+            horizon_culling: true,
             warning_above_m: palette::DEFAULT_WARNING_ABOVE_M,
             caution_below_m: palette::DEFAULT_CAUTION_BELOW_M,
         }
@@ -108,6 +115,9 @@ pub struct SceneStats {
     pub tiles: usize,
     /// Tiles dropped by the frustum in the frame's final selection.
     pub culled: usize,
+    /// Tiles inside the frustum dropped below the horizon in the frame's
+    /// final selection: neither selected, nor made, nor drawn.
+    pub horizon_culled: usize,
     /// Triangles of the tiles in the draw list, skirts included (each tile once).
     pub triangles: u64,
     /// Bytes of the staging copy uploaded.
@@ -209,6 +219,7 @@ impl Scene {
         let (near, far) = clip_planes(camera, terrain);
         let frustum = Frustum::from_view_projection(camera.projection(near, far) * camera.view());
         let mut report = SceneStats::default();
+        let horizon = self.horizon(camera, terrain);
         let mut lod = self.config.lod;
         let mut nearest_m: f64;
         loop {
@@ -220,6 +231,7 @@ impl Scene {
                 frustum: &frustum,
                 rings: &self.rings,
                 curvature: self.config.curvature,
+                horizon,
             };
             let selected = self.selector.select(&view, terrain);
             nearest_m = selected.iter().map(|t| t.distance).fold(f64::INFINITY, f64::min);
@@ -253,6 +265,7 @@ impl Scene {
         let stats = self.cache.stats();
         report.tiles = self.draw_list.tiles.len();
         report.culled = self.selector.culled();
+        report.horizon_culled = self.selector.horizon_culled();
         report.triangles = self.draw_list.triangles();
         report.bytes_uploaded = stats.bytes_uploaded;
         report.transfers = stats.transfers;
@@ -260,6 +273,39 @@ impl Scene {
         report.allocator_used_bytes = stats.allocator_used_bytes;
         report.allocator_workspace_bytes = stats.allocator_workspace_bytes;
         Ok(report)
+    }
+}
+
+impl Scene {
+    /// The horizon tiles are culled below for `camera`: over the data's
+    /// lowest height, when the curvature is drawn, horizon culling is on and
+    /// the camera is over the data's rectangle (see [`crate::lod::horizon`]).
+    fn horizon(&self, camera: &Camera, terrain: &dyn TerrainData) -> Option<Horizon> {
+        let layout = terrain.layout();
+        let inside = |at: f64, posts: u32, spacing: f64| {
+            at >= 0.0 && at <= posts.saturating_sub(1) as f64 * spacing
+        };
+        let p = camera.position;
+        let over_data = inside(p.x, layout.posts[0], layout.spacing_m[0])
+            && inside(p.y, layout.posts[1], layout.spacing_m[1]);
+        let on = self.config.horizon_culling && self.config.curvature && over_data;
+        on.then(|| Horizon::new(p.z, terrain.height_range().0 as f64)).flatten()
+    }
+
+    /// The level-0 cells a frame for `camera` holds in its frustum, above
+    /// and below the horizon (counted, not drawn; see [`frustum_census`]).
+    pub fn census(&self, camera: &Camera, terrain: &dyn TerrainData) -> Census {
+        let (near, far) = clip_planes(camera, terrain);
+        let frustum = Frustum::from_view_projection(camera.projection(near, far) * camera.view());
+        let view = CensusView {
+            eye: camera.position,
+            frustum: &frustum,
+            curvature: self.config.curvature,
+            horizon: self.horizon(camera, terrain),
+            grid_size: self.config.lod.grid_size,
+            root: terrain.layout().levels - 1,
+        };
+        frustum_census(&view, terrain)
     }
 }
 
