@@ -104,8 +104,9 @@ fn march(geometry: &ViewGeometry, ground: &RayGround<'_>, dir: DVec3) -> (Option
     let above = |s: f64| -> Option<f64> {
         let p = dir * s;
         let g = geometry.eye.truncate() + p.truncate();
-        let h = (ground.exact)(g.x, g.y)? as f64;
-        Some(p.z - (h - geometry.altitude - p.truncate().length_squared() * c))
+        let h = (ground.exact)(g.x, g.y)?;
+        // The surface as the measurement compares it (`drawn_truth`).
+        Some(p.z - (geometry.drawn_truth(g, h) - geometry.altitude))
     };
     let (mut s, mut prev) = (enter, enter);
     for step in 1..=MAX_STEPS {

@@ -81,7 +81,7 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     let (source, summary) = (terrain.source, terrain.summary);
     let mut config = DisplayConfig::new(args.backend, args.view.size);
     config.scene.horizon_culling = gapless;
-    config.memory_budget_bytes = Some(args.memory_mb as u64 * MB);
+    config.memory_budget_bytes = Some(display_budget(args)?);
     config.version = if args.es2 { GlesVersion::Es2 } else { GlesVersion::Es3 };
     config.scene.lod.tau_px = args.view.tau;
     config.scene.warning_above_m = args.warning_above;
@@ -107,7 +107,7 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     } else {
         fly_headless(args, &mut display, &path)?
     };
-    let memory = memory_report(&display);
+    let memory = memory_report(args, &display);
     if info.backend != OpenedBackend::Window {
         write_stats(args, &info, &dataset_name, &rows, &memory)?;
     }
@@ -116,11 +116,36 @@ pub fn run(args: &FlyArgs) -> Result<()> {
 
 const MB: u64 = 1 << 20;
 
+/// Heap a headless snapshot takes while it is read back and encoded (the
+/// image, its flipped copy, the PNG encoder's buffers), per pixel: measured
+/// 8.9 MB at 1280x720.
+const SNAPSHOT_BYTES_PER_PIXEL: u64 = 12;
+
+/// The part of `--memory-mb` the display gets: all of it, less what a
+/// headless run's snapshots take.
+fn display_budget(args: &FlyArgs) -> Result<u64> {
+    let budget = args.memory_mb as u64 * MB;
+    let snapshot = SNAPSHOT_BYTES_PER_PIXEL * args.view.size.x as u64 * args.view.size.y as u64;
+    match budget.checked_sub(snapshot).filter(|&left| left >= ridgeline::pipeline::MIN_BUDGET_BYTES)
+    {
+        Some(left) => Ok(left),
+        None => bail!(
+            "--memory-mb {}: {:.1} MB go to snapshots at {}x{}, too little is left for the display",
+            args.memory_mb,
+            snapshot as f64 / MB as f64,
+            args.view.size.x,
+            args.view.size.y
+        ),
+    }
+}
+
 /// What the run took of the board's memory (stats.json's `memory`).
 #[derive(serde::Serialize)]
 struct MemoryReport {
     /// `--memory-mb`, bytes.
     budget_bytes: u64,
+    /// Of it, what the display was planned for (the rest: snapshots).
+    display_budget_bytes: u64,
     /// Ridgeline's own heap at its peak (the counting allocator).
     heap_peak_bytes: u64,
     /// Ridgeline's own heap at the end of the run.
@@ -140,14 +165,15 @@ struct MemoryReport {
     driver_and_rest_bytes: u64,
 }
 
-fn memory_report(display: &Display) -> MemoryReport {
+fn memory_report(args: &FlyArgs, display: &Display) -> MemoryReport {
     let pipeline = display.pipeline();
     let heap_peak_bytes = super::heap::peak() as u64;
     let gpu_buffer_bytes = pipeline.scene().config().buffer_bytes as u64;
     let (resident_peak_bytes, resident_bytes) = super::heap::resident().unwrap_or((0, 0));
     let plan = pipeline.memory_plan();
     MemoryReport {
-        budget_bytes: plan.map_or(0, |p| p.budget_bytes),
+        budget_bytes: args.memory_mb as u64 * MB,
+        display_budget_bytes: plan.map_or(0, |p| p.budget_bytes),
         heap_peak_bytes,
         heap_bytes: super::heap::in_use() as u64,
         gpu_buffer_bytes,

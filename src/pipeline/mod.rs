@@ -11,7 +11,7 @@
 
 mod sizing;
 
-pub use sizing::{clipmap_view, plan_memory, MemoryPlan};
+pub use sizing::{clipmap_view, plan_memory, MemoryPlan, MIN_BUDGET_BYTES};
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -67,6 +67,16 @@ pub enum PipelineError {
     /// The camera or the tiling was invalid, or the buffer could not hold the root.
     #[error(transparent)]
     Scene(#[from] SceneError),
+    /// The memory budget is below what the display keeps aside.
+    #[error(
+        "memory budget {budget} bytes is below the least a display is planned for, {least} bytes"
+    )]
+    MemoryBudget {
+        /// The budget asked for, bytes.
+        budget: u64,
+        /// The least budget, bytes.
+        least: u64,
+    },
 }
 
 /// Why a frame failed: in the pipeline or in the backend drawing it.
@@ -123,16 +133,21 @@ impl FramePipeline {
         let view_config = clipmap_view(config, &summary, &layout)?;
         let wanted = sizing::atlas_slots(&view_config, layout.levels);
         let mut scene_config = config.scene;
-        let memory = config
-            .memory_budget_bytes
-            .map(|budget| plan_memory(budget, &layout, wanted, config.scene.buffer_bytes));
+        let mut loader = config.loader;
+        let memory = match config.memory_budget_bytes {
+            Some(budget) => Some(plan(config, budget, source.node_bytes(), wanted)?),
+            None => None,
+        };
         if let Some(plan) = memory {
             scene_config.buffer_bytes = plan.buffer_bytes;
+            if let LoaderMode::Thread { queue } = &mut loader {
+                *queue = plan.loader_queue as usize;
+            }
         }
         let clipmap_config = ClipmapConfig {
             atlas_slots: memory.map_or(wanted, |plan| plan.atlas_slots),
             budget: config.load_budget,
-            loader: config.loader,
+            loader,
         };
         let mut clipmap = Clipmap::new(source, clipmap_config)?;
         let view = clipmap.add_view(view_config, DVec3::ZERO)?;
@@ -232,6 +247,21 @@ impl FramePipeline {
     pub fn terrain(&self) -> ClipmapTerrain<'_> {
         ClipmapTerrain { clipmap: &self.clipmap, summary: &self.summary }
     }
+}
+
+/// The memory plan for `budget` bytes, or why there is none.
+fn plan(
+    config: &PipelineConfig,
+    budget: u64,
+    node_bytes: u64,
+    wanted: u32,
+) -> Result<MemoryPlan, PipelineError> {
+    let queue = match config.loader {
+        LoaderMode::Thread { queue } => queue.min(u32::MAX as usize) as u32,
+        LoaderMode::Inline => 0,
+    };
+    plan_memory(budget, node_bytes, wanted, queue, config.scene.buffer_bytes)
+        .ok_or(PipelineError::MemoryBudget { budget, least: MIN_BUDGET_BYTES })
 }
 
 fn ms(from: Instant, to: Instant) -> f64 {
