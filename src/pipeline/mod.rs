@@ -69,13 +69,16 @@ pub enum PipelineError {
     Scene(#[from] SceneError),
     /// The memory budget is below what the display keeps aside.
     #[error(
-        "memory budget {budget} bytes is below the least a display is planned for, {least} bytes"
+        "memory budget {budget} bytes is too small: at least {least} bytes, and room for the \
+         loader and two atlas slots of {node_bytes} bytes (the largest node)"
     )]
     MemoryBudget {
         /// The budget asked for, bytes.
         budget: u64,
         /// The least budget, bytes.
         least: u64,
+        /// Bytes a node buffer is counted at.
+        node_bytes: u64,
     },
 }
 
@@ -261,7 +264,7 @@ fn plan(
         LoaderMode::Inline => 0,
     };
     plan_memory(budget, node_bytes, wanted, queue, config.scene.buffer_bytes)
-        .ok_or(PipelineError::MemoryBudget { budget, least: MIN_BUDGET_BYTES })
+        .ok_or(PipelineError::MemoryBudget { budget, least: MIN_BUDGET_BYTES, node_bytes })
 }
 
 fn ms(from: Instant, to: Instant) -> f64 {

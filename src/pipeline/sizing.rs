@@ -88,7 +88,8 @@ pub struct MemoryPlan {
 /// and its staging copy (never more than `max_buffer_bytes`). A smaller
 /// buffer makes the scene coarsen its tiles, a smaller atlas makes tiles
 /// fall back to coarser resident nodes: the display degrades, never leaves
-/// holes. `None` when the budget is below the reserve.
+/// holes. `None` when the budget is below [`MIN_BUDGET_BYTES`] or leaves
+/// the atlas fewer than two slots.
 pub fn plan_memory(
     budget_bytes: u64,
     node_bytes: u64,
@@ -103,6 +104,10 @@ pub fn plan_memory(
     let buffers = ((usable as f64 * NODE_SHARE) as u64 / node_bytes.max(1)) as u32;
     let loader_queue = (buffers / 4).clamp(1, queue.max(1));
     let atlas_slots = buffers.saturating_sub(loader_queue + 2).min(wanted_slots);
+    if atlas_slots < 2.min(wanted_slots) {
+        // Not even the root and one node more: no display to degrade to.
+        return None;
+    }
     let nodes = (atlas_slots + loader_queue + 2) as u64 * node_bytes;
     let left = usable.saturating_sub(nodes);
     let buffer_bytes = (left / 2).min(max_buffer_bytes as u64) as u32 & !3;
@@ -126,7 +131,10 @@ mod tests {
             queue in 0u32..512,
         ) {
             match plan_memory(budget, node_bytes, wanted, queue, 84 << 20) {
-                None => prop_assert!(budget < MIN_BUDGET_BYTES),
+                None => prop_assert!(
+                    budget < MIN_BUDGET_BYTES
+                        || (budget - RESERVE_BYTES) as f64 * NODE_SHARE < (8 * node_bytes) as f64
+                ),
                 Some(plan) => {
                     let nodes = (plan.atlas_slots + plan.loader_queue + 2) as u64 * node_bytes;
                     let used = nodes + 2 * plan.buffer_bytes as u64;
