@@ -13,6 +13,7 @@ pub use clipmap_terrain::{ClipmapTerrain, TerrainSummary};
 pub use terrain::{PreloadedTerrain, TerrainData};
 
 use crate::camera::{Camera, CameraError, Frustum, EARTH_RADIUS_M};
+use crate::lod::life::LifeStats;
 use crate::lod::rings::RingInputs;
 use crate::lod::select::View;
 use crate::lod::{LevelRings, LodConfig, LodError, TileSelector};
@@ -122,6 +123,12 @@ pub struct SceneStats {
     pub allocator_workspace_bytes: u32,
     /// Times the selection was coarsened because the buffer was full.
     pub coarsened: u32,
+    /// The tau the frame's tiles were selected with, pixels: the bound it
+    /// achieved (above the requested one when a budget or a full buffer
+    /// loosened it).
+    pub tau_px: f64,
+    /// The valid life's split tests in the final selection (all zero without one).
+    pub life: LifeStats,
     /// CPU time of each stage.
     pub cpu_ms: StageTimes,
 }
@@ -135,6 +142,8 @@ pub struct Scene {
     draw_list: DrawList,
     deltas: Vec<f64>,
     height_range_m: f64,
+    /// Tau of the next frame, pixels: the configured one unless a budget set it.
+    tau_px: f64,
 }
 
 /// The near plane sits this share of the way to the nearest drawn tile's
@@ -172,7 +181,18 @@ impl Scene {
             draw_list,
             height_range_m: (hi - lo) as f64,
             deltas,
+            tau_px: config.lod.tau_px,
         })
+    }
+
+    /// Sets the tau the next frames select with (a frame budget's), pixels;
+    /// refused when it is not finite or below the configured tau.
+    pub fn set_tau(&mut self, tau_px: f64) -> Result<(), SceneError> {
+        if !(tau_px.is_finite() && tau_px >= self.config.lod.tau_px) {
+            return Err(LodError::Tau(tau_px).into());
+        }
+        self.tau_px = tau_px;
+        Ok(())
     }
 
     /// The configuration the scene was built with.
@@ -209,7 +229,7 @@ impl Scene {
         let (near, far) = clip_planes(camera, terrain);
         let frustum = Frustum::from_view_projection(camera.projection(near, far) * camera.view());
         let mut report = SceneStats::default();
-        let mut lod = self.config.lod;
+        let mut lod = LodConfig { tau_px: self.tau_px, ..self.config.lod };
         let mut nearest_m: f64;
         loop {
             let start = Instant::now();
@@ -253,6 +273,8 @@ impl Scene {
         let stats = self.cache.stats();
         report.tiles = self.draw_list.tiles.len();
         report.culled = self.selector.culled();
+        report.tau_px = lod.tau_px;
+        report.life = self.selector.life_stats().unwrap_or_default();
         report.triangles = self.draw_list.triangles();
         report.bytes_uploaded = stats.bytes_uploaded;
         report.transfers = stats.transfers;
