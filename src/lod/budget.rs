@@ -113,6 +113,7 @@ pub struct TauController {
     config: BudgetConfig,
     requested: f64,
     offset: f64,
+    ceiling: f64,
     limit: f64,
     last_direction: i8,
     mean: Option<f64>,
@@ -130,6 +131,7 @@ impl TauController {
             config,
             requested: requested_px,
             offset: 0.0,
+            ceiling: f64::INFINITY,
             limit: config.max_step,
             last_direction: 0,
             mean: None,
@@ -152,10 +154,31 @@ impl TauController {
         self.requested
     }
 
-    /// Whether the last measurement was in the band, or under it at the
-    /// requested tau (the budget does not bind): tau holds.
+    /// Whether tau holds: the last measurement was in the band, under it
+    /// at the requested tau (the budget does not bind), or over it at the
+    /// ceiling (the budget cannot be met by tau).
     pub fn steady(&self) -> bool {
         self.in_band
+    }
+
+    /// Caps tau at `ceiling_px` (where raising it stops changing anything:
+    /// [`crate::lod::LevelRings::tau_ceiling`]), never below the request; so
+    /// an unreachable budget cannot wind tau up without end.
+    pub fn set_ceiling(&mut self, ceiling_px: f64) {
+        if ceiling_px.is_nan() {
+            return;
+        }
+        self.ceiling = (ceiling_px / self.requested).log2().max(0.0);
+        self.offset = self.offset.min(self.ceiling);
+    }
+
+    /// Continues from `tau_px`, the tau a frame was actually drawn with
+    /// when the scene corrected it within the frame (clamped to the request
+    /// and the ceiling).
+    pub fn adopt(&mut self, tau_px: f64) {
+        if tau_px.is_finite() && tau_px > 0.0 {
+            self.offset = (tau_px / self.requested).log2().clamp(0.0, self.ceiling);
+        }
     }
 
     /// Takes the last frame's measurement (triangles or milliseconds, as
@@ -170,7 +193,8 @@ impl TauController {
         self.mean = Some(mean);
         let error = (mean / self.config.target_value()).log2();
         let band = (1.0 + self.config.deadband).log2();
-        let pinned = error < 0.0 && self.offset <= 0.0;
+        let pinned =
+            (error < 0.0 && self.offset <= 0.0) || (error > 0.0 && self.offset >= self.ceiling);
         self.in_band = error.abs() <= band || pinned;
         if self.in_band {
             return;
@@ -183,7 +207,7 @@ impl TauController {
         }
         self.last_direction = direction;
         let step = (self.config.gain * error).clamp(-self.limit, self.limit);
-        self.offset = (self.offset + step).max(0.0);
+        self.offset = (self.offset + step).clamp(0.0, self.ceiling);
         debug_assert!(self.tau_px() >= self.requested);
     }
 }
@@ -235,6 +259,12 @@ mod tests {
         assert_eq!(c.tau_px(), 1.0, "under budget at the requested tau: pinned");
         c.observe(400_000.0);
         assert!(c.tau_px() > 1.0 && c.tau_px() <= 0.25f64.exp2());
+        c.set_ceiling(1.1);
+        for _ in 0..50 {
+            c.observe(400_000.0);
+        }
+        assert!((c.tau_px() - 1.1).abs() < 1e-9, "held at the ceiling: {}", c.tau_px());
+        assert!(c.steady());
     }
 
     #[test]

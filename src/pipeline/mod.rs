@@ -25,7 +25,9 @@ use crate::clipmap::{Clipmap, ClipmapConfig, ClipmapError, ClipmapStats, LoaderM
 use crate::lod::budget::{BudgetConfig, BudgetError, BudgetTarget, TauController};
 use crate::node::NodeSource;
 use crate::render::{CallStats, DrawList, FrameOutput, RenderBackend};
-use crate::scene::{ClipmapTerrain, Scene, SceneConfig, SceneError, SceneStats, TerrainSummary};
+use crate::scene::{
+    ClipmapTerrain, Scene, SceneConfig, SceneError, SceneStats, TerrainSummary, TriangleBand,
+};
 
 /// Everything fixed for one pipeline.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -163,6 +165,7 @@ impl FramePipeline {
         let paged = Instant::now();
         if let Some(budget) = &self.budget {
             self.scene.set_tau(budget.tau_px()).map_err(PipelineError::from)?;
+            self.scene.set_triangle_band(triangle_band(budget.config()));
         }
         let terrain = ClipmapTerrain { clipmap: &self.clipmap, summary: &self.summary };
         let scene = self.scene.frame(camera, &terrain).map_err(PipelineError::from)?;
@@ -185,6 +188,10 @@ impl FramePipeline {
             tau_requested_px: self.scene.config().lod.tau_px,
         };
         if let Some(budget) = &mut self.budget {
+            budget.set_ceiling(self.scene.tau_ceiling());
+            if stats.scene.reselected > 0 && stats.scene.coarsened == 0 {
+                budget.adopt(stats.scene.tau_px);
+            }
             budget.observe(match budget.config().target {
                 BudgetTarget::Triangles(_) => stats.scene.triangles as f64,
                 BudgetTarget::FrameMs(_) => stats.frame_ms,
@@ -250,6 +257,18 @@ impl FramePipeline {
     /// The terrain as the scene sees it now: the clipmap's resident nodes.
     pub fn terrain(&self) -> ClipmapTerrain<'_> {
         ClipmapTerrain { clipmap: &self.clipmap, summary: &self.summary }
+    }
+}
+
+/// The band a triangle budget holds within each frame: the controller's
+/// deadband plus one percent (the frame's estimate is per tile); none for a
+/// frame-time target, which only the next frame can measure.
+fn triangle_band(config: &BudgetConfig) -> Option<TriangleBand> {
+    match config.target {
+        BudgetTarget::Triangles(n) => {
+            Some(TriangleBand { target: n as f64, tolerance: config.deadband + 0.01 })
+        }
+        BudgetTarget::FrameMs(_) => None,
     }
 }
 

@@ -6,8 +6,11 @@
 //! again with rings half as wide (coarser tiles), down to the root level,
 //! whose tiles are always resident: the picture gets coarser, never a hole.
 
+mod band;
 mod clipmap_terrain;
 mod terrain;
+
+pub use band::{TriangleBand, MAX_RESELECTIONS};
 
 pub use clipmap_terrain::{ClipmapTerrain, TerrainSummary};
 pub use terrain::{PreloadedTerrain, TerrainData};
@@ -129,6 +132,8 @@ pub struct SceneStats {
     pub tau_px: f64,
     /// The valid life's split tests in the final selection (all zero without one).
     pub life: LifeStats,
+    /// Selections redone to keep a triangle budget's band ([`TriangleBand`]).
+    pub reselected: u32,
     /// CPU time of each stage.
     pub cpu_ms: StageTimes,
 }
@@ -144,6 +149,11 @@ pub struct Scene {
     height_range_m: f64,
     /// Tau of the next frame, pixels: the configured one unless a budget set it.
     tau_px: f64,
+    /// Rings without Ulrich's rule, and the tau past which rings stop
+    /// shrinking (a budget's ceiling), of the last frame.
+    loose_rings: LevelRings,
+    tau_ceiling: f64,
+    band: band::BandState,
 }
 
 /// The near plane sits this share of the way to the nearest drawn tile's
@@ -165,19 +175,20 @@ impl Scene {
         let deltas = terrain.delta_per_level();
         let (lo, hi) = terrain.height_range();
         let draw_list = DrawList::with_capacity(cache_config.max_tiles as usize);
+        let inputs = RingInputs {
+            tile_size_m: 1.0,
+            delta_per_level: &deltas,
+            height_range_m: 0.0,
+            perspective_scale: 1.0,
+        };
         Ok(Scene {
+            loose_rings: LevelRings::new(&config.lod, inputs),
+            tau_ceiling: f64::INFINITY,
+            band: band::BandState::default(),
             config,
             selector: TileSelector::new(config.lod),
             cache: TileCache::new(cache_config, terrain)?,
-            rings: LevelRings::new(
-                &config.lod,
-                RingInputs {
-                    tile_size_m: 1.0,
-                    delta_per_level: &deltas,
-                    height_range_m: 0.0,
-                    perspective_scale: 1.0,
-                },
-            ),
+            rings: LevelRings::new(&config.lod, inputs),
             draw_list,
             height_range_m: (hi - lo) as f64,
             deltas,
@@ -210,6 +221,18 @@ impl Scene {
         (self.cache.staging(), self.cache.dirty_ranges())
     }
 
+    /// Keeps the next frames' triangles inside `band` (a triangle budget's)
+    /// by selecting again within the frame; `None`: no band.
+    pub fn set_triangle_band(&mut self, band: Option<TriangleBand>) {
+        self.band.band = band;
+    }
+
+    /// The tau past which the last frame's rings stop shrinking, pixels:
+    /// a budget raising tau further gains nothing.
+    pub fn tau_ceiling(&self) -> f64 {
+        self.tau_ceiling
+    }
+
     /// The rings of the last frame.
     pub fn rings(&self) -> &LevelRings {
         &self.rings
@@ -231,6 +254,8 @@ impl Scene {
         let mut report = SceneStats::default();
         let mut lod = LodConfig { tau_px: self.tau_px, ..self.config.lod };
         let mut nearest_m: f64;
+        let inputs = ring_inputs(&layout, grid_size, &self.deltas, self.height_range_m, camera);
+        self.tau_ceiling = LevelRings::tau_ceiling(&mut self.loose_rings, &lod, inputs);
         loop {
             let start = Instant::now();
             let inputs = ring_inputs(&layout, grid_size, &self.deltas, self.height_range_m, camera);
@@ -242,6 +267,18 @@ impl Scene {
                 curvature: self.config.curvature,
             };
             let selected = self.selector.select(&view, terrain);
+            let retarget = (report.reselected < MAX_RESELECTIONS && report.coarsened == 0)
+                .then(|| {
+                    let (floor, ceiling) = (self.config.lod.tau_px, self.tau_ceiling);
+                    self.band.retarget(selected.len(), lod.tau_px, floor, ceiling)
+                })
+                .flatten();
+            if let Some(tau_px) = retarget {
+                lod.tau_px = tau_px;
+                report.reselected += 1;
+                report.cpu_ms.select_ms += ms(start, Instant::now());
+                continue;
+            }
             nearest_m = selected.iter().map(|t| t.distance).fold(f64::INFINITY, f64::min);
             let selected_at = Instant::now();
             report.cpu_ms.select_ms += ms(start, selected_at);
@@ -276,6 +313,7 @@ impl Scene {
         report.tau_px = lod.tau_px;
         report.life = self.selector.life_stats().unwrap_or_default();
         report.triangles = self.draw_list.triangles();
+        self.band.learn(report.triangles, report.tiles);
         report.bytes_uploaded = stats.bytes_uploaded;
         report.transfers = stats.transfers;
         report.generated = stats.generated;
