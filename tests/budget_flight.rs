@@ -5,8 +5,11 @@
 //! says so. The flights are listed in [`flights`] (the cruise flight joins
 //! them when it exists).
 
+use std::sync::Arc;
+
 use ridgeline::flight::{default_flight, FlightPath};
 use ridgeline::lod::budget::{BudgetConfig, BudgetTarget};
+use ridgeline::node::NodeSource;
 use ridgeline::pipeline::{FramePipeline, FrameStats, PipelineConfig};
 use ridgeline::scene::{SceneConfig, TerrainSummary};
 use testkit::scene::null_backend;
@@ -21,10 +24,23 @@ fn flights() -> Vec<(&'static str, FlightPath)> {
     vec![("default", default_flight(&testkit::builtin_pyramid()))]
 }
 
+/// The built-in terrain with its node meshes (`fly`'s default) or as
+/// regular grids (`fly --regular-grid`).
+fn source(meshes: bool) -> (Arc<dyn NodeSource>, TerrainSummary) {
+    if meshes {
+        let terrain = testkit::builtin_terrain();
+        let summary = testkit::summary_of(&terrain);
+        (terrain, summary)
+    } else {
+        let pyramid = testkit::builtin_pyramid();
+        let summary = TerrainSummary::from_pyramid(pyramid.info());
+        (pyramid, summary)
+    }
+}
+
 /// `FRAMES` frames of `path` at tau 1 under `budget` triangles, with the
 /// valid life on as `ridgeline fly` runs it.
-fn fly(path: &FlightPath, budget: u64) -> Vec<FrameStats> {
-    let pyramid = testkit::builtin_pyramid();
+fn fly(path: &FlightPath, budget: u64, meshes: bool) -> Vec<FrameStats> {
     let mut scene = SceneConfig::default();
     scene.lod.max_travel_m = Some(path.max_travel_per_frame(FRAMES).max(1.0));
     let config = PipelineConfig {
@@ -34,8 +50,8 @@ fn fly(path: &FlightPath, budget: u64) -> Vec<FrameStats> {
         budget: Some(BudgetConfig::new(BudgetTarget::Triangles(budget))),
         ..PipelineConfig::new(SIZE)
     };
-    let summary = TerrainSummary::from_pyramid(pyramid.info());
-    let mut pipeline = FramePipeline::new(&config, pyramid.clone(), summary).expect("pipeline");
+    let (source, summary) = source(meshes);
+    let mut pipeline = FramePipeline::new(&config, source, summary).expect("pipeline");
     let mut backend = null_backend(&scene);
     path.frame_times(FRAMES)
         .map(|t| pipeline.frame(&path.sample(t).camera(60.0, SIZE), &mut backend).expect("frame"))
@@ -44,9 +60,13 @@ fn fly(path: &FlightPath, budget: u64) -> Vec<FrameStats> {
 
 #[test]
 fn the_triangle_budget_holds_after_30_frames() {
-    for (name, path) in flights() {
-        for budget in [300_000u64, 400_000, 700_000] {
-            let frames = fly(&path, budget);
+    // At 1280x720 node meshes draw 330k triangles at tau 1 and no fewer
+    // than about 216k at any tau; grids 1.37M and 280k.
+    let cases = [(true, [250_000u64, 290_000]), (false, [300_000, 700_000])];
+    for ((name, path), (meshes, budgets)) in flights().iter().flat_map(|f| cases.map(|c| (f, c))) {
+        let name = format!("{name} ({})", if meshes { "node meshes" } else { "regular grids" });
+        for budget in budgets {
+            let frames = fly(path, budget, meshes);
             let deviation = |s: &FrameStats| s.scene.triangles as f64 / budget as f64 - 1.0;
             let late = &frames[SETTLE..];
             let worst = late.iter().map(|s| deviation(s).abs()).fold(0.0, f64::max);
@@ -61,7 +81,7 @@ fn the_triangle_budget_holds_after_30_frames() {
                 100.0 * fraction,
                 frames[..SETTLE].iter().map(|s| s.scene.triangles).collect::<Vec<_>>()
             );
-            if worst > 0.05 {
+            if worst > 0.10 {
                 let late: Vec<_> = late
                     .iter()
                     .map(|s| {
@@ -84,11 +104,19 @@ fn the_triangle_budget_holds_after_30_frames() {
                 assert_eq!(s.tau_loosened(), s.scene.tau_px > 1.0, "frame {k}");
             }
             assert!(frames[0].scene.triangles as f64 > 1.05 * budget as f64, "the budget binds");
-            assert!(
-                worst <= 0.05,
-                "{name}, budget {budget}: {:.2} % off after {SETTLE} frames",
+            let outside = late.iter().filter(|s| deviation(s).abs() > 0.05).count();
+            println!("  {outside} of {} frames outside ±5 %", late.len());
+            let why = format!(
+                "{name}, budget {budget}: {outside} frames outside ±5 %, worst {:.2} %",
                 100.0 * worst
             );
+            if meshes {
+                // Node meshes: where one ring change swaps more triangles
+                // than the band holds, no tau lands in it (see DESIGN.md).
+                assert!(outside * 20 <= late.len() && worst <= 0.10, "{why}");
+            } else {
+                assert!(worst <= 0.05, "{why}");
+            }
         }
     }
 }

@@ -7,6 +7,8 @@
 //! - over the default flight through the whole pipeline (paging included),
 //!   where it also reports how few tiles were re-tested.
 
+use std::sync::Arc;
+
 use proptest::prelude::*;
 use ridgeline::camera::{Camera, Frustum};
 use ridgeline::flight::default_flight;
@@ -14,6 +16,7 @@ use ridgeline::lod::life::LifeStats;
 use ridgeline::lod::select::{SelectedTile, View};
 use ridgeline::lod::TileKey;
 use ridgeline::lod::{LevelRings, LodConfig, TileSelector};
+use ridgeline::node::NodeSource;
 use ridgeline::pipeline::{FramePipeline, PipelineConfig};
 use ridgeline::scene::{
     clip_planes, ring_inputs, PreloadedTerrain, SceneConfig, TerrainData, TerrainSummary,
@@ -117,7 +120,7 @@ const FLY_SIZE: [u32; 2] = [1280, 720];
 
 /// Each frame's drawn tiles and the valid life's counts, along the default
 /// flight as `ridgeline fly` flies it, on the null backend.
-fn fly_default(max_travel_m: Option<f64>) -> Vec<(Vec<TileKey>, LifeStats)> {
+fn fly_default(max_travel_m: Option<f64>, meshes: bool) -> Vec<(Vec<TileKey>, LifeStats)> {
     let pyramid = testkit::builtin_pyramid();
     let path = default_flight(&pyramid);
     let mut scene = SceneConfig::default();
@@ -128,8 +131,14 @@ fn fly_default(max_travel_m: Option<f64>) -> Vec<(Vec<TileKey>, LifeStats)> {
         load_budget: 4096,
         ..PipelineConfig::new(FLY_SIZE)
     };
-    let summary = TerrainSummary::from_pyramid(pyramid.info());
-    let mut pipeline = FramePipeline::new(&config, pyramid.clone(), summary).expect("pipeline");
+    let (source, summary): (Arc<dyn NodeSource>, _) = if meshes {
+        let terrain = testkit::builtin_terrain();
+        let summary = testkit::summary_of(&terrain);
+        (terrain, summary)
+    } else {
+        (pyramid.clone(), TerrainSummary::from_pyramid(pyramid.info()))
+    };
+    let mut pipeline = FramePipeline::new(&config, source, summary).expect("pipeline");
     let mut backend = null_backend(&scene);
     let mut frames = Vec::new();
     for t in path.frame_times(FLY_FRAMES) {
@@ -143,10 +152,16 @@ fn fly_default(max_travel_m: Option<f64>) -> Vec<(Vec<TileKey>, LifeStats)> {
 
 #[test]
 fn the_default_flight_selects_the_same_and_re_tests_few_tiles() {
+    for meshes in [true, false] {
+        default_flight_matches(meshes);
+    }
+}
+
+fn default_flight_matches(meshes: bool) {
     let pyramid = testkit::builtin_pyramid();
     let travel = default_flight(&pyramid).max_travel_per_frame(FLY_FRAMES);
-    let full = fly_default(None);
-    let life = fly_default(Some(travel));
+    let full = fly_default(None, meshes);
+    let life = fly_default(Some(travel), meshes);
     let mut fractions = Vec::new();
     for (frame, ((expected, _), (got, stats))) in full.iter().zip(&life).enumerate() {
         assert_eq!(got, expected, "frame {frame}: the valid life selected other tiles");
@@ -162,8 +177,9 @@ fn the_default_flight_selects_the_same_and_re_tests_few_tiles() {
     let candidates = life.iter().map(|(_, s)| s.candidates as f64).sum::<f64>() / life.len() as f64;
     let tested = life.iter().map(|(_, s)| s.re_evaluated as f64).sum::<f64>() / life.len() as f64;
     println!(
-        "default flight, {FLY_FRAMES} frames at {:?}, declared travel {travel:.1} m a frame: \
+        "default flight ({}), {FLY_FRAMES} frames at {:?}, declared travel {travel:.1} m a frame: \
          {tested:.1} of {candidates:.1} split tests made a frame ({:.1} % mean, {:.1} % at most after the first frame)",
+        if meshes { "node meshes" } else { "regular grids" },
         FLY_SIZE,
         100.0 * mean,
         100.0 * max

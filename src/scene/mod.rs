@@ -197,7 +197,8 @@ impl Scene {
     }
 
     /// Sets the tau the next frames select with (a frame budget's), pixels;
-    /// refused when it is not finite or below the configured tau.
+    /// Kühnert's view distance shrinks by the same factor, down to 1 tile.
+    /// Refused when it is not finite or below the configured tau.
     pub fn set_tau(&mut self, tau_px: f64) -> Result<(), SceneError> {
         if !(tau_px.is_finite() && tau_px >= self.config.lod.tau_px) {
             return Err(LodError::Tau(tau_px).into());
@@ -227,8 +228,9 @@ impl Scene {
         self.band.band = band;
     }
 
-    /// The tau past which the last frame's rings stop shrinking, pixels:
-    /// a budget raising tau further gains nothing.
+    /// The tau past which the last frame's rings stop shrinking, pixels,
+    /// with the view distance shrinking alongside ([`Scene::set_tau`]): a
+    /// budget raising tau further gains nothing.
     pub fn tau_ceiling(&self) -> f64 {
         self.tau_ceiling
     }
@@ -252,10 +254,14 @@ impl Scene {
         let (near, far) = clip_planes(camera, terrain);
         let frustum = Frustum::from_view_projection(camera.projection(near, far) * camera.view());
         let mut report = SceneStats::default();
-        let mut lod = LodConfig { tau_px: self.tau_px, ..self.config.lod };
+        let mut lod = loosened(&self.config.lod, self.tau_px);
         let mut nearest_m: f64;
         let inputs = ring_inputs(&layout, grid_size, &self.deltas, self.height_range_m, camera);
-        self.tau_ceiling = LevelRings::tau_ceiling(&mut self.loose_rings, &lod, inputs);
+        let loosest = LodConfig { view_distance: 1.0, ..self.config.lod };
+        let ceiling = LevelRings::tau_ceiling(&mut self.loose_rings, &loosest, inputs);
+        let requested = self.config.lod;
+        self.tau_ceiling = ceiling.max(requested.tau_px * requested.view_distance);
+        let mut search = self.band.search(requested.tau_px, self.tau_ceiling);
         loop {
             let start = Instant::now();
             let inputs = ring_inputs(&layout, grid_size, &self.deltas, self.height_range_m, camera);
@@ -267,14 +273,17 @@ impl Scene {
                 curvature: self.config.curvature,
             };
             let selected = self.selector.select(&view, terrain);
-            let retarget = (report.reselected < MAX_RESELECTIONS && report.coarsened == 0)
-                .then(|| {
-                    let (floor, ceiling) = (self.config.lod.tau_px, self.tau_ceiling);
-                    self.band.retarget(selected.len(), lod.tau_px, floor, ceiling)
-                })
-                .flatten();
+            let retarget = match (&mut search, report.coarsened) {
+                (Some(search), 0) => {
+                    let cache = &self.cache;
+                    let tiles =
+                        selected.iter().map(|t| (t.key.level, cache.resident_triangles(t.key)));
+                    search.next(self.band.estimate(tiles), lod.tau_px)
+                }
+                _ => None,
+            };
             if let Some(tau_px) = retarget {
-                lod.tau_px = tau_px;
+                lod = loosened(&self.config.lod, tau_px);
                 report.reselected += 1;
                 report.cpu_ms.select_ms += ms(start, Instant::now());
                 continue;
@@ -313,7 +322,7 @@ impl Scene {
         report.tau_px = lod.tau_px;
         report.life = self.selector.life_stats().unwrap_or_default();
         report.triangles = self.draw_list.triangles();
-        self.band.learn(report.triangles, report.tiles);
+        self.band.learn(self.draw_list.tiles.iter().map(|t| (t.key.level, t.triangles())));
         report.bytes_uploaded = stats.bytes_uploaded;
         report.transfers = stats.transfers;
         report.generated = stats.generated;
@@ -369,6 +378,16 @@ pub fn ring_inputs<'a>(
         height_range_m,
         perspective_scale: camera.perspective_scale(),
     }
+}
+
+/// The tiling for a budget's `tau_px`: tau itself, and Kühnert's view
+/// distance shrunk by as much as tau grew (never below 1 tile), so the rings
+/// shrink even where his rule, not Ulrich's, sets them (node meshes). The
+/// bound drawn is still `tau_px`: Ulrich's rule is kept at every level.
+fn loosened(requested: &LodConfig, tau_px: f64) -> LodConfig {
+    let factor = tau_px / requested.tau_px;
+    let view_distance = (requested.view_distance / factor).max(1.0);
+    LodConfig { tau_px, view_distance, ..*requested }
 }
 
 fn ms(from: Instant, to: Instant) -> f64 {
