@@ -142,7 +142,12 @@ impl TileSelector {
         let ring = view.rings.split_distance(key.level);
         match &mut self.life {
             None => distance < ring,
-            Some(life) => life.splits(key, bounds, ring, || distance),
+            Some(life) => {
+                let split = life.splits(key, bounds, ring, || distance);
+                // The distance is at hand anyway: check the kept outcome.
+                debug_assert_eq!(split, distance < ring, "a stale split test kept for {key:?}");
+                split
+            }
         }
     }
 
