@@ -233,8 +233,9 @@ fn print_tables(run: &AccuracyRun) -> Result<()> {
             run.views[worst.index].t
         )?;
     }
-    let bound = run.tau_achieved_max_px;
-    let verdict = if s.p999_px <= bound { "confirmed" } else { "NOT confirmed" };
+    // Two decimals at most: a budget's tau is any number.
+    let bound = (run.tau_achieved_max_px * 100.0).round() / 100.0;
+    let verdict = if s.p999_px <= run.tau_achieved_max_px { "confirmed" } else { "NOT confirmed" };
     writeln!(out, "  bound             p99.9 {:.3} px <= tau {bound} px: {verdict}", s.p999_px)?;
     super::print(&out)
 }
