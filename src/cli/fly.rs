@@ -46,6 +46,9 @@ pub struct FlyArgs {
     pub snapshots: u32,
 }
 
+/// The frame rate a window is taken to keep for the valid life's declared travel.
+const WINDOW_RATE_HZ: f64 = 10.0;
+
 pub fn run(args: &FlyArgs) -> Result<()> {
     args.view.check()?;
     if !(args.warning_above.is_finite()
@@ -62,11 +65,19 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     let (source, summary) = (terrain.source, terrain.summary);
     let mut config = DisplayConfig::new(args.backend, args.view.size);
     config.version = if args.es2 { GlesVersion::Es2 } else { GlesVersion::Es3 };
-    config.scene.lod.tau_px = args.view.tau;
     config.scene.warning_above_m = args.warning_above;
     config.scene.caution_below_m = args.caution_below;
     config.scene.curvature = !args.flat_earth;
-    config.fov_x_deg = args.view.fov;
+    // Headless frames are evenly spaced along the path; a window is taken to
+    // show WINDOW_RATE_HZ (slower frames re-test every tile); `auto` may open
+    // either, so it declares the longer interval.
+    let headless = path.duration() / args.frames.saturating_sub(1).max(1) as f64;
+    let interval = match args.backend {
+        GlBackend::Window => 1.0 / WINDOW_RATE_HZ,
+        GlBackend::Auto => headless.max(1.0 / WINDOW_RATE_HZ),
+        _ => headless,
+    };
+    args.view.configure(&mut config, &path, interval);
     let mut display = Display::new(&config, source, summary).context("opening the display")?;
     let info = display.info().clone();
     println!(
@@ -87,7 +98,7 @@ pub fn run(args: &FlyArgs) -> Result<()> {
         fly_headless(args, &mut display, &path)?
     };
     if info.backend != OpenedBackend::Window {
-        write_stats(args, &info, &dataset_name, &rows)?;
+        write_stats(args, &info, &dataset_name, &rows, config.scene.lod.max_travel_m)?;
     }
     print_summary(&rows)
 }
@@ -153,6 +164,7 @@ fn write_stats(
     info: &ridgeline::gl::GlInfo,
     dataset: &str,
     rows: &[Row],
+    max_travel_m: Option<f64>,
 ) -> Result<()> {
     let frames: Vec<serde_json::Value> = rows
         .iter()
@@ -174,6 +186,16 @@ fn write_stats(
                 "resident_nodes": s.resident_nodes,
                 "nodes_loaded": s.nodes_loaded,
                 "coarsened": s.scene.coarsened,
+                "tau_px": s.scene.tau_px,
+                "tau_requested_px": s.tau_requested_px,
+                "tau_loosened": s.tau_loosened(),
+                "reselected": s.scene.reselected,
+                "split_tests": {
+                    "candidates": s.scene.life.candidates,
+                    "re_evaluated": s.scene.life.re_evaluated,
+                    "fraction": s.scene.life.fraction(),
+                    "full": s.scene.life.full,
+                },
                 "cpu_ms": {
                     "clipmap": s.clipmap_ms,
                     "select": s.scene.cpu_ms.select_ms,
@@ -194,6 +216,10 @@ fn write_stats(
         "dataset": dataset,
         "size": [args.view.size.x, args.view.size.y],
         "tau_px": args.view.tau,
+        "triangle_budget": args.view.triangle_budget,
+        "frame_ms_target": args.view.frame_ms,
+        "max_travel_m": max_travel_m,
+        "tau_loosened_frames": rows.iter().filter(|r| r.stats.tau_loosened()).count(),
         "fov_x_deg": args.view.fov,
         "frames": frames,
     });
@@ -260,5 +286,49 @@ fn print_summary(rows: &[Row]) -> Result<()> {
         last.stats.scene.allocator_used_bytes as f64 / 1e6
     )?;
     writeln!(out, "  resident nodes    {} at the end", last.stats.resident_nodes)?;
+    write_tau(&mut out, rows)?;
+    write_split_tests(&mut out, rows)?;
     super::print(&out)
+}
+
+/// The tau line: the bound asked for and, when a budget loosened it, on
+/// how many frames and how far. A loosened bound is never left unsaid.
+fn write_tau(out: &mut String, rows: &[Row]) -> Result<()> {
+    use std::fmt::Write as _;
+    let requested = rows[0].stats.tau_requested_px;
+    let loosened = rows.iter().filter(|r| r.stats.tau_loosened()).count();
+    let mut taus: Vec<f64> = rows.iter().map(|r| r.stats.scene.tau_px).collect();
+    taus.sort_by(f64::total_cmp);
+    if loosened == 0 {
+        writeln!(out, "  tau               {requested} px on every frame (as requested)")?;
+    } else {
+        writeln!(
+            out,
+            "  tau               LOOSENED on {loosened} of {} frames: requested {requested} px, \
+             achieved p50 {:.2}, max {:.2} px (the bound the display held)",
+            rows.len(),
+            taus[taus.len() / 2],
+            taus[taus.len() - 1]
+        )?;
+    }
+    Ok(())
+}
+
+/// The valid life's line: split tests made against those a full
+/// re-evaluation makes.
+fn write_split_tests(out: &mut String, rows: &[Row]) -> Result<()> {
+    use std::fmt::Write as _;
+    let n = rows.len() as f64;
+    let life = |f: &dyn Fn(&ridgeline::lod::life::LifeStats) -> f64| {
+        rows.iter().map(|r| f(&r.stats.scene.life)).sum::<f64>() / n
+    };
+    let full = rows.iter().filter(|r| r.stats.scene.life.full).count();
+    writeln!(
+        out,
+        "  split tests       {:.1} of {:.1} made a frame ({:.1} % mean; valid life), {full} full re-evaluations",
+        life(&|l| l.re_evaluated as f64),
+        life(&|l| l.candidates as f64),
+        100.0 * life(&|l| l.fraction())
+    )?;
+    Ok(())
 }

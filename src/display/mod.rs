@@ -40,6 +40,8 @@ pub struct DisplayConfig {
     pub loader: LoaderMode,
     /// Clear to this colour and skip the sky (hole detection in tests).
     pub sentinel: Option<[f32; 4]>,
+    /// A frame budget (triangles or milliseconds) that may raise tau.
+    pub budget: Option<crate::lod::budget::BudgetConfig>,
 }
 
 impl DisplayConfig {
@@ -54,6 +56,7 @@ impl DisplayConfig {
             load_budget: 32,
             loader: LoaderMode::Thread { queue: 256 },
             sentinel: None,
+            budget: None,
         }
     }
 
@@ -65,6 +68,7 @@ impl DisplayConfig {
             viewport: self.size.into(),
             load_budget: self.load_budget,
             loader: self.loader,
+            budget: self.budget,
         }
     }
 }

@@ -6,13 +6,17 @@
 //! again with rings half as wide (coarser tiles), down to the root level,
 //! whose tiles are always resident: the picture gets coarser, never a hole.
 
+mod band;
 mod clipmap_terrain;
 mod terrain;
+
+pub use band::{TriangleBand, MAX_RESELECTIONS};
 
 pub use clipmap_terrain::{ClipmapTerrain, TerrainSummary};
 pub use terrain::{PreloadedTerrain, TerrainData};
 
 use crate::camera::{Camera, CameraError, Frustum, EARTH_RADIUS_M};
+use crate::lod::life::LifeStats;
 use crate::lod::rings::RingInputs;
 use crate::lod::select::View;
 use crate::lod::{LevelRings, LodConfig, LodError, TileSelector};
@@ -122,6 +126,14 @@ pub struct SceneStats {
     pub allocator_workspace_bytes: u32,
     /// Times the selection was coarsened because the buffer was full.
     pub coarsened: u32,
+    /// The tau the frame's tiles were selected with, pixels: the bound it
+    /// achieved (above the requested one when a budget or a full buffer
+    /// loosened it).
+    pub tau_px: f64,
+    /// The valid life's split tests in the final selection (all zero without one).
+    pub life: LifeStats,
+    /// Selections redone to keep a triangle budget's band ([`TriangleBand`]).
+    pub reselected: u32,
     /// CPU time of each stage.
     pub cpu_ms: StageTimes,
 }
@@ -135,6 +147,13 @@ pub struct Scene {
     draw_list: DrawList,
     deltas: Vec<f64>,
     height_range_m: f64,
+    /// Tau of the next frame, pixels: the configured one unless a budget set it.
+    tau_px: f64,
+    /// Rings without Ulrich's rule, and the tau past which rings stop
+    /// shrinking (a budget's ceiling), of the last frame.
+    loose_rings: LevelRings,
+    tau_ceiling: f64,
+    band: band::BandState,
 }
 
 /// The near plane sits this share of the way to the nearest drawn tile's
@@ -156,23 +175,36 @@ impl Scene {
         let deltas = terrain.delta_per_level();
         let (lo, hi) = terrain.height_range();
         let draw_list = DrawList::with_capacity(cache_config.max_tiles as usize);
+        let inputs = RingInputs {
+            tile_size_m: 1.0,
+            delta_per_level: &deltas,
+            height_range_m: 0.0,
+            perspective_scale: 1.0,
+        };
         Ok(Scene {
+            loose_rings: LevelRings::new(&config.lod, inputs),
+            tau_ceiling: f64::INFINITY,
+            band: band::BandState::default(),
             config,
             selector: TileSelector::new(config.lod),
             cache: TileCache::new(cache_config, terrain)?,
-            rings: LevelRings::new(
-                &config.lod,
-                RingInputs {
-                    tile_size_m: 1.0,
-                    delta_per_level: &deltas,
-                    height_range_m: 0.0,
-                    perspective_scale: 1.0,
-                },
-            ),
+            rings: LevelRings::new(&config.lod, inputs),
             draw_list,
             height_range_m: (hi - lo) as f64,
             deltas,
+            tau_px: config.lod.tau_px,
         })
+    }
+
+    /// Sets the tau the next frames select with (a frame budget's), pixels;
+    /// Kühnert's view distance shrinks by the same factor, down to 1 tile.
+    /// Refused when it is not finite or below the configured tau.
+    pub fn set_tau(&mut self, tau_px: f64) -> Result<(), SceneError> {
+        if !(tau_px.is_finite() && tau_px >= self.config.lod.tau_px) {
+            return Err(LodError::Tau(tau_px).into());
+        }
+        self.tau_px = tau_px;
+        Ok(())
     }
 
     /// The configuration the scene was built with.
@@ -188,6 +220,19 @@ impl Scene {
     /// The byte ranges the GPU buffer must receive this frame, and the staging copy.
     pub fn uploads(&self) -> (&[u8], &[std::ops::Range<u32>]) {
         (self.cache.staging(), self.cache.dirty_ranges())
+    }
+
+    /// Keeps the next frames' triangles inside `band` (a triangle budget's)
+    /// by selecting again within the frame; `None`: no band.
+    pub fn set_triangle_band(&mut self, band: Option<TriangleBand>) {
+        self.band.band = band;
+    }
+
+    /// The tau past which the last frame's rings stop shrinking, pixels,
+    /// with the view distance shrinking alongside ([`Scene::set_tau`]): a
+    /// budget raising tau further gains nothing.
+    pub fn tau_ceiling(&self) -> f64 {
+        self.tau_ceiling
     }
 
     /// The rings of the last frame.
@@ -209,8 +254,14 @@ impl Scene {
         let (near, far) = clip_planes(camera, terrain);
         let frustum = Frustum::from_view_projection(camera.projection(near, far) * camera.view());
         let mut report = SceneStats::default();
-        let mut lod = self.config.lod;
+        let mut lod = loosened(&self.config.lod, self.tau_px);
         let mut nearest_m: f64;
+        let inputs = ring_inputs(&layout, grid_size, &self.deltas, self.height_range_m, camera);
+        let loosest = LodConfig { view_distance: 1.0, ..self.config.lod };
+        let ceiling = LevelRings::tau_ceiling(&mut self.loose_rings, &loosest, inputs);
+        let requested = self.config.lod;
+        self.tau_ceiling = ceiling.max(requested.tau_px * requested.view_distance);
+        let mut search = self.band.search(requested.tau_px, self.tau_ceiling);
         loop {
             let start = Instant::now();
             let inputs = ring_inputs(&layout, grid_size, &self.deltas, self.height_range_m, camera);
@@ -222,6 +273,21 @@ impl Scene {
                 curvature: self.config.curvature,
             };
             let selected = self.selector.select(&view, terrain);
+            let retarget = match (&mut search, report.coarsened) {
+                (Some(search), 0) => {
+                    let cache = &self.cache;
+                    let tiles =
+                        selected.iter().map(|t| (t.key.level, cache.resident_triangles(t.key)));
+                    search.next(self.band.estimate(tiles), lod.tau_px)
+                }
+                _ => None,
+            };
+            if let Some(tau_px) = retarget {
+                lod = loosened(&self.config.lod, tau_px);
+                report.reselected += 1;
+                report.cpu_ms.select_ms += ms(start, Instant::now());
+                continue;
+            }
             nearest_m = selected.iter().map(|t| t.distance).fold(f64::INFINITY, f64::min);
             let selected_at = Instant::now();
             report.cpu_ms.select_ms += ms(start, selected_at);
@@ -253,7 +319,10 @@ impl Scene {
         let stats = self.cache.stats();
         report.tiles = self.draw_list.tiles.len();
         report.culled = self.selector.culled();
+        report.tau_px = lod.tau_px;
+        report.life = self.selector.life_stats().unwrap_or_default();
         report.triangles = self.draw_list.triangles();
+        self.band.learn(self.draw_list.tiles.iter().map(|t| (t.key.level, t.triangles())));
         report.bytes_uploaded = stats.bytes_uploaded;
         report.transfers = stats.transfers;
         report.generated = stats.generated;
@@ -309,6 +378,16 @@ pub fn ring_inputs<'a>(
         height_range_m,
         perspective_scale: camera.perspective_scale(),
     }
+}
+
+/// The tiling for a budget's `tau_px`: tau itself, and Kühnert's view
+/// distance shrunk by as much as tau grew (never below 1 tile), so the rings
+/// shrink even where his rule, not Ulrich's, sets them (node meshes). The
+/// bound drawn is still `tau_px`: Ulrich's rule is kept at every level.
+fn loosened(requested: &LodConfig, tau_px: f64) -> LodConfig {
+    let factor = tau_px / requested.tau_px;
+    let view_distance = (requested.view_distance / factor).max(1.0);
+    LodConfig { tau_px, view_distance, ..*requested }
 }
 
 fn ms(from: Instant, to: Instant) -> f64 {
