@@ -16,8 +16,9 @@ use super::error::GlError;
 use super::handle::Gl;
 use super::objects::{Buffer, BufferTarget, BufferUsage, Program, VertexArray};
 use crate::gl_check;
+use crate::render::cluster::{MAX_MEMBERS, MEMBER_FLOATS};
 use crate::render::{
-    check_uploads, palette, DrawList, FrameUniforms, RenderError, Slice, TileUniforms,
+    check_uploads, palette, Cluster, DrawList, FrameUniforms, RenderError, Slice, TileUniforms,
 };
 use crate::tiles::block::{HEIGHT_OFFSET, NORMAL_OFFSET, VERTEX_BYTES};
 
@@ -32,9 +33,8 @@ const VERTEX_STRIDE: i32 = VERTEX_BYTES as i32;
 
 struct Locations {
     view_projection: Option<glow::UniformLocation>,
-    tile: Option<glow::UniformLocation>,
+    members: Option<glow::UniformLocation>,
     posts: Option<glow::UniformLocation>,
-    morph: Option<glow::UniformLocation>,
     frame: Option<glow::UniformLocation>,
     sun: Option<glow::UniformLocation>,
     awareness: Option<glow::UniformLocation>,
@@ -74,9 +74,8 @@ impl TerrainProgram {
         let program = Program::build(gl, name, VERTEX_SOURCE, fragment, &attributes)?;
         let at = Locations {
             view_projection: program.uniform_location("u_view_projection"),
-            tile: program.uniform_location("u_tile"),
+            members: program.uniform_location("u_members"),
             posts: program.uniform_location("u_posts"),
-            morph: program.uniform_location("u_morph"),
             frame: program.uniform_location("u_frame"),
             sun: program.uniform_location("u_sun"),
             awareness: program.uniform_location("u_awareness"),
@@ -218,8 +217,11 @@ impl TerrainPass {
             calls.enable_attribute(NORMAL);
             // Far slice first; then a clear depth for the near slice.
             let mut on_plain = true;
+            // The attribute base last set (clusters share theirs).
+            let mut base = None;
             if let Some(far) = frame.slices.far {
-                on_plain = self.draw_slice(calls, programs, list, far, Slice::Far, blocks);
+                let b = &mut base;
+                on_plain = self.draw_slice(calls, programs, list, far, Slice::Far, blocks, b);
                 calls.clear(glow::DEPTH_BUFFER_BIT);
             }
             if !on_plain {
@@ -227,7 +229,7 @@ impl TerrainPass {
                 set_frame_uniforms(calls, &program.at, &frame);
             }
             let near = frame.slices.near;
-            self.draw_slice(calls, programs, list, near, Slice::Near, blocks);
+            self.draw_slice(calls, programs, list, near, Slice::Near, blocks, &mut base);
             calls.disable_attribute(GRID);
             calls.disable_attribute(HEIGHT);
             calls.disable_attribute(NORMAL);
@@ -243,7 +245,7 @@ impl TerrainPass {
     /// `view_projection`: those without voids with the plain program (bound
     /// on entry), then those with voids with the other. Returns whether the
     /// plain program is still bound.
-    #[allow(unsafe_code)]
+    #[allow(unsafe_code, clippy::too_many_arguments)]
     fn draw_slice(
         &self,
         calls: Calls<'_>,
@@ -252,14 +254,14 @@ impl TerrainPass {
         view_projection: glam::Mat4,
         slice: Slice,
         blocks: TileBlocks<'_>,
+        base: &mut Option<u32>,
     ) -> bool {
         let frame = list.uniforms.expect("drawn lists have uniforms");
         let [plain, voids] = programs;
         // SAFETY: the plain program is bound and its location comes from it.
         unsafe { calls.uniform_matrix(plain.at.view_projection.as_ref(), &view_projection) };
-        self.draw_tiles(calls, &plain.at, list.tiles_with(slice, false), blocks);
-        let mut with_voids = list.tiles_with(slice, true).peekable();
-        if with_voids.peek().is_none() {
+        self.draw_part(calls, &plain.at, list, slice, false, blocks, base);
+        if !list.has_voids_in(slice) {
             return true;
         }
         // SAFETY: a linked program of this context; its locations come from it.
@@ -268,8 +270,29 @@ impl TerrainPass {
             set_frame_uniforms(calls, &voids.at, &frame);
             calls.uniform_matrix(voids.at.view_projection.as_ref(), &view_projection);
         }
-        self.draw_tiles(calls, &voids.at, with_voids, blocks);
+        self.draw_part(calls, &voids.at, list, slice, true, blocks, base);
         false
+    }
+
+    /// Draws the tiles or clusters of `slice` with or without `voids`.
+    #[allow(clippy::too_many_arguments)]
+    fn draw_part(
+        &self,
+        calls: Calls<'_>,
+        at: &Locations,
+        list: &DrawList,
+        slice: Slice,
+        voids: bool,
+        blocks: TileBlocks<'_>,
+        base: &mut Option<u32>,
+    ) {
+        if list.clustered() {
+            for cluster in list.clusters_with(slice, voids) {
+                draw_cluster(calls, at, list, cluster, slice, base);
+            }
+        } else {
+            self.draw_tiles(calls, at, list.tiles_with(slice, voids), blocks);
+        }
     }
 
     fn draw_tiles<'t>(
@@ -308,16 +331,50 @@ impl TerrainPass {
         // from `vertices`, its indices (numbering only those vertices) from
         // `indices`.
         unsafe {
-            let [x, y] = tile.first_post;
-            calls.uniform_4(at.tile.as_ref(), [x, y, tile.vertex_step, tile.skirt_edges as f32]);
-            let [start, end] = tile.morph;
-            calls.uniform_4(at.morph.as_ref(), [start, end, tile.skirt_depth, 0.0]);
-            calls.attribute_pointer(GRID, 3, glow::UNSIGNED_SHORT, false, VERTEX_STRIDE, vertices);
-            let heights = vertices + HEIGHT_OFFSET as i32;
-            calls.attribute_pointer(HEIGHT, 2, glow::FLOAT, false, VERTEX_STRIDE, heights);
-            let normals = vertices + NORMAL_OFFSET as i32;
-            calls.attribute_pointer(NORMAL, 4, glow::BYTE, true, VERTEX_STRIDE, normals);
+            calls.uniform_4v(at.members.as_ref(), &tile.member_uniforms());
+            attribute_pointers(calls, vertices);
             calls.draw_triangles(tile.index_count as i32, indices);
+        }
+    }
+}
+
+/// Points the three attributes at vertices from byte `vertices` of the
+/// bound buffer.
+#[allow(unsafe_code)]
+unsafe fn attribute_pointers(calls: Calls<'_>, vertices: i32) {
+    // Post, skirt edge and member slot: four 16-bit integers.
+    calls.attribute_pointer(GRID, 4, glow::UNSIGNED_SHORT, false, VERTEX_STRIDE, vertices);
+    let heights = vertices + HEIGHT_OFFSET as i32;
+    calls.attribute_pointer(HEIGHT, 2, glow::FLOAT, false, VERTEX_STRIDE, heights);
+    let normals = vertices + NORMAL_OFFSET as i32;
+    calls.attribute_pointer(NORMAL, 4, glow::BYTE, true, VERTEX_STRIDE, normals);
+}
+
+/// Draws `cluster`'s members in `slice`: its members' uniforms in one
+/// write, the attribute pointers when its base is not `base` (the last
+/// set), one glDrawElements per run of members in the slice.
+#[allow(unsafe_code)]
+fn draw_cluster(
+    calls: Calls<'_>,
+    at: &Locations,
+    list: &DrawList,
+    cluster: &Cluster,
+    slice: Slice,
+    base: &mut Option<u32>,
+) {
+    let mut uniforms = [0.0; MAX_MEMBERS * MEMBER_FLOATS];
+    let used = list.cluster_uniforms(cluster, &mut uniforms);
+    // SAFETY: the bound buffer holds the cluster's block: its vertices
+    // from `cluster.base` on (every index numbers a vertex of the block
+    // from there, below 2^16), its indices at the runs' offsets.
+    unsafe {
+        calls.uniform_4v(at.members.as_ref(), &uniforms[..used]);
+        if *base != Some(cluster.base) {
+            *base = Some(cluster.base);
+            attribute_pointers(calls, cluster.base as i32);
+        }
+        for run in list.runs(cluster, slice) {
+            calls.draw_triangles(run.index_count as i32, run.index_byte_offset as i32);
         }
     }
 }

@@ -3,11 +3,13 @@
 //! the [`null::NullBackend`] only counts them, so tests can check what would
 //! be drawn without any context.
 
+pub mod cluster;
 pub mod cost;
 pub mod draw_list;
 pub mod null;
 pub mod palette;
 
+pub use cluster::{Cluster, ClusterMorph, ClusterRun, Member};
 pub use cost::{CallStats, CostModel};
 pub use draw_list::{
     DepthSlices, DrawList, DrawnTile, FrameUniforms, PostFrame, Slice, TileUniforms,
