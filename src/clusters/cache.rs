@@ -1,9 +1,15 @@
-//! Which clusters have a block in the cluster buffer, made from which
+//! Which clusters have blocks in the cluster buffers, made from which
 //! tiles' blocks. Per frame, like the tile cache (Polok's two passes):
 //! clusters the frame no longer has give their blocks back; clusters that
-//! are new, or whose members changed, announce their size; the run is
-//! placed and each fills its block from its members' tile blocks; one
+//! are new, or whose members changed, announce their sizes; the runs are
+//! placed and each fills its blocks from its members' tile blocks; one
 //! dirty range per run piece is uploaded.
+//!
+//! A cluster has two blocks, in two allocators: its vertices in the vertex
+//! buffer, its indices in the index buffer. Vertices alone pack densely, so
+//! more clusters lie within 2^16 vertices of a shared attribute base; a
+//! new cluster takes the highest base already in use that reaches all of
+//! its vertices, else the most aligned one that does ([`cluster_base`]).
 
 use super::{cluster_base, ClusterKey, Formation, Placement};
 use crate::allocator::{
@@ -21,8 +27,10 @@ use std::ops::Range;
 /// Sizes fixed when the cache is built.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct ClusterConfig {
-    /// Bytes of the cluster buffer (and its staging copy).
+    /// Bytes of the cluster vertex buffer (and its staging copy).
     pub capacity_bytes: u32,
+    /// Bytes of the cluster index buffer (and its staging copy).
+    pub index_capacity_bytes: u32,
     /// Clusters that may have a block at once.
     pub max_clusters: u32,
     /// Longest single transfer in bytes; `None` for one transfer per frame.
@@ -61,7 +69,7 @@ pub struct ClusterFrameStats {
     pub bytes_uploaded: u64,
     /// Transfers: one per run piece.
     pub transfers: usize,
-    /// Bytes held by clusters' blocks.
+    /// Bytes held by clusters' blocks, vertices and indices.
     pub used_bytes: u64,
     /// Distinct attribute bases of the frame's clusters.
     pub bases: usize,
@@ -93,6 +101,9 @@ impl MemberSource {
     }
 }
 
+/// A cluster not yet given a base.
+const NO_BASE: u32 = u32::MAX;
+
 #[derive(Clone, Copy, Debug)]
 struct Resident {
     key: ClusterKey,
@@ -109,20 +120,30 @@ struct Resident {
 struct Job {
     slot: u32,
     placements: (u32, u32),
+    /// Where its vertex block was placed, bytes.
+    vertex_start: u32,
 }
 
 /// The clusters resident in the cluster buffer; see the module documentation.
 pub struct ClusterCache {
     config: ClusterConfig,
+    /// Every cluster's vertices.
     allocator: ContiguousAllocator,
+    /// Every cluster's indices.
+    index_allocator: ContiguousAllocator,
+    /// Attribute bases in use, with how many resident clusters use each,
+    /// sorted by base (vertices from byte 0).
+    bases_in_use: Vec<(u32, u32)>,
     slots: Vec<Option<Resident>>,
     spare: Vec<u32>,
     by_key: HashMap<ClusterKey, u32>,
     frame: u64,
     formation: Formation,
     requests: Vec<Request>,
+    index_requests: Vec<Request>,
     jobs: Vec<Job>,
     dirty: Vec<Range<u32>>,
+    index_dirty: Vec<Range<u32>>,
     /// Each attribute base and its nearest cluster's rank (scratch).
     bases: Vec<(u32, u32)>,
     stats: ClusterFrameStats,
@@ -132,24 +153,31 @@ impl ClusterCache {
     /// An empty cache.
     pub fn new(config: ClusterConfig) -> Result<Self, ClusterError> {
         let max = config.max_clusters as usize;
-        let allocator = ContiguousAllocator::new(AllocatorConfig {
-            capacity: config.capacity_bytes,
+        let allocator_config = |capacity| AllocatorConfig {
+            capacity,
             max_generators: config.max_clusters,
             alignment: 4,
             transfer_cap: config.transfer_cap,
             frames_in_flight: config.frames_in_flight,
-        })?;
+        };
+        let allocator = ContiguousAllocator::new(allocator_config(config.capacity_bytes))?;
+        let index_allocator =
+            ContiguousAllocator::new(allocator_config(config.index_capacity_bytes))?;
         Ok(ClusterCache {
             config,
             allocator,
+            index_allocator,
+            bases_in_use: Vec::with_capacity(max),
             slots: vec![None; max],
             spare: (0..config.max_clusters).rev().collect(),
             by_key: HashMap::with_capacity(max),
             frame: 0,
             formation: Formation::with_capacity(max),
             requests: Vec::with_capacity(max),
+            index_requests: Vec::with_capacity(max),
             jobs: Vec::with_capacity(max),
             dirty: Vec::with_capacity(max),
+            index_dirty: Vec::with_capacity(max),
             bases: Vec::with_capacity(max),
             stats: ClusterFrameStats::default(),
         })
@@ -160,14 +188,24 @@ impl ClusterCache {
         &self.config
     }
 
-    /// The staging copy the cluster buffer mirrors.
+    /// The staging copy the cluster vertex buffer mirrors.
     pub fn staging(&self) -> &[u8] {
         self.allocator.staging()
     }
 
-    /// The ranges of the staging copy the GPU must receive this frame.
+    /// The ranges of the vertex staging copy the GPU must receive this frame.
     pub fn dirty_ranges(&self) -> &[Range<u32>] {
         &self.dirty
+    }
+
+    /// The staging copy the cluster index buffer mirrors.
+    pub fn index_staging(&self) -> &[u8] {
+        self.index_allocator.staging()
+    }
+
+    /// The ranges of the index staging copy the GPU must receive this frame.
+    pub fn index_dirty_ranges(&self) -> &[Range<u32>] {
+        &self.index_dirty
     }
 
     /// What the last update did.
@@ -191,8 +229,11 @@ impl ClusterCache {
     ) -> Result<(), ClusterError> {
         self.frame += 1;
         self.allocator.begin_frame();
+        self.index_allocator.begin_frame();
         self.dirty.clear();
+        self.index_dirty.clear();
         self.requests.clear();
+        self.index_requests.clear();
         self.jobs.clear();
         self.stats = ClusterFrameStats::default();
         let mut formation = std::mem::take(&mut self.formation);
@@ -242,7 +283,9 @@ impl ClusterCache {
             let end = group_end(placements, start);
             let key = placements[start].key;
             let slot = match self.by_key.get(&key) {
-                Some(&slot) if self.slots[slot as usize].expect("mapped").last_frame == self.frame => {
+                Some(&slot)
+                    if self.slots[slot as usize].expect("mapped").last_frame == self.frame =>
+                {
                     start = end;
                     continue;
                 }
@@ -257,18 +300,20 @@ impl ClusterCache {
             let (vertices, indices) = members.iter().fold((0, 0), |(v, i), p| {
                 (v + p.vertices, i + list.tiles[p.tile as usize].index_count)
             });
-            let bytes = (vertices * VERTEX_BYTES + indices * INDEX_BYTES).next_multiple_of(VERTEX_BYTES);
-            self.requests.push(Request {
-                generator: GeneratorId(slot),
-                format: VertexFormat(0),
-                size: bytes,
-            });
-            self.jobs.push(Job { slot, placements: (start as u32, end as u32) });
+            let generator = GeneratorId(slot);
+            let format = VertexFormat(0);
+            self.requests.push(Request { generator, format, size: vertices * VERTEX_BYTES });
+            let size = (indices * INDEX_BYTES).next_multiple_of(4);
+            self.index_requests.push(Request { generator, format, size });
+            if let Some(old) = self.slots[slot as usize] {
+                self.release_base(old.base);
+            }
+            self.jobs.push(Job { slot, placements: (start as u32, end as u32), vertex_start: 0 });
             let mut resident = Resident {
                 key,
                 members: [MemberSource::default(); MAX_MEMBERS],
                 count: members.len() as u8,
-                base: 0,
+                base: NO_BASE,
                 index_byte_offset: 0,
                 last_frame: self.frame,
             };
@@ -290,64 +335,103 @@ impl ClusterCache {
         for slot in 0..self.slots.len() as u32 {
             let unused = matches!(self.slots[slot as usize], Some(r) if r.last_frame != self.frame);
             if unused {
-                let resident = self.slots[slot as usize].take().expect("matched");
-                self.by_key.remove(&resident.key);
-                self.allocator.release(GeneratorId(slot)).expect("slot ids are in range");
-                self.spare.push(slot);
+                self.forget(slot);
             }
         }
     }
 
-    /// Places the run and fills every queued cluster's block.
+    /// Gives slot `slot`'s blocks and base back.
+    fn forget(&mut self, slot: u32) {
+        if let Some(resident) = self.slots[slot as usize].take() {
+            self.by_key.remove(&resident.key);
+            if resident.base != NO_BASE {
+                self.release_base(resident.base);
+            }
+            self.allocator.release(GeneratorId(slot)).expect("slot ids are in range");
+            self.index_allocator.release(GeneratorId(slot)).expect("slot ids are in range");
+            self.spare.push(slot);
+        }
+    }
+
+    /// One cluster fewer uses attribute base `base` (bytes).
+    fn release_base(&mut self, base: u32) {
+        if let Ok(at) = self.bases_in_use.binary_search_by_key(&base, |b| b.0) {
+            self.bases_in_use[at].1 -= 1;
+            if self.bases_in_use[at].1 == 0 {
+                self.bases_in_use.remove(at);
+            }
+        }
+    }
+
+    /// Places the runs and fills every queued cluster's blocks.
     fn make(
         &mut self,
         placements: &[Placement],
         list: &DrawList,
         tile_staging: &[u8],
     ) -> Result<(), ClusterError> {
-        let (slots, jobs, dirty) = (&mut self.slots, &self.jobs, &mut self.dirty);
-        let mut bytes_uploaded = 0u64;
-        let outcome = self.allocator.allocate(&self.requests).map(|mut plan| {
-            for (index, job) in jobs.iter().enumerate() {
-                let range = plan.range(index);
-                let resident = slots[job.slot as usize].as_mut().expect("queued");
-                debug_assert_eq!(range.start % VERTEX_BYTES, 0, "blocks are whole vertices");
-                let first = range.start / VERTEX_BYTES;
-                let members = &placements[job.placements.0 as usize..job.placements.1 as usize];
-                let vertices: u32 = members.iter().map(|p| p.vertices).sum();
-                let base = cluster_base(first, first + vertices);
-                resident.base = base * VERTEX_BYTES;
-                resident.index_byte_offset = range.start + vertices * VERTEX_BYTES;
+        if let Err(error) = self.place_and_fill(placements, list, tile_staging) {
+            // Forget the clusters queued, so the next frame makes them again.
+            for k in 0..self.jobs.len() {
+                self.forget(self.jobs[k].slot);
             }
-            plan.fill(|index, _request, block| {
-                let job = jobs[index];
-                let resident = slots[job.slot as usize].as_ref().expect("queued");
-                let members = &placements[job.placements.0 as usize..job.placements.1 as usize];
-                fill_block(block, resident, members, list, tile_staging);
-                bytes_uploaded += block.len() as u64;
-            });
-            dirty.extend(plan.dirty_ranges().iter().cloned());
-        });
-        match outcome {
-            Ok(()) => {
-                self.stats.made = self.jobs.len();
-                self.stats.bytes_uploaded = bytes_uploaded;
-                self.stats.transfers = self.dirty.len();
-                Ok(())
-            }
-            Err(error) => {
-                // Nothing placed: forget the clusters queued, so the next
-                // frame makes them again.
-                for job in &self.jobs {
-                    if let Some(resident) = self.slots[job.slot as usize].take() {
-                        self.by_key.remove(&resident.key);
-                        let _ = self.allocator.release(GeneratorId(job.slot));
-                        self.spare.push(job.slot);
-                    }
-                }
-                Err(ClusterError::BufferFull(error))
-            }
+            return Err(ClusterError::BufferFull(error));
         }
+        self.stats.made = self.jobs.len();
+        self.stats.transfers = self.dirty.len() + self.index_dirty.len();
+        Ok(())
+    }
+
+    fn place_and_fill(
+        &mut self,
+        placements: &[Placement],
+        list: &DrawList,
+        tile_staging: &[u8],
+    ) -> Result<(), AllocError> {
+        let ClusterCache {
+            allocator,
+            index_allocator,
+            bases_in_use,
+            slots,
+            jobs,
+            requests,
+            index_requests,
+            dirty,
+            index_dirty,
+            stats,
+            ..
+        } = self;
+        let mut vertex_plan = allocator.allocate(requests)?;
+        for (k, job) in jobs.iter_mut().enumerate() {
+            let range = vertex_plan.range(k);
+            debug_assert_eq!(range.start % VERTEX_BYTES, 0, "blocks are whole vertices");
+            job.vertex_start = range.start;
+            let resident = slots[job.slot as usize].as_mut().expect("queued");
+            resident.base = take_base(bases_in_use, range);
+        }
+        let mut index_plan = index_allocator.allocate(index_requests)?;
+        for (k, job) in jobs.iter().enumerate() {
+            let resident = slots[job.slot as usize].as_mut().expect("queued");
+            resident.index_byte_offset = index_plan.range(k).start;
+        }
+        let members_of =
+            |job: &Job| &placements[job.placements.0 as usize..job.placements.1 as usize];
+        let mut bytes = 0u64;
+        vertex_plan.fill(|k, _, block| {
+            fill_vertices(block, members_of(&jobs[k]), list, tile_staging);
+            bytes += block.len() as u64;
+        });
+        dirty.extend(vertex_plan.dirty_ranges().iter().cloned());
+        index_plan.fill(|k, _, block| {
+            let job = &jobs[k];
+            let base = slots[job.slot as usize].expect("queued").base;
+            let first = (job.vertex_start - base) / VERTEX_BYTES;
+            fill_indices(block, first, members_of(job), list, tile_staging);
+            bytes += block.len() as u64;
+        });
+        index_dirty.extend(index_plan.dirty_ranges().iter().cloned());
+        stats.bytes_uploaded = bytes;
+        Ok(())
     }
 
     /// Lists the frame's clusters in `list`, in draw order: by attribute
@@ -389,7 +473,11 @@ impl ClusterCache {
         let members = &list.members;
         let nearest = |c: &Cluster| {
             let first = c.first_member as usize;
-            members[first..first + c.member_count as usize].iter().map(|m| m.tile).min().unwrap_or(0)
+            members[first..first + c.member_count as usize]
+                .iter()
+                .map(|m| m.tile)
+                .min()
+                .unwrap_or(0)
         };
         list.clusters.sort_unstable_by_key(|c| (c.base, nearest(c)));
         self.bases.clear();
@@ -406,7 +494,7 @@ impl ClusterCache {
         };
         list.clusters.sort_unstable_by_key(|c| (group(c), nearest(c)));
         list.clustered = true;
-        let used = self.allocator.stats().live_bytes;
+        let used = self.allocator.stats().live_bytes + self.index_allocator.stats().live_bytes;
         self.stats.clusters = list.clusters.len();
         self.stats.used_bytes = used;
     }
@@ -428,39 +516,67 @@ fn group_end(placements: &[Placement], start: usize) -> usize {
     end
 }
 
-/// Writes a cluster's block: each member's vertices with its slot, then
-/// every member's indices numbered from the cluster's base, then zeros.
-fn fill_block(
+/// Writes a cluster's vertex block: each member's vertices with its slot.
+fn fill_vertices(block: &mut [u8], members: &[Placement], list: &DrawList, tile_staging: &[u8]) {
+    let size = VERTEX_BYTES as usize;
+    let mut at = 0;
+    for p in members {
+        let source = list.tiles[p.tile as usize].block(tile_staging);
+        for vertex in source.vertices() {
+            let vertex = TileVertex { _pad: p.slot as u16, ..vertex };
+            block[at..at + size].copy_from_slice(bytemuck::bytes_of(&vertex));
+            at += size;
+        }
+    }
+    debug_assert_eq!(at, block.len());
+}
+
+/// Writes a cluster's index block: every member's triangles, numbered from
+/// the cluster's base (its first vertex is vertex `first` from there), then
+/// zero padding.
+fn fill_indices(
     block: &mut [u8],
-    resident: &Resident,
+    mut first: u32,
     members: &[Placement],
     list: &DrawList,
     tile_staging: &[u8],
 ) {
-    let block_start = resident.index_byte_offset
-        - members.iter().map(|p| p.vertices).sum::<u32>() * VERTEX_BYTES;
-    let mut at = 0usize;
-    let mut first_vertex = (block_start - resident.base) / VERTEX_BYTES;
-    let vertex_bytes = VERTEX_BYTES as usize;
-    let index_start: usize = members.iter().map(|p| p.vertices as usize).sum::<usize>() * vertex_bytes;
-    let mut index_at = index_start;
+    let mut at = 0;
     for p in members {
-        let tile = &list.tiles[p.tile as usize];
-        let source = tile.block(tile_staging);
-        for vertex in source.vertices() {
-            let vertex = TileVertex { _pad: p.slot as u16, ..vertex };
-            block[at..at + vertex_bytes].copy_from_slice(bytemuck::bytes_of(&vertex));
-            at += vertex_bytes;
-        }
+        let source = list.tiles[p.tile as usize].block(tile_staging);
         for t in 0..source.triangle_count() {
             for index in source.triangle(t) {
-                let rebased = first_vertex + index as u32;
-                debug_assert!(rebased < 1 << 16);
-                block[index_at..index_at + 2].copy_from_slice(&(rebased as u16).to_ne_bytes());
-                index_at += 2;
+                let rebased = first + index as u32;
+                debug_assert!(rebased < 1 << 16, "the base reaches every vertex");
+                block[at..at + 2].copy_from_slice(&(rebased as u16).to_ne_bytes());
+                at += 2;
             }
         }
-        first_vertex += p.vertices;
+        first += p.vertices;
     }
-    block[index_at..].fill(0);
+    block[at..].fill(0);
+}
+
+/// A new base for a cluster of vertices `first..end`: its first vertex,
+/// so clusters placed after it share it as far as 16-bit indices reach.
+fn new_base(first: u32, _end: u32) -> u32 {
+    first
+}
+
+/// The attribute base (bytes) for a cluster whose vertices are bytes
+/// `range` of the vertex buffer: the highest base in `bases` (sorted,
+/// with their users) that reaches them all with 16-bit indices, else
+/// [`cluster_base`]'s; counted as one more user.
+fn take_base(bases: &mut Vec<(u32, u32)>, range: Range<u32>) -> u32 {
+    let (first, end) = (range.start / VERTEX_BYTES, range.end / VERTEX_BYTES);
+    let at = bases.partition_point(|b| b.0 <= range.start);
+    let base = match bases[..at].last() {
+        Some(&(base, _)) if end - base / VERTEX_BYTES <= 1 << 16 => base,
+        _ => new_base(first, end) * VERTEX_BYTES,
+    };
+    match bases.binary_search_by_key(&base, |b| b.0) {
+        Ok(k) => bases[k].1 += 1,
+        Err(k) => bases.insert(k, (base, 1)),
+    }
+    base
 }

@@ -145,7 +145,8 @@ impl Formation {
                 let vertices: u32 = self.placements[start..end].iter().map(|p| p.vertices).sum();
                 if vertices > MAX_CLUSTER_VERTICES {
                     for p in &mut self.placements[start..end] {
-                        p.key.part = if split == 1 { 1 + slot_quadrant(p.slot) } else { 5 + p.slot };
+                        p.key.part =
+                            if split == 1 { 1 + slot_quadrant(p.slot) } else { 5 + p.slot };
                     }
                     changed = true;
                 }

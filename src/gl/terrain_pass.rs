@@ -92,8 +92,11 @@ pub struct TerrainPass {
     /// rejection, so only tiles with voids use it).
     colour: [TerrainProgram; 2],
     position: [TerrainProgram; 2],
-    /// The tiles' blocks, at the allocator's offsets.
+    /// The tiles' blocks, at the allocator's offsets (with clusters: the
+    /// clusters' vertex blocks).
     blocks: Buffer,
+    /// With clusters: their index blocks, made at the first clustered upload.
+    indices: Option<Buffer>,
     vertex_array: Option<VertexArray>,
 }
 
@@ -118,7 +121,7 @@ impl TerrainPass {
             Buffer::new(gl, BufferTarget::Vertices, buffer_bytes as usize, BufferUsage::Dynamic)?;
         let vertex_array =
             if gl.caps().vertex_array_objects { Some(VertexArray::new(gl)?) } else { None };
-        Ok(TerrainPass { gl: Rc::clone(gl), colour, position, blocks, vertex_array })
+        Ok(TerrainPass { gl: Rc::clone(gl), colour, position, blocks, indices: None, vertex_array })
     }
 
     /// Copies the dirty ranges of the staging copy into the tile buffer at
@@ -127,7 +130,32 @@ impl TerrainPass {
     pub fn upload(&self, staging: &[u8], ranges: &[std::ops::Range<u32>]) -> Result<(), GlError> {
         check_uploads(staging, self.blocks.size() as u32, ranges)?;
         for range in ranges {
-            self.sub_data(range.start, &staging[range.start as usize..range.end as usize]);
+            self.sub_data(
+                &self.blocks,
+                range.start,
+                &staging[range.start as usize..range.end as usize],
+            );
+        }
+        gl_check!(self.gl)
+    }
+
+    /// Copies the dirty ranges of the cluster index staging copy into the
+    /// index buffer (made the size of `staging` on first use), as
+    /// [`Self::upload`] does for the vertex buffer.
+    pub fn upload_indices(
+        &mut self,
+        staging: &[u8],
+        ranges: &[std::ops::Range<u32>],
+    ) -> Result<(), GlError> {
+        if self.indices.is_none() {
+            let size = staging.len();
+            let buffer = Buffer::new(&self.gl, BufferTarget::Indices, size, BufferUsage::Dynamic)?;
+            self.indices = Some(buffer);
+        }
+        let buffer = self.indices.as_ref().expect("made above");
+        check_uploads(staging, buffer.size() as u32, ranges)?;
+        for range in ranges {
+            self.sub_data(buffer, range.start, &staging[range.start as usize..range.end as usize]);
         }
         gl_check!(self.gl)
     }
@@ -145,13 +173,13 @@ impl TerrainPass {
                 RenderError::UploadPastBuffer { start: offset, end, capacity, staging }.into()
             );
         }
-        self.sub_data(offset, bytes);
+        self.sub_data(&self.blocks, offset, bytes);
         gl_check!(self.gl)
     }
 
-    /// `bytes` into the tile buffer at `offset`, which the caller checked.
+    /// `bytes` into `buffer` at `offset`, which the caller checked.
     #[allow(unsafe_code)]
-    fn sub_data(&self, offset: u32, bytes: &[u8]) {
+    fn sub_data(&self, buffer: &Buffer, offset: u32, bytes: &[u8]) {
         let calls = Calls::new(&self.gl);
         // SAFETY: the range lies inside the buffer (checked by the caller);
         // the vertex array is unbound first so the bind changes none.
@@ -159,8 +187,8 @@ impl TerrainPass {
             if self.vertex_array.is_some() {
                 calls.bind_vertex_array(None);
             }
-            calls.bind_buffer(&self.blocks);
-            calls.buffer_sub_data(&self.blocks, offset as usize, bytes);
+            calls.bind_buffer(buffer);
+            calls.buffer_sub_data(buffer, offset as usize, bytes);
         }
     }
 
@@ -210,7 +238,11 @@ impl TerrainPass {
             // The index binding is the vertex array's state where there is
             // one, the context's where there is none (ES 2.0): bound here,
             // every frame, either way.
-            calls.bind_buffer_to(&self.blocks, BufferTarget::Indices);
+            let indices = match (&self.indices, list.clustered()) {
+                (Some(indices), true) => indices,
+                _ => &self.blocks,
+            };
+            calls.bind_buffer_to(indices, BufferTarget::Indices);
             calls.bind_buffer(&self.blocks);
             calls.enable_attribute(GRID);
             calls.enable_attribute(HEIGHT);
@@ -287,7 +319,7 @@ impl TerrainPass {
         base: &mut Option<u32>,
     ) {
         if list.clustered() {
-            for cluster in list.clusters_with(slice, voids) {
+            for cluster in list.clusters_with(slice, voids, *base) {
                 draw_cluster(calls, at, list, cluster, slice, base);
             }
         } else {

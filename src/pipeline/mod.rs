@@ -143,7 +143,8 @@ impl FramePipeline {
         let scene = self.scene.frame(camera, &terrain).map_err(PipelineError::from)?;
         let tiled = Instant::now();
         let (staging, dirty) = self.scene.gpu_uploads();
-        let output = FrameOutput { list: self.scene.draw_list(), staging, dirty };
+        let indices = self.scene.index_uploads();
+        let output = FrameOutput { list: self.scene.draw_list(), staging, dirty, indices };
         backend.render(&output).map_err(FrameError::Backend)?;
         backend.finish();
         let done = Instant::now();

@@ -92,7 +92,7 @@ impl DrawList {
     /// pass switches to the voids program after the others).
     pub fn has_voids_in(&self, slice: Slice) -> bool {
         if self.clustered {
-            self.clusters_with(slice, true).next().is_some()
+            self.clusters_with(slice, true, None).next().is_some()
         } else {
             self.tiles_with(slice, true).next().is_some()
         }
@@ -109,15 +109,19 @@ impl DrawList {
     }
 
     /// The clusters with a member in `slice`, with or without voids, in
-    /// draw order. The GL terrain pass and the cost model both walk this.
+    /// draw order: those of attribute base `bound` (the one last set)
+    /// first, then the rest in list order (grouped by base, nearest group
+    /// first). The GL terrain pass and the cost model both walk this.
     pub fn clusters_with(
         &self,
         slice: Slice,
         voids: bool,
+        bound: Option<u32>,
     ) -> impl Iterator<Item = &Cluster> + '_ {
-        self.clusters
-            .iter()
-            .filter(move |c| c.voids == voids && self.runs(c, slice).next().is_some())
+        let wanted = move |c: &&Cluster| c.voids == voids && self.runs(c, slice).next().is_some();
+        let first = self.clusters.iter().filter(move |c| Some(c.base) == bound).filter(wanted);
+        let rest = self.clusters.iter().filter(move |c| Some(c.base) != bound).filter(wanted);
+        first.chain(rest)
     }
 
     /// The members of `cluster`.

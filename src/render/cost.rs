@@ -194,7 +194,7 @@ pub fn terrain(model: &CostModel, list: &DrawList) -> CallStats {
             continue;
         }
         for voids in [false, true] {
-            for cluster in list.clusters_with(slice, voids) {
+            for cluster in list.clusters_with(slice, voids, base) {
                 stats.uniform_writes += 1;
                 if base != Some(cluster.base) {
                     base = Some(cluster.base);

@@ -29,6 +29,9 @@ pub struct FrameOutput<'a> {
     /// The byte ranges of `staging` written since the last frame: one
     /// transfer each.
     pub dirty: &'a [Range<u32>],
+    /// With clusters: the index buffer's staging copy and its ranges to
+    /// upload (the buffer `staging` mirrors then holds only vertices).
+    pub indices: Option<(&'a [u8], &'a [Range<u32>])>,
 }
 
 /// What a renderer does with a frame. Implemented by the GL renderer, the

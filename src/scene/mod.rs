@@ -180,6 +180,7 @@ impl Scene {
         let clusters = if config.clusters {
             Some(ClusterCache::new(ClusterConfig {
                 capacity_bytes: config.buffer_bytes,
+                index_capacity_bytes: config.buffer_bytes / 2,
                 max_clusters: cache_config.max_tiles,
                 transfer_cap: config.transfer_cap,
                 frames_in_flight: config.frames_in_flight,
@@ -234,6 +235,12 @@ impl Scene {
         }
     }
 
+    /// With clusters on, the cluster index buffer's staging copy and the
+    /// ranges of it to upload this frame.
+    pub fn index_uploads(&self) -> Option<(&[u8], &[std::ops::Range<u32>])> {
+        self.clusters.as_ref().map(|c| (c.index_staging(), c.index_dirty_ranges()))
+    }
+
     /// The cluster cache, with clusters on.
     pub fn clusters(&self) -> Option<&ClusterCache> {
         self.clusters.as_ref()
@@ -274,7 +281,8 @@ impl Scene {
             nearest_m = selected.iter().map(|t| t.distance).fold(f64::INFINITY, f64::min);
             let selected_at = Instant::now();
             report.cpu_ms.select_ms += ms(start, selected_at);
-            let outcome = self.cache.update(selected, terrain).map(|_| ()).map_err(SceneError::from);
+            let outcome =
+                self.cache.update(selected, terrain).map(|_| ()).map_err(SceneError::from);
             report.cpu_ms.tiles_ms += ms(selected_at, Instant::now());
             let outcome = outcome.and_then(|()| {
                 let near_m = (nearest_m * NEAR_SHARE).min(f32::MAX as f64) as f32;
