@@ -22,15 +22,17 @@
 //! finer data); a still camera makes none.
 //!
 //! **Placement.** ES 2.0 has no base vertex: a draw's indices number
-//! vertices from where the attribute pointers point, and are 16-bit. Every
-//! block is a multiple of the 20-byte vertex long, so every block starts on
-//! a vertex of one lattice from byte 0; a cluster's indices are numbered
-//! from the most aligned lattice vertex (highest power of two) that still
-//! reaches all of its vertices with 16-bit indices. Neighbouring clusters
-//! in the buffer then share a base, and the pass sets the three attribute
-//! pointers only when the base changes.
+//! vertices from where the attribute pointers point, and are 16-bit. The
+//! vertex blocks live in an allocator of their own (the indices in
+//! another), each a whole number of 20-byte vertices, so every block starts
+//! on a vertex of one lattice from byte 0 and vertex data pack densely. A
+//! cluster's indices are numbered from an *attribute base*: the highest
+//! base already in use that reaches all of its vertices with 16-bit
+//! indices, else its own first vertex. Clusters sharing a base share their
+//! attribute pointers: the pass sets the three only when the base changes.
 
 mod cache;
+pub mod mirror;
 pub mod shapes;
 
 pub use cache::{ClusterCache, ClusterConfig, ClusterError, ClusterFrameStats};
@@ -195,21 +197,6 @@ impl Formation {
     }
 }
 
-/// The vertex (counted from byte 0 of the buffer) that a cluster whose
-/// vertices are `first..end` numbers its indices from: the one divisible
-/// by the highest power of two with every vertex of the cluster less than
-/// 2^16 above it.
-pub fn cluster_base(first: u32, end: u32) -> u32 {
-    debug_assert!(end - first <= MAX_CLUSTER_VERTICES);
-    for k in (0..32).rev() {
-        let base = (first >> k) << k;
-        if end - base <= MAX_CLUSTER_VERTICES {
-            return base;
-        }
-    }
-    first
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -282,17 +269,5 @@ mod tests {
         formation.form(&tiles);
         let sizes: Vec<usize> = formation.clusters().map(|r| r.len()).collect();
         assert_eq!(sizes, [4, 4, 4, 4], "80 000 vertices: one cluster per quadrant");
-    }
-
-    #[test]
-    fn bases_are_shared_by_neighbouring_clusters() {
-        assert_eq!(cluster_base(0, 65_536), 0);
-        assert_eq!(cluster_base(70_000, 80_000), 65_536);
-        assert_eq!(cluster_base(81_000, 90_000), 65_536, "the neighbour's base");
-        assert_eq!(cluster_base(100_000, 140_000), 98_304);
-        for (first, end) in [(1, 65_537), (123_457, 150_000), (3, 4)] {
-            let base = cluster_base(first, end);
-            assert!(base <= first && end - base <= 65_536, "{first} {end} {base}");
-        }
     }
 }
