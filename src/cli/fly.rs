@@ -41,6 +41,10 @@ pub struct FlyArgs {
     /// Draw a flat earth (no curvature drop).
     #[arg(long)]
     pub flat_earth: bool,
+    /// Draw the tiles as clusters of up to 16 neighbours, one draw call
+    /// each (Judnich & Ling), instead of one draw call per tile.
+    #[arg(long)]
+    pub clusters: bool,
     /// PNG snapshots written along a headless flight (the last frame always is).
     #[arg(long, default_value_t = 6)]
     pub snapshots: u32,
@@ -66,6 +70,7 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     config.scene.warning_above_m = args.warning_above;
     config.scene.caution_below_m = args.caution_below;
     config.scene.curvature = !args.flat_earth;
+    config.scene.clusters = args.clusters;
     config.fov_x_deg = args.view.fov;
     let mut display = Display::new(&config, source, summary).context("opening the display")?;
     let info = display.info().clone();
@@ -165,6 +170,9 @@ fn write_stats(
                 "triangles": s.scene.triangles,
                 "draw_calls": s.draw_calls,
                 "attribute_pointer_changes": s.calls.attribute_pointer_changes,
+                "clusters": s.scene.clusters,
+                "clusters_made": s.scene.clusters_made,
+                "cluster_bytes_uploaded": s.scene.cluster_bytes_uploaded,
                 "calls": s.calls,
                 "bytes_uploaded": s.scene.bytes_uploaded,
                 "transfers": s.scene.transfers,
@@ -194,6 +202,7 @@ fn write_stats(
         "dataset": dataset,
         "size": [args.view.size.x, args.view.size.y],
         "tau_px": args.view.tau,
+        "clusters": args.clusters,
         "fov_x_deg": args.view.fov,
         "frames": frames,
     });
@@ -215,7 +224,8 @@ fn print_summary(rows: &[Row]) -> Result<()> {
     let mean = |f: &dyn Fn(&FrameStats) -> f64| {
         rows.iter().map(|r| f(&r.stats)).sum::<f64>() / rows.len() as f64
     };
-    let uploaded: u64 = rows.iter().map(|r| r.stats.scene.bytes_uploaded).sum();
+    // What the GPU received: tile blocks, or cluster blocks with clusters on.
+    let uploaded: u64 = rows.iter().map(|r| r.stats.calls.bytes_uploaded).sum();
     let last = rows.last().expect("rows is not empty");
     writeln!(out)?;
     writeln!(out, "  frames            {}", rows.len())?;
@@ -236,10 +246,11 @@ fn print_summary(rows: &[Row]) -> Result<()> {
     )?;
     writeln!(
         out,
-        "  tiles             mean {:.0} ({:.0} triangles, {:.0} draw calls)",
+        "  tiles             mean {:.0} ({:.0} triangles, {:.0} draw calls, {:.0} clusters)",
         mean(&|s| s.scene.tiles as f64),
         mean(&|s| s.scene.triangles as f64),
-        mean(&|s| s.draw_calls as f64)
+        mean(&|s| s.draw_calls as f64),
+        mean(&|s| s.scene.clusters as f64)
     )?;
     writeln!(
         out,
