@@ -6,8 +6,9 @@
 //!   (and SCSLOD-64 for completeness: 16 tiles of 64 cells exceed 16-bit
 //!   indices, so its clusters are cut to quadrants).
 //!
-//! Per technique and view: the view is settled and drawn once (uploads),
-//! then drawn again from the same camera three times, nothing to upload,
+//! Per view, every technique in turn (interleaved, the order reversed every
+//! other view): the view is settled and drawn once (uploads), then drawn
+//! again from the same camera three times (two with `--quick`), nothing to upload,
 //! and the median kept: draw calls ("batches"), triangles, attribute
 //! pointer changes, the CPU time the renderer spends issuing the frame's
 //! GL calls (clear, sky, terrain; no glFinish), the frame time to
@@ -18,7 +19,7 @@
 //! 1280x720, the viewport clipped to the target): rasterisation then costs
 //! next to nothing, and what is left is Mesa's per-call and per-vertex work.
 //!
-//! `-- --quick` draws 6 views instead of 24. Prints tables, writes
+//! `-- --quick` draws 3 views instead of 24. Prints tables, writes
 //! target/bench/batches.json and target/bench/batches.svg.
 
 mod support;
@@ -28,6 +29,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use glam::UVec2;
+use ridgeline::camera::Camera;
 use ridgeline::clipmap::LoaderMode;
 use ridgeline::dataset;
 use ridgeline::display::DisplayConfig;
@@ -35,14 +37,15 @@ use ridgeline::flight::default_flight;
 use ridgeline::gl::{ContextRequest, GlBackend, GlContext, GlRenderer};
 use ridgeline::pipeline::FramePipeline;
 use ridgeline::pyramid::{Pyramid, Silent};
-use ridgeline::render::{CallStats, FrameOutput, RenderBackend};
+use ridgeline::render::{CallStats, ClusterOrder, FrameOutput, RenderBackend};
 use ridgeline::scene::TerrainSummary;
 use serde_json::json;
 use support::{print_table, write_json, write_svg, BenchArgs, Panel, Series};
 
 const SIZE: UVec2 = UVec2::new(1280, 720);
 const FOV_X_DEG: f64 = 60.0;
-const REPEATS: usize = 3;
+/// Each technique's buffer: CLOD-16's 2000 tiles at tau 1 take 20 MB.
+const BUFFER_BYTES: u32 = 48 << 20;
 
 /// The GL renderer, timing how long issuing each frame's calls takes.
 struct Timed {
@@ -74,11 +77,16 @@ impl RenderBackend for Timed {
 struct Technique {
     grid: u32,
     clusters: bool,
+    order: ClusterOrder,
 }
 
 impl Technique {
     fn name(&self) -> String {
-        format!("{}-{}", if self.clusters { "SCSLOD" } else { "CLOD" }, self.grid)
+        let order = match (self.clusters, self.order) {
+            (true, ClusterOrder::NearestFirst) => " nearest first",
+            _ => "",
+        };
+        format!("{}-{}{order}", if self.clusters { "SCSLOD" } else { "CLOD" }, self.grid)
     }
 }
 
@@ -103,37 +111,49 @@ fn median(mut values: Vec<f64>) -> f64 {
     values[values.len() / 2]
 }
 
-fn run(
-    pyramid: &Arc<Pyramid>,
-    technique: Technique,
-    target: UVec2,
-    tau: f64,
-    views: usize,
-) -> Result<Row, Box<dyn std::error::Error>> {
-    let mut config = DisplayConfig::new(GlBackend::Egl, SIZE);
-    config.loader = LoaderMode::Inline;
-    config.load_budget = 1000;
-    config.scene.lod.grid_size = technique.grid;
-    config.scene.lod.tau_px = tau;
-    config.scene.clusters = technique.clusters;
-    let request = ContextRequest::new(GlBackend::Egl, config.version, target);
-    let context = GlContext::new(&request)?;
-    let summary = TerrainSummary::from_pyramid(pyramid.info());
-    let mut pipeline = FramePipeline::new(&config.pipeline(), pyramid.clone(), summary)?;
-    let renderer = GlRenderer::new(context.gl(), config.scene.buffer_bytes)?;
-    let mut backend = Timed { renderer, issue_ms: 0.0 };
-    let path = default_flight(pyramid);
-    let mut sum = Row::default();
-    for t in path.frame_times(views as u32) {
-        let camera = path.sample(t).camera(FOV_X_DEG, [SIZE.x, SIZE.y]);
-        pipeline.settle(&camera, 1000)?;
-        context.make_current()?;
-        context.bind_target();
-        let first = pipeline.frame(&camera, &mut backend)?;
+/// One technique's context, pipeline and renderer, and its sums.
+struct Runner {
+    context: GlContext,
+    pipeline: FramePipeline,
+    backend: Timed,
+    sum: Row,
+}
+
+impl Runner {
+    fn open(
+        pyramid: &Arc<Pyramid>,
+        technique: Technique,
+        target: UVec2,
+        tau: f64,
+    ) -> Result<Runner, Box<dyn std::error::Error>> {
+        let mut config = DisplayConfig::new(GlBackend::Egl, SIZE);
+        config.loader = LoaderMode::Inline;
+        config.load_budget = 1000;
+        config.scene.buffer_bytes = BUFFER_BYTES;
+        config.scene.lod.grid_size = technique.grid;
+        config.scene.lod.tau_px = tau;
+        config.scene.clusters = technique.clusters;
+        config.scene.cluster_order = technique.order;
+        let request = ContextRequest::new(GlBackend::Egl, config.version, target);
+        let context = GlContext::new(&request)?;
+        let summary = TerrainSummary::from_pyramid(pyramid.info());
+        let pipeline = FramePipeline::new(&config.pipeline(), pyramid.clone(), summary)?;
+        let renderer = GlRenderer::new(context.gl(), config.scene.buffer_bytes)?;
+        let backend = Timed { renderer, issue_ms: 0.0 };
+        Ok(Runner { context, pipeline, backend, sum: Row::default() })
+    }
+
+    /// Settles `camera`, draws it once (uploads), then `repeats` times.
+    fn view(&mut self, camera: &Camera, repeats: usize) -> Result<(), Box<dyn std::error::Error>> {
+        let (pipeline, backend, sum) = (&mut self.pipeline, &mut self.backend, &mut self.sum);
+        pipeline.settle(camera, 1000)?;
+        self.context.make_current()?;
+        self.context.bind_target();
+        let first = pipeline.frame(camera, backend)?;
         sum.first_frame_upload_bytes += first.calls.bytes_uploaded as f64;
         let mut frames = Vec::new();
-        for _ in 0..REPEATS {
-            let stats = pipeline.frame(&camera, &mut backend)?;
+        for _ in 0..repeats {
+            let stats = pipeline.frame(camera, backend)?;
             frames.push((stats, backend.issue_ms));
         }
         let frame_ms = median(frames.iter().map(|f| f.0.frame_ms).collect());
@@ -151,20 +171,50 @@ fn run(
         sum.triangles_per_s += triangles / (frame_ms / 1e3);
         sum.tiles += stats.scene.tiles as f64;
         sum.clusters += stats.scene.clusters as f64;
+        Ok(())
     }
-    let n = views as f64;
-    Ok(Row {
-        batches: sum.batches / n,
-        triangles: sum.triangles / n,
-        pointer_changes: sum.pointer_changes / n,
-        uniform_writes: sum.uniform_writes / n,
-        issue_ms: sum.issue_ms / n,
-        frame_ms: sum.frame_ms / n,
-        triangles_per_s: sum.triangles_per_s / n,
-        tiles: sum.tiles / n,
-        clusters: sum.clusters / n,
-        first_frame_upload_bytes: sum.first_frame_upload_bytes / n,
-    })
+
+    fn mean(&self, views: usize) -> Row {
+        let (sum, n) = (self.sum, views as f64);
+        Row {
+            batches: sum.batches / n,
+            triangles: sum.triangles / n,
+            pointer_changes: sum.pointer_changes / n,
+            uniform_writes: sum.uniform_writes / n,
+            issue_ms: sum.issue_ms / n,
+            frame_ms: sum.frame_ms / n,
+            triangles_per_s: sum.triangles_per_s / n,
+            tiles: sum.tiles / n,
+            clusters: sum.clusters / n,
+            first_frame_upload_bytes: sum.first_frame_upload_bytes / n,
+        }
+    }
+}
+
+/// Every technique over the same views, interleaved view by view (the
+/// order reversed every other view), so load on the machine hits all alike.
+fn run_all(
+    pyramid: &Arc<Pyramid>,
+    techniques: &[Technique],
+    target: UVec2,
+    tau: f64,
+    views: usize,
+    repeats: usize,
+) -> Result<Vec<Row>, Box<dyn std::error::Error>> {
+    let mut runners = techniques
+        .iter()
+        .map(|&t| Runner::open(pyramid, t, target, tau))
+        .collect::<Result<Vec<_>, _>>()?;
+    let path = default_flight(pyramid);
+    for (k, t) in path.frame_times(views as u32).enumerate() {
+        let camera = path.sample(t).camera(FOV_X_DEG, [SIZE.x, SIZE.y]);
+        let count = runners.len();
+        for j in 0..count {
+            let at = if k % 2 == 0 { j } else { count - 1 - j };
+            runners[at].view(&camera, repeats)?;
+        }
+    }
+    Ok(runners.iter().map(|r| r.mean(views)).collect())
 }
 
 fn table(title: &str, techniques: &[Technique], rows: &[Row]) {
@@ -222,20 +272,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .nth(1)
         .map(|v| v.parse().expect("--tau PX"))
         .unwrap_or(1.0);
-    let views = if args.quick { 6 } else { 24 };
+    let (views, repeats) = if args.quick { (3, 2) } else { (24, 3) };
     let pyramid = Arc::new(dataset::open(None, Path::new("cache"), &Silent)?);
-    let techniques: Vec<Technique> =
+    let by_base = ClusterOrder::ByBase;
+    let mut techniques: Vec<Technique> =
         [(16, false), (32, false), (64, false), (16, true), (32, true), (64, true)]
             .into_iter()
-            .map(|(grid, clusters)| Technique { grid, clusters })
+            .map(|(grid, clusters)| Technique { grid, clusters, order: by_base })
             .collect();
+    techniques.push(Technique { grid: 32, clusters: true, order: ClusterOrder::NearestFirst });
     let mut report = serde_json::Map::new();
     let mut panels = Vec::new();
     for (label, target) in [("1280x720", SIZE), ("2x2", UVec2::new(2, 2))] {
-        let mut rows = Vec::new();
-        for &technique in &techniques {
-            rows.push(run(&pyramid, technique, target, tau, views)?);
-        }
+        let rows = run_all(&pyramid, &techniques, target, tau, views, repeats)?;
         table(
             &format!(
                 "tau {tau} px, tiles chosen for 1280x720, drawn into {label}: means over {views} views of the default flight, ratios against CLOD-32"
@@ -254,7 +303,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             points: techniques
                 .iter()
                 .zip(&rows)
-                .filter(|(t, _)| t.clusters == clusters)
+                .filter(|(t, _)| t.clusters == clusters && t.order == by_base)
                 .map(|(t, r)| (t.grid as f64, f(r)))
                 .collect(),
         };

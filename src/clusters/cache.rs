@@ -18,7 +18,7 @@ use crate::allocator::{
 };
 use crate::lod::TileKey;
 use crate::render::cluster::MAX_MEMBERS;
-use crate::render::{Cluster, DrawList, Member, TileUniforms};
+use crate::render::{Cluster, ClusterOrder, DrawList, Member, TileUniforms};
 use crate::tiles::block::{INDEX_BYTES, VERTEX_BYTES};
 use crate::tiles::TileVertex;
 use std::collections::HashMap;
@@ -492,7 +492,10 @@ impl ClusterCache {
             let at = bases.binary_search_by_key(&c.base, |b| b.0).expect("every base listed");
             bases[at].1
         };
-        list.clusters.sort_unstable_by_key(|c| (group(c), nearest(c)));
+        match list.cluster_order {
+            ClusterOrder::ByBase => list.clusters.sort_unstable_by_key(|c| (group(c), nearest(c))),
+            ClusterOrder::NearestFirst => list.clusters.sort_unstable_by_key(nearest),
+        }
         list.clustered = true;
         let used = self.allocator.stats().live_bytes + self.index_allocator.stats().live_bytes;
         self.stats.clusters = list.clusters.len();

@@ -31,6 +31,18 @@ pub enum ClusterMorph {
     FirstMember,
 }
 
+/// In which order a frame's clusters are drawn.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub enum ClusterOrder {
+    /// Grouped by attribute base (each base's pointers set once a part),
+    /// the groups by their nearest cluster, nearest first within a group.
+    #[default]
+    ByBase,
+    /// Nearest first (by each cluster's nearest member), as tiles are:
+    /// early depth rejection, at the price of more pointer changes.
+    NearestFirst,
+}
+
 /// One cluster of the frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Cluster {

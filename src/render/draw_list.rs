@@ -15,7 +15,7 @@ use crate::tiles::block::{BLOCK_ALIGNMENT, INDEX_BYTES};
 use crate::tiles::{TileBlock, TileCoverage, TileDraw};
 use glam::{DVec2, Mat4, Vec3};
 
-use super::cluster::{Cluster, ClusterMorph, Member};
+use super::cluster::{Cluster, ClusterMorph, ClusterOrder, Member};
 
 /// Uniforms shared by every tile of a frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -257,6 +257,8 @@ pub struct DrawList {
     pub members: Vec<Member>,
     /// Which morph range a cluster's members take.
     pub cluster_morph: ClusterMorph,
+    /// In which order clusters are drawn.
+    pub cluster_order: ClusterOrder,
 }
 
 /// What [`skirt_edges`] needs of a neighbour.
@@ -304,6 +306,7 @@ impl DrawList {
             clusters: Vec::with_capacity(tiles),
             members: Vec::with_capacity(tiles),
             cluster_morph: ClusterMorph::PerMember,
+            cluster_order: ClusterOrder::ByBase,
         }
     }
 

@@ -9,7 +9,7 @@ pub mod draw_list;
 pub mod null;
 pub mod palette;
 
-pub use cluster::{Cluster, ClusterMorph, ClusterRun, Member};
+pub use cluster::{Cluster, ClusterMorph, ClusterOrder, ClusterRun, Member};
 pub use cost::{CallStats, CostModel};
 pub use draw_list::{
     DepthSlices, DrawList, DrawnTile, FrameUniforms, PostFrame, Slice, TileUniforms,

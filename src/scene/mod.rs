@@ -20,7 +20,7 @@ use crate::lod::{LevelRings, LodConfig, LodError, TileSelector};
 use crate::node::NodeLayout;
 use crate::render::draw_list::TileGeometry;
 use crate::render::draw_list::{DepthSlices, PostFrame};
-use crate::render::{palette, ClusterMorph, DrawList, FrameUniforms};
+use crate::render::{palette, ClusterMorph, ClusterOrder, DrawList, FrameUniforms};
 use crate::tiles::{TileCache, TileCacheConfig, TileError};
 use std::time::Instant;
 
@@ -65,6 +65,8 @@ pub struct SceneConfig {
     pub clusters: bool,
     /// Which morph range a cluster's members take (tests break it on purpose).
     pub cluster_morph: ClusterMorph,
+    /// In which order clusters are drawn.
+    pub cluster_order: ClusterOrder,
 }
 
 impl Default for SceneConfig {
@@ -79,6 +81,7 @@ impl Default for SceneConfig {
             caution_below_m: palette::DEFAULT_CAUTION_BELOW_M,
             clusters: false,
             cluster_morph: ClusterMorph::PerMember,
+            cluster_order: ClusterOrder::ByBase,
         }
     }
 }
@@ -177,6 +180,7 @@ impl Scene {
         let (lo, hi) = terrain.height_range();
         let mut draw_list = DrawList::with_capacity(cache_config.max_tiles as usize);
         draw_list.cluster_morph = config.cluster_morph;
+        draw_list.cluster_order = config.cluster_order;
         let clusters = if config.clusters {
             Some(ClusterCache::new(ClusterConfig {
                 capacity_bytes: config.buffer_bytes,
