@@ -180,8 +180,10 @@ pub fn cell_surface(h00: f64, h10: f64, h01: f64, h11: f64, fu: f64, fv: f64) ->
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct MeshVertex {
-    /// Mesh post `(i, j)` from the node's south-west post, in steps of
-    /// `2^NodeMesh::post_level` level-0 posts.
+    /// Mesh post `(i, j)` from the node's south-west post, in half steps
+    /// of `2^NodeMesh::post_level` level-0 posts: even pairs are posts of
+    /// the reference lattice, odd pairs the centres of cells drawn as a
+    /// fan of four (see `meshes::fan`).
     pub post: [u16; 2],
     /// Height of the data there, metres; NaN where there is none.
     pub height: f32,

@@ -9,11 +9,12 @@ use ridgeline::gl::{ChunkedBaseline, GlBackend, GlesVersion};
 use ridgeline::pipeline::{FramePipeline, FrameStats};
 use testkit::render::{config, open, render, VIEWS};
 
-/// A second pipeline over the built-in terrain, for the baseline backend.
+/// A second pipeline over the built-in terrain (its node meshes, as the
+/// display's), for the baseline backend.
 fn baseline_pipeline(config: &ridgeline::display::DisplayConfig) -> FramePipeline {
-    let pyramid = testkit::builtin_pyramid();
-    let summary = ridgeline::scene::TerrainSummary::from_pyramid(pyramid.info());
-    FramePipeline::new(&config.pipeline(), pyramid, summary).expect("baseline pipeline")
+    let terrain = testkit::builtin_terrain_for(config.scene.lod.tau_px);
+    let summary = testkit::summary_of(&terrain);
+    FramePipeline::new(&config.pipeline(), terrain, summary).expect("baseline pipeline")
 }
 
 /// Draws `camera` through `pipeline` on `baseline` into `display`'s target.

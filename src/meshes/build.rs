@@ -14,16 +14,19 @@
 //!    centres where an edge crosses a cell's diagonal), plus the reference
 //!    nodes' own delta when the reference is not level 0: the node's delta;
 //! 5. per vertex, the parent mesh's height there (the morph target) and the
-//!    data's normal there.
+//!    data's normal there;
+//! 6. cells drawn across a fold of the parent's split into fans, so that
+//!    fully morphed the mesh is the parent's surface ([`super::fan`]).
 
 use rayon::prelude::*;
 
+use super::fan::fan_unnested_cells;
 use super::reference::{reference_grid, ReferenceGrid};
 use super::{MeshOptions, MeshesError};
 use crate::mesh::rtin::round_up_to_f32;
 use crate::mesh::{
     max_surface_distance, Diagonal, HeightGrid, Mesh, MeshError, MeshSampler, Metric, Rtin,
-    RtinOptions,
+    RtinOptions, MAX_VERTICES,
 };
 use crate::node::{MeshVertex, NodeId, NodeLayout, NodeMesh, NodeSource};
 use crate::pyramid::Progress;
@@ -37,7 +40,26 @@ pub struct BuiltMesh {
     /// The error the mesh was simplified to (above the level's error only
     /// where the level's mesh would pass 65 536 vertices).
     pub error_m: f32,
-    sampler: MeshSampler,
+    /// What its children's morph targets are read from; dropped once they
+    /// are built.
+    surface: Option<MeshSurface>,
+}
+
+/// A built mesh's drawn surface: its height, and its normal as the GPU
+/// interpolates it across each triangle, anywhere in the node.
+struct MeshSurface {
+    height: MeshSampler,
+    normal: [MeshSampler; 2],
+}
+
+impl MeshSurface {
+    /// Height and normal (x, y, scaled to -127..127) at `(x, y)` in the
+    /// mesh's reference posts; `None` outside the node.
+    fn at(&self, x: f64, y: f64) -> Option<(f64, [f64; 2])> {
+        let height = self.height.height_on_mesh(x, y)?;
+        let normal = self.normal.each_ref().map(|n| n.height_on_mesh(x, y).unwrap_or(0.0));
+        Some((height, normal))
+    }
 }
 
 /// Every present node's mesh, level by level (finest first), `None` where
@@ -99,6 +121,10 @@ pub fn build_meshes(
             })
             .collect();
         levels[level as usize] = built.into_iter().collect::<Result<_, _>>()?;
+        // The parents' surfaces are read by their children only.
+        if let Some(parents) = levels.get_mut(level as usize + 1) {
+            parents.iter_mut().flatten().for_each(|p| p.surface = None);
+        }
     }
     Ok(BuiltMeshes { options, levels })
 }
@@ -140,21 +166,39 @@ pub fn build_node(
         parent.map(|(pid, p)| (Placement { id, parent: pid, node_size, post_level }, p));
     let keep = |m: [u32; 2]| placement.as_ref().is_some_and(|(at, p)| parent_has(at, p, m));
     let mut error = if leaf { 0.0 } else { options.level_error(id.level) as f64 };
-    let mesh = loop {
-        match rtin.extract_with(error, extent, keep) {
-            Ok(mesh) => break mesh,
-            Err(MeshError::TooManyVertices { .. }) if error < 1e6 => error = (2.0 * error).max(1.0),
+    // A mesh too large for 16-bit indices, fans included, is simplified further.
+    let (mesh, node_mesh) = loop {
+        let mesh = match rtin.extract_with(error, extent, keep) {
+            Ok(mesh) => mesh,
+            Err(MeshError::TooManyVertices { .. }) if error < 1e6 => {
+                error = (2.0 * error).max(1.0);
+                continue;
+            }
             Err(e) => return Err(MeshesError::Mesh { id, source: e }),
+        };
+        let heights = mesh.vertex_heights(&grid);
+        let node_mesh = stored_mesh(source, &reference, &mesh, &heights, placement.as_ref());
+        if node_mesh.vertices.len() <= MAX_VERTICES || error >= 1e6 {
+            break ((mesh, heights), node_mesh);
         }
+        error = (2.0 * error).max(1.0);
     };
-    let heights = mesh.vertex_heights(&grid);
+    let (mesh, heights) = mesh;
+    if node_mesh.vertices.len() > MAX_VERTICES {
+        let count = node_mesh.vertices.len();
+        return Err(MeshesError::Mesh { id, source: MeshError::TooManyVertices { count } });
+    }
+    // Fans draw the mesh's own surface: its distance to the data is the mesh's.
     let surface = max_surface_distance(&mesh, &heights, &grid);
     let delta = round_up_to_f32(surface + reference.delta as f64);
-    let sampler = MeshSampler::of_rtin(&mesh, &heights, &rtin);
-    let vertices = vertices(source, &reference, &mesh, &heights, placement.as_ref());
-    let node_mesh = NodeMesh { post_level, vertices, indices: mesh.indices };
+    let normal = [0, 1].map(|k| {
+        let values: Vec<f32> =
+            node_mesh.vertices[..mesh.vertices.len()].iter().map(|v| v.normal[k] as f32).collect();
+        MeshSampler::of_rtin(&mesh, &values, &rtin)
+    });
+    let surface = MeshSurface { height: MeshSampler::of_rtin(&mesh, &heights, &rtin), normal };
     node_mesh.debug_check();
-    Ok(BuiltMesh { mesh: node_mesh, delta, error_m: error as f32, sampler })
+    Ok(BuiltMesh { mesh: node_mesh, delta, error_m: error as f32, surface: Some(surface) })
 }
 
 /// The finest level with a stored node under node `id` (`id.level` for a
@@ -181,12 +225,12 @@ fn finest_stored_level(source: &dyn NodeSource, id: NodeId) -> u8 {
 
 /// Whether the parent's mesh has a vertex at the child's reference post `m`.
 fn parent_has(at: &Placement, parent: &BuiltMesh, m: [u32; 2]) -> bool {
-    let [x, y] = at.parent_post(parent.mesh.post_level, m);
+    let [x, y] = at.parent_post(parent.mesh.post_level, m.map(f64::from));
     x >= 0.0
         && y >= 0.0
         && x.fract() == 0.0
         && y.fract() == 0.0
-        && parent.sampler.has_vertex(x as u32, y as u32)
+        && parent.surface.as_ref().is_some_and(|s| s.height.has_vertex(x as u32, y as u32))
 }
 
 /// Where a node's reference posts lie in its parent's mesh.
@@ -200,15 +244,37 @@ struct Placement {
 impl Placement {
     /// The parent mesh's post coordinates (posts of `2^parent_level`) of the
     /// child's reference post `m`.
-    fn parent_post(&self, parent_level: u8, m: [u32; 2]) -> [f64; 2] {
+    fn parent_post(&self, parent_level: u8, m: [f64; 2]) -> [f64; 2] {
         let (id, pid, n) = (self.id, self.parent, self.node_size);
         let origin = |x: u32, level: u8| (x as i64 * n) << level;
         let at = |k: usize, child: u32, parent: u32| {
-            let p0 = origin(child, id.level) + ((m[k] as i64) << self.post_level);
-            (p0 - origin(parent, pid.level)) as f64 / (1i64 << parent_level) as f64
+            // Whole level-0 posts, then the fraction: exact for half posts.
+            let p0 = origin(child, id.level) - origin(parent, pid.level);
+            (p0 as f64 + m[k] * (1i64 << self.post_level) as f64) / (1i64 << parent_level) as f64
         };
         [at(0, id.x, pid.x), at(1, id.y, pid.y)]
     }
+}
+
+/// The stored mesh: its vertices (posts in half steps), with cells across
+/// a fold of the parent's drawn as fans ([`fan_unnested_cells`]).
+fn stored_mesh(
+    source: &dyn NodeSource,
+    reference: &ReferenceGrid,
+    mesh: &Mesh,
+    heights: &[f32],
+    parent: Option<&(Placement, &BuiltMesh)>,
+) -> NodeMesh {
+    let mut vertices = vertices(source, reference, mesh, heights, parent);
+    let mut indices = mesh.indices.clone();
+    if let Some((at, p)) = parent {
+        let parent_at = |x: f64, y: f64| {
+            let [px, py] = at.parent_post(p.mesh.post_level, [x / 2.0, y / 2.0]);
+            p.surface.as_ref()?.at(px, py)
+        };
+        fan_unnested_cells(&mut vertices, &mut indices, parent_at);
+    }
+    NodeMesh { post_level: reference.post_level, vertices, indices }
 }
 
 /// The stored vertices: heights, morph targets, and the data's normal at
@@ -231,19 +297,21 @@ fn vertices(
             let m = [post[0] as u32, post[1] as u32];
             let [x, y] = reference.normal(m[0], m[1], spacing);
             let on_parent = parent.and_then(|(at, p)| {
-                let [px, py] = at.parent_post(p.mesh.post_level, m);
-                p.sampler.height_on_mesh(px, py).filter(|h| h.is_finite())
+                let [px, py] = at.parent_post(p.mesh.post_level, m.map(f64::from));
+                p.surface.as_ref()?.at(px, py).filter(|(h, _)| h.is_finite())
             });
-            MeshVertex {
-                post,
-                height,
-                target: if height.is_nan() {
-                    f32::NAN
-                } else {
-                    on_parent.map_or(height, |h| h as f32)
-                },
-                normal: [x, y, x, y],
-            }
+            // Where the parent has no surface the vertex does not morph.
+            let (target, [nx, ny]) = match on_parent {
+                Some((h, n)) if !height.is_nan() => (h as f32, n.map(to_i8)),
+                _ if height.is_nan() => (f32::NAN, [x, y]),
+                _ => (height, [x, y]),
+            };
+            MeshVertex { post: post.map(|c| 2 * c), height, target, normal: [x, y, nx, ny] }
         })
         .collect()
+}
+
+/// A normal component interpolated between stored ones, stored again.
+fn to_i8(n: f64) -> i8 {
+    n.round().clamp(-127.0, 127.0) as i8
 }

@@ -14,10 +14,12 @@
 //! |---|---|
 //! | [`mod@reference`] | the best data under a node on a finer level's lattice |
 //! | [`mod@build`] | per node: RTIN mesh, exact delta, morph targets, normals |
+//! | [`mod@fan`] | cells split four ways so a mesh, fully morphed, is its parent's surface |
 //! | [`mod@file`] | the mesh file: versioned, checksummed, memory-mapped, written atomically |
 //! | [`mod@source`] | [`MeshedSource`]: a pyramid whose nodes come with their meshes |
 
 pub mod build;
+pub mod fan;
 pub mod file;
 pub mod reference;
 pub mod source;

@@ -402,7 +402,7 @@ fn tile_uniforms(
         key,
         first_post,
         post_step: step as f32,
-        vertex_step: draw.vertex_step as f32,
+        vertex_step: draw.vertex_step,
         morph,
         skirt_depth: skirt_depth(draw, geometry.delta_per_level),
         skirt_edges: ALL_EDGES,

@@ -60,8 +60,8 @@ pub struct TileDraw {
     /// Its indices: three per triangle, skirts included.
     pub index_count: u32,
     /// Level-0 posts between its vertices' posts (`u_tile.z`): `2^level`
-    /// for a regular grid, the node mesh's post step for a mesh tile.
-    pub vertex_step: u32,
+    /// for a regular grid, half the node mesh's post step for a mesh tile.
+    pub vertex_step: f32,
     /// Made from a node's mesh (its edges are shared only with tiles cut
     /// from the same node mesh), not as a regular grid of posts.
     pub node_mesh: bool,
@@ -145,11 +145,12 @@ pub enum TileMeshKind {
 }
 
 impl TileMeshKind {
-    /// Level-0 posts between the tile's vertex posts (`u_tile.z`).
-    pub fn vertex_step(self, key: TileKey) -> u32 {
+    /// Level-0 posts between the tile's vertex posts (`u_tile.z`): a
+    /// node mesh counts half steps of its lattice (cell centres are vertices).
+    pub fn vertex_step(self, key: TileKey) -> f32 {
         match self {
-            TileMeshKind::Grid => 1 << key.level,
-            TileMeshKind::NodeMesh(square) => square.step,
+            TileMeshKind::Grid => (1u32 << key.level) as f32,
+            TileMeshKind::NodeMesh(square) => square.step as f32 / 2.0,
         }
     }
 }

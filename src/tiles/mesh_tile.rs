@@ -123,8 +123,9 @@ impl MeshCutter {
         }
         self.order.clear();
         self.indices.clear();
-        let [x0, y0] = square.origin.map(|o| o as i64);
-        let w = square.width as i64;
+        // Mesh posts count half steps: the square's, doubled.
+        let [x0, y0] = square.origin.map(|o| 2 * o as i64);
+        let w = 2 * square.width as i64;
         let inside = |p: [u16; 2]| {
             let (x, y) = (p[0] as i64 - x0, p[1] as i64 - y0);
             (0..=w).contains(&x) && (0..=w).contains(&y)
@@ -172,13 +173,13 @@ impl MeshCutter {
     /// The cut's vertices on each edge, in skirt order (counter-clockwise
     /// around the tile, as `grid::edge_posts`).
     fn gather_edges(&mut self, mesh: &NodeMesh, square: TileSquare) {
-        let w = square.width;
+        let w = 2 * square.width;
         for edge in &mut self.edges {
             edge.clear();
         }
         for (n, &v) in self.order.iter().enumerate() {
             let [x, y] =
-                [0, 1].map(|k| mesh.vertices[v as usize].post[k] as u32 - square.origin[k]);
+                [0, 1].map(|k| mesh.vertices[v as usize].post[k] as u32 - 2 * square.origin[k]);
             let n = n as u16;
             if y == 0 {
                 self.edges[0].push((x, n));
@@ -211,9 +212,10 @@ impl MeshCutter {
         let square = inputs.square;
         for (out, &v) in vertices.iter_mut().zip(&self.order) {
             let vertex = inputs.mesh.vertices[v as usize];
-            let post = [0, 1].map(|k| (vertex.post[k] as u32 - square.origin[k]) as u16);
-            let level0 =
-                [0, 1].map(|k| inputs.node_origin[k] + vertex.post[k] as u64 * square.step as u64);
+            // Half steps, as the mesh's: the tile's vertex step is half its mesh's.
+            let post = [0, 1].map(|k| (vertex.post[k] as u32 - 2 * square.origin[k]) as u16);
+            let level0 = [0, 1]
+                .map(|k| inputs.node_origin[k] + vertex.post[k] as u64 * square.step as u64 / 2);
             if vertex.height.is_nan() {
                 without += 1;
                 *out = TileVertex {
@@ -302,9 +304,9 @@ impl MeshCutter {
     /// next to mesh position `along` on it, all have data.
     fn data_across(&self, inputs: &CutInputs<'_>, e: usize, along: u32) -> bool {
         let square = inputs.square;
-        // Mesh posts to the tile's own posts (a tile post is `ratio` mesh posts).
-        let ratio = (inputs.tile_step / square.step).max(1) as i64;
-        let g = (square.width as i64) / ratio;
+        // Half mesh posts to the tile's own posts (a tile post is `ratio` of them).
+        let ratio = 2 * (inputs.tile_step / square.step).max(1) as i64;
+        let g = (2 * square.width as i64) / ratio;
         let a = along as i64;
         let (lo, hi) = (a / ratio, (a + ratio - 1) / ratio);
         let post = |k: i64| -> (i64, i64) {

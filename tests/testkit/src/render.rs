@@ -62,7 +62,17 @@ pub fn config(backend: GlBackend, version: GlesVersion) -> DisplayConfig {
     }
 }
 
+/// A display over the built-in terrain, tiles cut from its node meshes for
+/// the config's tau (what `ridgeline fly` draws).
 pub fn open(config: &DisplayConfig) -> Result<DisplayParts, DisplayError> {
+    let terrain = crate::builtin_terrain_for(config.scene.lod.tau_px);
+    let summary = crate::summary_of(&terrain);
+    DisplayParts::open(config, terrain, summary)
+}
+
+/// A display over the built-in terrain, tiles drawn as regular grids
+/// (`ridgeline fly --regular-grid`).
+pub fn open_grid(config: &DisplayConfig) -> Result<DisplayParts, DisplayError> {
     open_over(config, builtin_pyramid())
 }
 
@@ -73,14 +83,6 @@ pub fn open_over(
 ) -> Result<DisplayParts, DisplayError> {
     let summary = TerrainSummary::from_pyramid(pyramid.info());
     DisplayParts::open(config, pyramid, summary)
-}
-
-/// A display over the built-in terrain with its node meshes for the
-/// config's tau (`fly --node-meshes`).
-pub fn open_meshed(config: &DisplayConfig) -> Result<DisplayParts, DisplayError> {
-    let terrain = crate::builtin_terrain_for(config.scene.lod.tau_px);
-    let summary = crate::summary_of(&terrain);
-    DisplayParts::open(config, terrain, summary)
 }
 
 /// A camera over the render tests' viewport ([`SIZE`]) at `(x, y)` metres

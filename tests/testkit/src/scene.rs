@@ -34,18 +34,19 @@ pub fn pipeline_over(
     FramePipeline::new(&pipeline, source, summary).expect("pipeline")
 }
 
-/// [`pipeline_over`] the built-in terrain.
+/// [`pipeline_over`] the built-in terrain with its node meshes for the
+/// config's tau (what `ridgeline fly` draws).
 pub fn pipeline(config: SceneConfig) -> FramePipeline {
-    let pyramid = crate::builtin_pyramid();
-    let summary = TerrainSummary::from_pyramid(pyramid.info());
-    pipeline_over(pyramid, summary, config)
-}
-
-/// [`pipeline_over`] the built-in terrain with its node meshes.
-pub fn pipeline_meshed(config: SceneConfig) -> FramePipeline {
     let terrain = crate::builtin_terrain_for(config.lod.tau_px);
     let summary = crate::summary_of(&terrain);
     pipeline_over(terrain, summary, config)
+}
+
+/// [`pipeline_over`] the built-in terrain drawn as regular grids.
+pub fn pipeline_grid(config: SceneConfig) -> FramePipeline {
+    let pyramid = crate::builtin_pyramid();
+    let summary = TerrainSummary::from_pyramid(pyramid.info());
+    pipeline_over(pyramid, summary, config)
 }
 
 /// A null backend standing for an ES 3 context with the sky on.
@@ -128,12 +129,12 @@ pub fn edge_heights(
                 morph_factor(distance, tile.morph[0] as f64, tile.morph[1] as f64),
             )
         };
-        // Tile sides in level-0 posts from its south-west corner.
-        let side = (grid as i64) << tile.key.level;
+        // Tile sides in half level-0 posts from its south-west corner (a
+        // mesh tile's vertices count half its lattice's steps).
+        let side = (2 * grid as i64) << tile.key.level;
         let base = (tile.key.x as i64 * side, tile.key.y as i64 * side);
-        let scale = tile.vertex_step as i64;
-        let step = (1i64 << tile.key.level) / 2;
-        let step = step.max(1);
+        let scale = (2.0 * tile.vertex_step) as i64;
+        let step = (1i64 << tile.key.level).max(2);
         for t in (0..block.triangle_count()).filter(|&t| !block.is_skirt(t)) {
             let corners = block.triangle(t).map(|v| block.vertex(v as usize));
             for k in 0..3 {
@@ -155,7 +156,7 @@ pub fn edge_heights(
                         let f = (u - pa[axis]) as f64 / (pb[axis] - pa[axis]) as f64;
                         let mut point = pa;
                         point[axis] = u;
-                        let key = (2 * (base.0 + point[0]), 2 * (base.1 + point[1]));
+                        let key = (base.0 + point[0], base.1 + point[1]);
                         let height = a + f * (b - a);
                         let entry = heights.entry(key).or_default();
                         // Each tile once per point (segments share their ends).
@@ -172,7 +173,7 @@ pub fn edge_heights(
 }
 
 /// The side (0 south, 1 east, 2 north, 3 west: the skirt bits' order) of
-/// a tile `side` level-0 posts wide that the segment `p`-`q` lies on.
+/// a tile `side` half level-0 posts wide that the segment `p`-`q` lies on.
 fn side_of(p: [i64; 2], q: [i64; 2], side: i64) -> Option<usize> {
     match () {
         _ if p[1] == 0 && q[1] == 0 => Some(0),
