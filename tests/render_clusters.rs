@@ -1,5 +1,6 @@
 //! Cluster batches (issue 12, Judnich & Ling): the default flight at tau 1,
-//! 4 and 8 drawn once tile by tile and once as clusters must draw the same
+//! 4 and 8 (tiles cut from node meshes, as `fly` draws them, and regular
+//! grids) drawn once tile by tile and once as clusters must draw the same
 //! triangles (skirts counted) and the same picture within the golden
 //! tolerance, with at least 6 times fewer terrain draw calls; on EGL and
 //! OSMesa, ES 3 and ES 2.0.
@@ -13,15 +14,23 @@
 //! per draw and says how far the flight is from 1.
 
 use ridgeline::display::DisplayConfig;
+use ridgeline::display::{DisplayError, DisplayParts};
 use ridgeline::flight::default_flight;
 use ridgeline::gl::{GlBackend, GlesVersion};
 use testkit::builtin_pyramid;
 use testkit::compare::assert_similar;
 use testkit::gl::{skip_for_missing_osmesa, take_turn};
-use testkit::render::{config, open, render, SIZE, TOLERANCE};
+use testkit::render::{config, open, open_grid, render, SIZE, TOLERANCE};
 
 /// Per tau: tiles, terrain draw calls with clusters, and the ratio.
-fn fly_both_ways(base: DisplayConfig, tau: f64, frames: u32) -> Option<(u64, u64, u64)> {
+type Open = fn(&DisplayConfig) -> Result<DisplayParts, DisplayError>;
+
+fn fly_both_ways(
+    base: DisplayConfig,
+    open: Open,
+    tau: f64,
+    frames: u32,
+) -> Option<(u64, u64, u64)> {
     let (backend, version) = (base.backend, base.version);
     let mut per_tile = base;
     per_tile.scene.lod.tau_px = tau;
@@ -29,9 +38,7 @@ fn fly_both_ways(base: DisplayConfig, tau: f64, frames: u32) -> Option<(u64, u64
     clustered.scene.clusters = true;
     let mut tiles_display = match open(&per_tile) {
         Ok(display) => display,
-        Err(ridgeline::display::DisplayError::Gl(error))
-            if skip_for_missing_osmesa("render_clusters", &error) =>
-        {
+        Err(DisplayError::Gl(error)) if skip_for_missing_osmesa("render_clusters", &error) => {
             return None
         }
         Err(error) => panic!("{error}"),
@@ -65,9 +72,14 @@ fn fly_both_ways(base: DisplayConfig, tau: f64, frames: u32) -> Option<(u64, u64
 }
 
 fn check(backend: GlBackend, version: GlesVersion, taus: &[f64], frames: u32) {
+    check_over(open, backend, version, taus, frames);
+}
+
+fn check_over(open: Open, backend: GlBackend, version: GlesVersion, taus: &[f64], frames: u32) {
     let _turn = take_turn();
     for &tau in taus {
-        let Some((tiles, draws, pointers)) = fly_both_ways(config(backend, version), tau, frames)
+        let Some((tiles, draws, pointers)) =
+            fly_both_ways(config(backend, version), open, tau, frames)
         else {
             return;
         };
@@ -84,6 +96,12 @@ fn check(backend: GlBackend, version: GlesVersion, taus: &[f64], frames: u32) {
 #[test]
 fn clusters_draw_the_same_picture_with_six_times_fewer_calls_on_egl() {
     check(GlBackend::Egl, GlesVersion::Es3, &[1.0, 4.0, 8.0], 12);
+}
+
+/// Regular grids (`fly --regular-grid`): the same.
+#[test]
+fn clusters_of_regular_grids_draw_the_same_picture() {
+    check_over(open_grid, GlBackend::Egl, GlesVersion::Es3, &[1.0, 4.0, 8.0], 8);
 }
 
 #[test]

@@ -18,7 +18,8 @@ use crate::allocator::{
 };
 use crate::lod::TileKey;
 use crate::render::cluster::MAX_MEMBERS;
-use crate::render::{Cluster, ClusterOrder, DrawList, Member, TileUniforms};
+use crate::render::cluster_draws::part_bit;
+use crate::render::{Cluster, ClusterOrder, DrawList, Member, Slice, TileUniforms};
 use crate::tiles::block::{INDEX_BYTES, VERTEX_BYTES};
 use crate::tiles::TileVertex;
 use std::collections::HashMap;
@@ -459,12 +460,22 @@ impl ClusterCache {
                 first_index += tile.index_count;
                 voids |= tile.voids;
             }
+            let mut parts = 0;
+            for p in &placements[start..end] {
+                let tile = &list.tiles[p.tile as usize];
+                for slice in [Slice::Far, Slice::Near] {
+                    if list.tile_in(tile, slice) {
+                        parts |= part_bit(slice, voids);
+                    }
+                }
+            }
             list.clusters.push(Cluster {
                 base: resident.base,
                 index_byte_offset: resident.index_byte_offset,
                 first_member,
                 member_count: (end - start) as u32,
                 voids,
+                parts,
             });
             start = end;
         }

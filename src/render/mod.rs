@@ -4,6 +4,7 @@
 //! be drawn without any context.
 
 pub mod cluster;
+pub mod cluster_draws;
 pub mod cost;
 pub mod draw_list;
 pub mod null;
