@@ -1,7 +1,8 @@
 //! Once warmed up, a frame of the scene allocates nothing: ring updates, tile
 //! selection, the tile cache (slots, allocator, vertex generation) and the
-//! draw list all reuse buffers sized at start. One test in this binary, since
-//! the counter sees the whole process.
+//! draw list all reuse buffers sized at start; so do the clusters (their
+//! formation, cache and allocators) when the tiles are drawn as clusters.
+//! One test in this binary, since the counter sees the whole process.
 
 use ridgeline::scene::{Scene, SceneConfig, TriangleBand};
 use testkit::scene::{camera, terrain};
@@ -9,6 +10,7 @@ use testkit::scene::{camera, terrain};
 #[test]
 fn steady_state_frames_allocate_nothing() {
     frames_allocate_nothing(SceneConfig::default(), false);
+    frames_allocate_nothing(SceneConfig { clusters: true, ..SceneConfig::default() }, false);
     // With the valid life (the path moves 47 m a frame) and a triangle band
     // that makes the scene select again within frames.
     let mut config = SceneConfig::default();
@@ -46,8 +48,10 @@ fn frames_allocate_nothing(config: SceneConfig, budget: bool) {
     let still = path(120);
     scene.frame(&still, terrain).unwrap();
     let before = testkit::alloc::allocations();
+    let mut uploaded = 0;
     for _ in 0..20 {
-        scene.frame(&still, terrain).unwrap();
+        let stats = scene.frame(&still, terrain).unwrap();
+        uploaded += stats.bytes_uploaded + stats.cluster_bytes_uploaded;
     }
     let resting = testkit::alloc::allocations() - before;
     assert!(generated > 0, "the flight made new tiles");
@@ -56,5 +60,11 @@ fn frames_allocate_nothing(config: SceneConfig, budget: bool) {
         let stats = scene.frame(&still, terrain).unwrap();
         assert!(stats.life.candidates > 0 && !stats.life.full, "{:?}", stats.life);
     }
-    assert_eq!((moving, resting), (0, 0), "allocations in 80 moving and 20 still frames");
+    assert_eq!(uploaded, 0, "a still camera uploads nothing (clusters: {})", config.clusters);
+    assert_eq!(
+        (moving, resting),
+        (0, 0),
+        "allocations in 80 moving and 20 still frames (clusters: {})",
+        config.clusters
+    );
 }

@@ -41,6 +41,10 @@ pub struct FlyArgs {
     /// Draw a flat earth (no curvature drop).
     #[arg(long)]
     pub flat_earth: bool,
+    /// Draw the tiles as clusters of up to 16 neighbours, one draw call
+    /// each (Judnich & Ling), instead of one draw call per tile.
+    #[arg(long)]
+    pub clusters: bool,
     /// PNG snapshots written along a headless flight (the last frame always is).
     #[arg(long, default_value_t = 6)]
     pub snapshots: u32,
@@ -78,6 +82,8 @@ pub fn run(args: &FlyArgs) -> Result<()> {
         _ => headless,
     };
     args.view.configure(&mut config, &path, interval);
+    config.scene.clusters = args.clusters;
+    config.fov_x_deg = args.view.fov;
     let mut display = Display::new(&config, source, summary).context("opening the display")?;
     let info = display.info().clone();
     println!(
@@ -177,6 +183,9 @@ fn write_stats(
                 "triangles": s.scene.triangles,
                 "draw_calls": s.draw_calls,
                 "attribute_pointer_changes": s.calls.attribute_pointer_changes,
+                "clusters": s.scene.clusters,
+                "clusters_made": s.scene.clusters_made,
+                "cluster_bytes_uploaded": s.scene.cluster_bytes_uploaded,
                 "calls": s.calls,
                 "bytes_uploaded": s.scene.bytes_uploaded,
                 "transfers": s.scene.transfers,
@@ -220,6 +229,7 @@ fn write_stats(
         "frame_ms_target": args.view.frame_ms,
         "max_travel_m": max_travel_m,
         "tau_loosened_frames": rows.iter().filter(|r| r.stats.tau_loosened()).count(),
+        "clusters": args.clusters,
         "fov_x_deg": args.view.fov,
         "frames": frames,
     });
@@ -241,7 +251,8 @@ fn print_summary(rows: &[Row]) -> Result<()> {
     let mean = |f: &dyn Fn(&FrameStats) -> f64| {
         rows.iter().map(|r| f(&r.stats)).sum::<f64>() / rows.len() as f64
     };
-    let uploaded: u64 = rows.iter().map(|r| r.stats.scene.bytes_uploaded).sum();
+    // What the GPU received: tile blocks, or cluster blocks with clusters on.
+    let uploaded: u64 = rows.iter().map(|r| r.stats.calls.bytes_uploaded).sum();
     let last = rows.last().expect("rows is not empty");
     writeln!(out)?;
     writeln!(out, "  frames            {}", rows.len())?;
@@ -262,10 +273,11 @@ fn print_summary(rows: &[Row]) -> Result<()> {
     )?;
     writeln!(
         out,
-        "  tiles             mean {:.0} ({:.0} triangles, {:.0} draw calls)",
+        "  tiles             mean {:.0} ({:.0} triangles, {:.0} draw calls, {:.0} clusters)",
         mean(&|s| s.scene.tiles as f64),
         mean(&|s| s.scene.triangles as f64),
-        mean(&|s| s.draw_calls as f64)
+        mean(&|s| s.draw_calls as f64),
+        mean(&|s| s.scene.clusters as f64)
     )?;
     writeln!(
         out,

@@ -170,8 +170,9 @@ impl FramePipeline {
         let terrain = ClipmapTerrain { clipmap: &self.clipmap, summary: &self.summary };
         let scene = self.scene.frame(camera, &terrain).map_err(PipelineError::from)?;
         let tiled = Instant::now();
-        let (staging, dirty) = self.scene.uploads();
-        let output = FrameOutput { list: self.scene.draw_list(), staging, dirty };
+        let (staging, dirty) = self.scene.gpu_uploads();
+        let indices = self.scene.index_uploads();
+        let output = FrameOutput { list: self.scene.draw_list(), staging, dirty, indices };
         backend.render(&output).map_err(FrameError::Backend)?;
         backend.finish();
         let done = Instant::now();
@@ -234,7 +235,8 @@ impl FramePipeline {
         self.scene.draw_list()
     }
 
-    /// The staging copy the backend's GPU buffer mirrors.
+    /// The tile cache's staging copy: what the draw list's tiles' offsets
+    /// refer to (the GPU buffer mirrors it when clusters are off).
     pub fn staging(&self) -> &[u8] {
         self.scene.uploads().0
     }

@@ -16,6 +16,7 @@ pub use clipmap_terrain::{ClipmapTerrain, TerrainSummary};
 pub use terrain::{PreloadedTerrain, TerrainData};
 
 use crate::camera::{Camera, CameraError, Frustum, EARTH_RADIUS_M};
+use crate::clusters::{ClusterCache, ClusterConfig, ClusterError};
 use crate::lod::life::LifeStats;
 use crate::lod::rings::RingInputs;
 use crate::lod::select::View;
@@ -23,7 +24,7 @@ use crate::lod::{LevelRings, LodConfig, LodError, TileSelector};
 use crate::node::NodeLayout;
 use crate::render::draw_list::TileGeometry;
 use crate::render::draw_list::{DepthSlices, PostFrame};
-use crate::render::{palette, DrawList, FrameUniforms};
+use crate::render::{palette, ClusterMorph, ClusterOrder, DrawList, FrameUniforms};
 use crate::tiles::{TileCache, TileCacheConfig, TileError};
 use std::time::Instant;
 
@@ -63,6 +64,13 @@ pub struct SceneConfig {
     pub warning_above_m: f32,
     /// Terrain less than this many metres below the aircraft is amber.
     pub caution_below_m: f32,
+    /// Draw the tiles as clusters (Judnich & Ling; `crate::clusters`): the
+    /// GPU buffer then holds the clusters' blocks, not the tiles'.
+    pub clusters: bool,
+    /// Which morph range a cluster's members take (tests break it on purpose).
+    pub cluster_morph: ClusterMorph,
+    /// In which order clusters are drawn.
+    pub cluster_order: ClusterOrder,
 }
 
 impl Default for SceneConfig {
@@ -75,6 +83,9 @@ impl Default for SceneConfig {
             curvature: true,
             warning_above_m: palette::DEFAULT_WARNING_ABOVE_M,
             caution_below_m: palette::DEFAULT_CAUTION_BELOW_M,
+            clusters: false,
+            cluster_morph: ClusterMorph::PerMember,
+            cluster_order: ClusterOrder::ByBase,
         }
     }
 }
@@ -92,6 +103,10 @@ pub enum SceneError {
     /// coarsened down to the root level.
     #[error("tiles: {0}")]
     Tiles(#[from] TileError),
+    /// The cluster cache could not be built or could not take the frame's
+    /// clusters, even coarsened down to the root level.
+    #[error("clusters: {0}")]
+    Clusters(#[from] ClusterError),
 }
 
 /// CPU time of each stage of a frame, milliseconds.
@@ -134,6 +149,12 @@ pub struct SceneStats {
     pub life: LifeStats,
     /// Selections redone to keep a triangle budget's band ([`TriangleBand`]).
     pub reselected: u32,
+    /// Clusters drawn (0 when tiles are drawn one by one).
+    pub clusters: usize,
+    /// Clusters whose block was made this frame.
+    pub clusters_made: usize,
+    /// Bytes of cluster blocks uploaded (the GPU's uploads when clustered).
+    pub cluster_bytes_uploaded: u64,
     /// CPU time of each stage.
     pub cpu_ms: StageTimes,
 }
@@ -154,6 +175,8 @@ pub struct Scene {
     loose_rings: LevelRings,
     tau_ceiling: f64,
     band: band::BandState,
+    /// With clusters on: their blocks, which the GPU buffer then mirrors.
+    clusters: Option<ClusterCache>,
 }
 
 /// The near plane sits this share of the way to the nearest drawn tile's
@@ -174,7 +197,20 @@ impl Scene {
         };
         let deltas = terrain.delta_per_level();
         let (lo, hi) = terrain.height_range();
-        let draw_list = DrawList::with_capacity(cache_config.max_tiles as usize);
+        let mut draw_list = DrawList::with_capacity(cache_config.max_tiles as usize);
+        draw_list.cluster_morph = config.cluster_morph;
+        draw_list.cluster_order = config.cluster_order;
+        let clusters = if config.clusters {
+            Some(ClusterCache::new(ClusterConfig {
+                capacity_bytes: config.buffer_bytes,
+                index_capacity_bytes: config.buffer_bytes / 2,
+                max_clusters: cache_config.max_tiles,
+                transfer_cap: config.transfer_cap,
+                frames_in_flight: config.frames_in_flight,
+            })?)
+        } else {
+            None
+        };
         let inputs = RingInputs {
             tile_size_m: 1.0,
             delta_per_level: &deltas,
@@ -185,6 +221,7 @@ impl Scene {
             loose_rings: LevelRings::new(&config.lod, inputs),
             tau_ceiling: f64::INFINITY,
             band: band::BandState::default(),
+            clusters,
             config,
             selector: TileSelector::new(config.lod),
             cache: TileCache::new(cache_config, terrain)?,
@@ -217,7 +254,9 @@ impl Scene {
         &self.draw_list
     }
 
-    /// The byte ranges the GPU buffer must receive this frame, and the staging copy.
+    /// The tile cache's staging copy (what the draw list's tile offsets
+    /// refer to) and the ranges of it made this frame. Without clusters
+    /// the GPU buffer mirrors it.
     pub fn uploads(&self) -> (&[u8], &[std::ops::Range<u32>]) {
         (self.cache.staging(), self.cache.dirty_ranges())
     }
@@ -233,6 +272,27 @@ impl Scene {
     /// budget raising tau further gains nothing.
     pub fn tau_ceiling(&self) -> f64 {
         self.tau_ceiling
+    }
+
+    /// The staging copy the GPU buffer mirrors and the ranges it must
+    /// receive this frame: the cluster cache's with clusters on, else
+    /// [`Self::uploads`].
+    pub fn gpu_uploads(&self) -> (&[u8], &[std::ops::Range<u32>]) {
+        match &self.clusters {
+            Some(clusters) => (clusters.staging(), clusters.dirty_ranges()),
+            None => self.uploads(),
+        }
+    }
+
+    /// With clusters on, the cluster index buffer's staging copy and the
+    /// ranges of it to upload this frame.
+    pub fn index_uploads(&self) -> Option<(&[u8], &[std::ops::Range<u32>])> {
+        self.clusters.as_ref().map(|c| (c.index_staging(), c.index_dirty_ranges()))
+    }
+
+    /// The cluster cache, with clusters on.
+    pub fn clusters(&self) -> Option<&ClusterCache> {
+        self.clusters.as_ref()
     }
 
     /// The rings of the last frame.
@@ -291,31 +351,43 @@ impl Scene {
             nearest_m = selected.iter().map(|t| t.distance).fold(f64::INFINITY, f64::min);
             let selected_at = Instant::now();
             report.cpu_ms.select_ms += ms(start, selected_at);
-            let outcome = self.cache.update(selected, terrain);
+            let outcome =
+                self.cache.update(selected, terrain).map(|_| ()).map_err(SceneError::from);
             report.cpu_ms.tiles_ms += ms(selected_at, Instant::now());
+            let outcome = outcome.and_then(|()| {
+                let near_m = (nearest_m * NEAR_SHARE).min(f32::MAX as f64) as f32;
+                let uniforms = frame_uniforms(&self.config, camera, terrain, near_m);
+                let start = Instant::now();
+                let geometry = TileGeometry {
+                    grid_size,
+                    node_size: layout.node_size,
+                    spacing_m: layout.spacing_m,
+                    delta_per_level: &self.deltas,
+                };
+                self.draw_list.build(uniforms, self.cache.draws(), &self.rings, geometry);
+                if let Some(clusters) = &mut self.clusters {
+                    let (staging, dirty) = (self.cache.staging(), self.cache.dirty_ranges());
+                    clusters.update(&mut self.draw_list, staging, dirty)?;
+                }
+                report.cpu_ms.draw_list_ms = ms(start, Instant::now());
+                Ok(())
+            });
+            let full = matches!(
+                outcome,
+                Err(SceneError::Tiles(TileError::BufferFull(_)))
+                    | Err(SceneError::Clusters(ClusterError::BufferFull(_)))
+            );
             match outcome {
-                Ok(_) => break,
-                Err(TileError::BufferFull(_)) if lod.view_distance > 1.0 || lod.tau_px < 1e6 => {
+                Ok(()) => break,
+                Err(_) if full && (lod.view_distance > 1.0 || lod.tau_px < 1e6) => {
                     // Coarser: half the rings (Ulrich's rule through tau, Kühnert's through distance).
                     lod.view_distance = (lod.view_distance / 2.0).max(1.0);
                     lod.tau_px *= 2.0;
                     report.coarsened += 1;
                 }
-                Err(error) => return Err(error.into()),
+                Err(error) => return Err(error),
             }
         }
-        let near_m = (nearest_m * NEAR_SHARE).min(f32::MAX as f64) as f32;
-        let uniforms = frame_uniforms(&self.config, camera, terrain, near_m);
-        let start = Instant::now();
-        let geometry = TileGeometry {
-            grid_size,
-            node_size: layout.node_size,
-            spacing_m: layout.spacing_m,
-            delta_per_level: &self.deltas,
-        };
-        let draws = self.cache.draws();
-        self.draw_list.build(uniforms, draws, &self.rings, geometry);
-        report.cpu_ms.draw_list_ms = ms(start, Instant::now());
         let stats = self.cache.stats();
         report.tiles = self.draw_list.tiles.len();
         report.culled = self.selector.culled();
@@ -328,6 +400,12 @@ impl Scene {
         report.generated = stats.generated;
         report.allocator_used_bytes = stats.allocator_used_bytes;
         report.allocator_workspace_bytes = stats.allocator_workspace_bytes;
+        if let Some(clusters) = &self.clusters {
+            let stats = clusters.stats();
+            report.clusters = stats.clusters;
+            report.clusters_made = stats.made;
+            report.cluster_bytes_uploaded = stats.bytes_uploaded;
+        }
         Ok(report)
     }
 }
