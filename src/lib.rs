@@ -15,6 +15,7 @@
 //! | [`mesh`] | adaptive chunk meshes, GL-free: the RTIN error map and extraction, exact mesh delta against level 0, morph-target lookup, view-dependent RTIN refinement |
 //! | [`meshes`] | node meshes (Ulrich's chunks): each stored node's adaptive mesh of the best data under it (RTIN at its level's error, exact delta, morph targets, normals), the mesh file beside the pyramid, and the source that pages nodes with their meshes |
 //! | [`tiles`] | per-tile mesh blocks (vertices, then indices), the regular grid mesh, vertex data, the tile cache on the allocator |
+//! | [`clusters`] | cluster batches (Judnich & Ling): the frame's tiles gathered into two-level clusters, each cluster's block (its members' vertices, one 16-bit index list) in the cluster buffer |
 //! | [`render`] | the GL-free half of drawing: draw lists, the backend trait, the counting null backend, the palette |
 //! | [`flight`] | camera paths for `fly`: the `--path` CSV, interpolation, frame times, the built-in approach |
 //! | [`scene`] | one frame of the display, GL-free: rings, selection, tile uploads, draw list, stage times |
@@ -32,6 +33,7 @@ pub mod accuracy;
 pub mod allocator;
 pub mod camera;
 pub mod clipmap;
+pub mod clusters;
 pub mod dataset;
 pub mod dem;
 pub mod display;

@@ -72,6 +72,12 @@ fn accuracy_refuses_impossible_options_by_name() {
         (["accuracy", "--tau", "0"], "--tau"),
         (["accuracy", "--fov", "180"], "--fov"),
         (["accuracy", "--backend", "window"], "--backend window"),
+        (["accuracy", "--triangle-budget", "0"], "--triangle-budget"),
+        (["accuracy", "--frame-ms", "NaN"], "--frame-ms"),
+        (["accuracy", "--frame-ms", "-2"], "--frame-ms"),
+        (["accuracy", "--frame-ms", "0"], "--frame-ms"),
+        (["accuracy", "--max-speed", "-1"], "--max-speed"),
+        (["accuracy", "--max-speed", "inf"], "--max-speed"),
     ] {
         let out = ridgeline(&args);
         let stderr = String::from_utf8_lossy(&out.stderr);

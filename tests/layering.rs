@@ -20,7 +20,7 @@ const LAYERS: &[&[&str]] = &[
     &["geo", "node", "allocator", "camera"],
     &["mesh", "dem", "pyramid", "procedural"],
     &["clipmap", "lod", "tiles", "meshes", "dataset"],
-    &["render"],
+    &["render", "clusters"],
     &["scene", "pipeline"],
     &["accuracy", "flight"],
     &["gl"],

@@ -133,7 +133,29 @@ fn fly_counting_holes(
 #[test]
 fn no_holes_along_a_low_flight() {
     let _turn = take_turn();
-    for (name, config) in [("flying", flying()), ("coarse", coarse())] {
+    no_holes(&[("flying", flying()), ("coarse", coarse())]);
+}
+
+/// Drawn as clusters (Judnich & Ling): the same checks.
+#[test]
+fn no_holes_and_no_pops_drawn_as_clusters() {
+    let _turn = take_turn();
+    let configs =
+        [("flying-clusters", clustered(flying())), ("coarse-clusters", clustered(coarse()))];
+    no_holes(&configs);
+    no_pops(&[
+        ("flying-clusters", clustered(flying()), 5),
+        ("coarse-clusters", clustered(coarse()), 3),
+    ]);
+}
+
+fn clustered(mut config: DisplayConfig) -> DisplayConfig {
+    config.scene.clusters = true;
+    config
+}
+
+fn no_holes(configs: &[(&str, DisplayConfig)]) {
+    for (name, config) in configs.iter().cloned() {
         let mut display = open(&with_sentinel(config)).expect("EGL display");
         let (frames, levels, evidence) =
             fly_counting_holes(&mut display, &format!("cracks-{name}"), None);
@@ -310,7 +332,11 @@ const SEARCH_STEP_M: f64 = 25.0;
 #[test]
 fn no_pops_where_tiles_switch_level_along_a_slow_flight() {
     let _turn = take_turn();
-    for (name, config, least) in [("flying", flying(), 5), ("coarse", coarse(), 3)] {
+    no_pops(&[("flying", flying(), 5), ("coarse", coarse(), 3)]);
+}
+
+fn no_pops(configs: &[(&str, DisplayConfig, usize)]) {
+    for (name, config, least) in configs.iter().cloned() {
         let pops = pops(&config, None);
         for pop in &pops {
             println!(
@@ -350,4 +376,17 @@ fn the_pop_check_finds_switches_without_morph() {
     }
     let caught = pops.iter().filter(|pop| !pop.is_small()).count();
     assert!(caught > 0, "none of {} unmorphed switches was caught", pops.len());
+}
+
+/// Clusters whose members all morph over the first member's range (one
+/// morph per cluster) pop where tiles switch level: the check catches it.
+#[test]
+fn the_pop_check_finds_a_broken_cluster_morph() {
+    let _turn = take_turn();
+    let mut broken = clustered(coarse());
+    broken.scene.cluster_morph = ridgeline::render::ClusterMorph::FirstMember;
+    let pops = pops(&broken, None);
+    let caught = pops.iter().filter(|pop| !pop.is_small()).count();
+    println!("coarse, cluster morph broken: {caught} of {} switches caught", pops.len());
+    assert!(caught > 0, "none of {} switches with a broken cluster morph was caught", pops.len());
 }

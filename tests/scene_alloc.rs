@@ -1,15 +1,30 @@
 //! Once warmed up, a frame of the scene allocates nothing: ring updates, tile
 //! selection, the tile cache (slots, allocator, vertex generation) and the
-//! draw list all reuse buffers sized at start. One test in this binary, since
-//! the counter sees the whole process.
+//! draw list all reuse buffers sized at start; so do the clusters (their
+//! formation, cache and allocators) when the tiles are drawn as clusters.
+//! One test in this binary, since the counter sees the whole process.
 
-use ridgeline::scene::{Scene, SceneConfig};
+use ridgeline::scene::{Scene, SceneConfig, TriangleBand};
 use testkit::scene::{camera, terrain};
 
 #[test]
 fn steady_state_frames_allocate_nothing() {
+    frames_allocate_nothing(SceneConfig::default(), false);
+    frames_allocate_nothing(SceneConfig { clusters: true, ..SceneConfig::default() }, false);
+    // With the valid life (the path moves 47 m a frame) and a triangle band
+    // that makes the scene select again within frames.
+    let mut config = SceneConfig::default();
+    config.lod.max_travel_m = Some(50.0);
+    frames_allocate_nothing(config, true);
+}
+
+fn frames_allocate_nothing(config: SceneConfig, budget: bool) {
     let terrain = terrain();
-    let mut scene = Scene::new(SceneConfig::default(), terrain).unwrap();
+    let mut scene = Scene::new(config, terrain).unwrap();
+    if budget {
+        scene.set_triangle_band(Some(TriangleBand { target: 60_000.0, tolerance: 0.04 }));
+        scene.set_tau(1.5).unwrap();
+    }
     let path = |k: u32| {
         camera(20_000.0 + 40.0 * k as f64, 30_000.0 + 25.0 * k as f64, 3_000.0, 55.0, -7.0)
     };
@@ -18,18 +33,38 @@ fn steady_state_frames_allocate_nothing() {
         scene.frame(&path(k), terrain).unwrap();
     }
     let before = testkit::alloc::allocations();
-    let mut generated = 0;
+    let (mut generated, mut reselected) = (0, 0);
     for k in 40..120 {
-        generated += scene.frame(&path(k), terrain).unwrap().generated;
+        let stats = scene.frame(&path(k), terrain).unwrap();
+        generated += stats.generated;
+        reselected += stats.reselected;
+        // Alternate the band's target so the scene keeps selecting again.
+        let target = if k % 2 == 0 { 30_000.0 } else { 90_000.0 };
+        if budget {
+            scene.set_triangle_band(Some(TriangleBand { target, tolerance: 0.04 }));
+        }
     }
     let moving = testkit::alloc::allocations() - before;
     let still = path(120);
     scene.frame(&still, terrain).unwrap();
     let before = testkit::alloc::allocations();
+    let mut uploaded = 0;
     for _ in 0..20 {
-        scene.frame(&still, terrain).unwrap();
+        let stats = scene.frame(&still, terrain).unwrap();
+        uploaded += stats.bytes_uploaded + stats.cluster_bytes_uploaded;
     }
     let resting = testkit::alloc::allocations() - before;
     assert!(generated > 0, "the flight made new tiles");
-    assert_eq!((moving, resting), (0, 0), "allocations in 80 moving and 20 still frames");
+    assert!(!budget || reselected > 0, "the band never made the scene select again");
+    if budget {
+        let stats = scene.frame(&still, terrain).unwrap();
+        assert!(stats.life.candidates > 0 && !stats.life.full, "{:?}", stats.life);
+    }
+    assert_eq!(uploaded, 0, "a still camera uploads nothing (clusters: {})", config.clusters);
+    assert_eq!(
+        (moving, resting),
+        (0, 0),
+        "allocations in 80 moving and 20 still frames (clusters: {})",
+        config.clusters
+    );
 }

@@ -59,7 +59,7 @@ fn an_upload_past_the_buffer_is_refused() {
     let staging = [0u8; 128];
     let list = DrawList::default();
     let dirty = std::slice::from_ref(&(32..96));
-    let frame = FrameOutput { list: &list, staging: &staging, dirty };
+    let frame = FrameOutput { list: &list, staging: &staging, dirty, indices: None };
     let error = backend.render(&frame).unwrap_err();
     assert_eq!(
         error,

@@ -61,9 +61,7 @@ fn terrain_morph_matches_its_rust_mirror() {
     let rust =
         std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("src/lod/morph.rs"))
             .unwrap();
-    assert!(
-        code(&vert).contains("clamp((distance - u_morph.x) / (u_morph.y - u_morph.x), 0.0, 1.0)")
-    );
+    assert!(code(&vert).contains("clamp((distance - ranges.x) / (ranges.y - ranges.x), 0.0, 1.0)"));
     assert!(
         code(&vert).contains("length(vec3(position, own - altitude))")
             && code(&vert).contains("float own = no_data ? a_height.y : a_height.x;"),

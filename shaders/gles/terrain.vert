@@ -1,7 +1,8 @@
 #version 100
 // Terrain tile vertex shader, GLSL ES 1.00. No texture reads: positions and
-// heights arrive as attributes from the tile's own block of the tile buffer
-// (Polok; src/tiles/block.rs), the tile's placement as uniforms. Positions are relative to the camera, from
+// heights arrive as attributes from the tile's own block of the tile buffer,
+// or from its cluster's block (Polok; src/tiles/block.rs, src/clusters/), the
+// tile's placement as uniforms. Positions are relative to the camera, from
 // integer post numbers counted from an anchor post next to it: a post two
 // tiles share gets the same bits from both, so edges are watertight.
 //
@@ -9,14 +10,18 @@
 // u_morph.x to 1 at u_morph.y with the vertex's distance to the camera,
 // measured with its unmorphed height.
 
-attribute vec3 a_grid;    // post i, post j (in the tile's posts), skirt edge 1..4 or 0
+attribute vec4 a_grid;    // post i, post j (in the tile's posts), skirt edge 1..4 or 0, member slot
 attribute vec2 a_height;  // this level's height, the parent level's height
 attribute vec4 a_normal;  // normal xy at this level, at the parent level
 
 uniform mat4 u_view_projection;
-uniform vec4 u_tile;      // south-west post numbered from the anchor (xy), level-0 posts per cell (z), skirt edges (w: bit k-1 for edge k)
+// Per member tile of the draw (a cluster's up to 16, or the one tile at
+// slot 0), selected by the vertex's slot (a_grid.w):
+// [2 slot]:     south-west post numbered from the anchor (xy), level-0 posts
+//               per vertex post (z), skirt edges (w: bit k-1 for edge k);
+// [2 slot + 1]: morph start, morph end, skirt depth, unused.
+uniform vec4 u_members[32];
 uniform vec4 u_posts;     // level-0 post spacing (xy), camera minus anchor post (zw), metres
-uniform vec4 u_morph;     // morph start, morph end, skirt depth, unused
 uniform vec4 u_frame;     // camera altitude, 1 / (2 R) or 0 for a flat earth, the data's last post numbered from the anchor (zw)
 
 varying vec3 v_normal;
@@ -28,7 +33,10 @@ varying float v_void;        // 1 at a post without data, 0 elsewhere (see VOIDS
 varying vec2 v_beyond;       // posts past the data's last post, east and north (clipped where above 0)
 
 void main() {
-    vec2 post = u_tile.xy + a_grid.xy * u_tile.z;
+    int slot = int(a_grid.w);
+    vec4 tile = u_members[2 * slot];
+    vec4 ranges = u_members[2 * slot + 1];
+    vec2 post = tile.xy + a_grid.xy * tile.z;
     vec2 position = post * u_posts.xy - u_posts.zw;
     // Linear across every triangle, so the clip at 0 is the data's edge.
     v_beyond = post - u_frame.zw;
@@ -39,13 +47,13 @@ void main() {
     float own = no_data ? a_height.y : a_height.x;
     v_void = no_data ? 1.0 : 0.0;
     float distance = length(vec3(position, own - altitude));
-    float morph = clamp((distance - u_morph.x) / (u_morph.y - u_morph.x), 0.0, 1.0);
+    float morph = clamp((distance - ranges.x) / (ranges.y - ranges.x), 0.0, 1.0);
     float height = mix(own, a_height.y, morph);
     float drop = dot(position, position) * u_frame.y;
-    // Edge k hangs its skirt when bit k-1 of u_tile.w is set (an integer
+    // Edge k hangs its skirt when bit k-1 of tile.w is set (an integer
     // below 16, exact in any float).
-    float hangs = a_grid.z > 0.5 ? mod(floor(u_tile.w / exp2(a_grid.z - 1.0)), 2.0) : 0.0;
-    float z = height - hangs * u_morph.z - altitude - drop;
+    float hangs = a_grid.z > 0.5 ? mod(floor(tile.w / exp2(a_grid.z - 1.0)), 2.0) : 0.0;
+    float z = height - hangs * ranges.z - altitude - drop;
     vec2 n = mix(a_normal.xy, a_normal.zw, morph);
     v_normal = vec3(n, sqrt(max(1.0 - dot(n, n), 0.0)));
     v_relative_height = height - altitude;

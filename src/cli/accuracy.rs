@@ -51,6 +51,8 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
     config.scene.horizon_culling = terrain.gapless;
     config.scene.lod.tau_px = args.view.tau;
     config.fov_x_deg = args.view.fov;
+    // Views are far apart: each is a jump, so every view re-tests all tiles.
+    args.view.configure(&mut config, &path, 0.1);
     let grid_size = config.scene.lod.grid_size;
     let mut display = DisplayParts::open(&config, Arc::clone(&source), summary)
         .context("opening a headless display")?;
@@ -96,6 +98,10 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
         "flight": format!("{:?}", args.view.flight).to_lowercase(),
         "truth": run.truth,
         "horizon_culled": mean(&run, |v| v.horizon_culled as f64),
+        "tau_achieved_max_px": run.tau_achieved_max_px,
+        "tau_loosened_views": run.tau_loosened_views,
+        "triangle_budget": args.view.triangle_budget,
+        "frame_ms_target": args.view.frame_ms,
         "p50_px": run.summary.p50_px,
         "p99_px": run.summary.p99_px,
         "p999_px": run.summary.p999_px,
@@ -120,8 +126,12 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
     } else {
         print_tables(&run)?;
     }
-    if run.summary.p999_px > run.tau_px {
-        bail!("measured p99.9 error {:.3} px exceeds tau {} px", run.summary.p999_px, run.tau_px);
+    if run.summary.p999_px > run.tau_achieved_max_px {
+        bail!(
+            "measured p99.9 error {:.3} px exceeds tau {} px",
+            run.summary.p999_px,
+            run.tau_achieved_max_px
+        );
     }
     Ok(())
 }
@@ -167,8 +177,9 @@ fn print_tables(run: &AccuracyRun) -> Result<()> {
     let mut out = String::new();
     writeln!(
         out,
-        "{:>8} {:>8} {:>8} {:>8} {:>8} {:>9} {:>9} {:>9} {:>9}",
+        "{:>8} {:>7} {:>8} {:>8} {:>8} {:>8} {:>9} {:>9} {:>9} {:>9}",
         "t s",
+        "tau px",
         "p50 px",
         "p99 px",
         "p99.9 px",
@@ -182,8 +193,9 @@ fn print_tables(run: &AccuracyRun) -> Result<()> {
         let e = &v.errors;
         writeln!(
             out,
-            "{:>8.1} {:>8.3} {:>8.3} {:>8.3} {:>8.3} {:>8.4}% {:>9} {:>9} {:>9.4}",
+            "{:>8.1} {:>7.2} {:>8.3} {:>8.3} {:>8.3} {:>8.3} {:>8.4}% {:>9} {:>9} {:>9.4}",
             v.t,
+            v.tau_px,
             e.p50_px,
             e.p99_px,
             e.p999_px,
@@ -196,7 +208,19 @@ fn print_tables(run: &AccuracyRun) -> Result<()> {
     }
     let s = &run.summary;
     writeln!(out)?;
-    writeln!(out, "  tau               {} px", run.tau_px)?;
+    if run.tau_loosened_views == 0 {
+        writeln!(out, "  tau               {} px", run.tau_px)?;
+    } else {
+        writeln!(
+            out,
+            "  tau               LOOSENED by the frame budget on {} of {} views: requested {} px, \
+             achieved up to {:.2} px (the bound checked below)",
+            run.tau_loosened_views,
+            run.views.len(),
+            run.tau_px,
+            run.tau_achieved_max_px
+        )?;
+    }
     writeln!(out, "  error             p50 {:.3}, p99 {:.3}, p99.9 {:.3}, max {:.3} px over {} terrain pixels", s.p50_px, s.p99_px, s.p999_px, s.max_px, s.pixels)?;
     writeln!(
         out,
@@ -241,11 +265,9 @@ fn print_tables(run: &AccuracyRun) -> Result<()> {
             run.views[worst.index].t
         )?;
     }
-    let verdict = if s.p999_px <= run.tau_px { "confirmed" } else { "NOT confirmed" };
-    writeln!(
-        out,
-        "  bound             p99.9 {:.3} px <= tau {} px: {verdict}",
-        s.p999_px, run.tau_px
-    )?;
+    // Two decimals at most: a budget's tau is any number.
+    let bound = (run.tau_achieved_max_px * 100.0).round() / 100.0;
+    let verdict = if s.p999_px <= run.tau_achieved_max_px { "confirmed" } else { "NOT confirmed" };
+    writeln!(out, "  bound             p99.9 {:.3} px <= tau {bound} px: {verdict}", s.p999_px)?;
     super::print(&out)
 }

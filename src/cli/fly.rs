@@ -41,6 +41,10 @@ pub struct FlyArgs {
     /// Draw a flat earth (no curvature drop).
     #[arg(long)]
     pub flat_earth: bool,
+    /// Draw the tiles as clusters of up to 16 neighbours, one draw call
+    /// each (Judnich & Ling), instead of one draw call per tile.
+    #[arg(long)]
+    pub clusters: bool,
     /// PNG snapshots written along a headless flight (the last frame always is).
     #[arg(long, default_value_t = 6)]
     pub snapshots: u32,
@@ -55,6 +59,8 @@ pub struct FlyArgs {
 pub const DEFAULT_MEMORY_MB: u32 = 64;
 /// The smallest and largest `--memory-mb`.
 const MEMORY_MB_RANGE: std::ops::RangeInclusive<u32> = 4..=65_536;
+/// The frame rate a window is taken to keep for the valid life's declared travel.
+const WINDOW_RATE_HZ: f64 = 10.0;
 
 pub fn run(args: &FlyArgs) -> Result<()> {
     args.view.check()?;
@@ -83,10 +89,20 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     config.scene.horizon_culling = gapless;
     config.memory_budget_bytes = Some(display_budget(args)?);
     config.version = if args.es2 { GlesVersion::Es2 } else { GlesVersion::Es3 };
-    config.scene.lod.tau_px = args.view.tau;
     config.scene.warning_above_m = args.warning_above;
     config.scene.caution_below_m = args.caution_below;
     config.scene.curvature = !args.flat_earth;
+    // Headless frames are evenly spaced along the path; a window is taken to
+    // show WINDOW_RATE_HZ (slower frames re-test every tile); `auto` may open
+    // either, so it declares the longer interval.
+    let headless = path.duration() / args.frames.saturating_sub(1).max(1) as f64;
+    let interval = match args.backend {
+        GlBackend::Window => 1.0 / WINDOW_RATE_HZ,
+        GlBackend::Auto => headless.max(1.0 / WINDOW_RATE_HZ),
+        _ => headless,
+    };
+    args.view.configure(&mut config, &path, interval);
+    config.scene.clusters = args.clusters;
     config.fov_x_deg = args.view.fov;
     let mut display = Display::new(&config, source, summary).context("opening the display")?;
     let info = display.info().clone();
@@ -109,7 +125,8 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     };
     let memory = memory_report(args, &display);
     if info.backend != OpenedBackend::Window {
-        write_stats(args, &info, &dataset_name, &rows, &memory)?;
+        let travel = config.scene.lod.max_travel_m;
+        write_stats(args, &info, &dataset_name, &rows, &memory, travel)?;
     }
     print_summary(&rows, &memory)
 }
@@ -247,6 +264,7 @@ fn write_stats(
     dataset: &str,
     rows: &[Row],
     memory: &MemoryReport,
+    max_travel_m: Option<f64>,
 ) -> Result<()> {
     let frames: Vec<serde_json::Value> = rows
         .iter()
@@ -259,6 +277,9 @@ fn write_stats(
                 "triangles": s.scene.triangles,
                 "draw_calls": s.draw_calls,
                 "attribute_pointer_changes": s.calls.attribute_pointer_changes,
+                "clusters": s.scene.clusters,
+                "clusters_made": s.scene.clusters_made,
+                "cluster_bytes_uploaded": s.scene.cluster_bytes_uploaded,
                 "calls": s.calls,
                 "bytes_uploaded": s.scene.bytes_uploaded,
                 "transfers": s.scene.transfers,
@@ -270,6 +291,16 @@ fn write_stats(
                 "coarsened": s.scene.coarsened,
                 "culled": s.scene.culled,
                 "horizon_culled": s.scene.horizon_culled,
+                "tau_px": s.scene.tau_px,
+                "tau_requested_px": s.tau_requested_px,
+                "tau_loosened": s.tau_loosened(),
+                "reselected": s.scene.reselected,
+                "split_tests": {
+                    "candidates": s.scene.life.candidates,
+                    "re_evaluated": s.scene.life.re_evaluated,
+                    "fraction": s.scene.life.fraction(),
+                    "full": s.scene.life.full,
+                },
                 "cpu_ms": {
                     "clipmap": s.clipmap_ms,
                     "select": s.scene.cpu_ms.select_ms,
@@ -290,6 +321,11 @@ fn write_stats(
         "dataset": dataset,
         "size": [args.view.size.x, args.view.size.y],
         "tau_px": args.view.tau,
+        "triangle_budget": args.view.triangle_budget,
+        "frame_ms_target": args.view.frame_ms,
+        "max_travel_m": max_travel_m,
+        "tau_loosened_frames": rows.iter().filter(|r| r.stats.tau_loosened()).count(),
+        "clusters": args.clusters,
         "fov_x_deg": args.view.fov,
         "flight": format!("{:?}", args.view.flight).to_lowercase(),
         "memory": memory,
@@ -313,7 +349,8 @@ fn print_summary(rows: &[Row], memory: &MemoryReport) -> Result<()> {
     let mean = |f: &dyn Fn(&FrameStats) -> f64| {
         rows.iter().map(|r| f(&r.stats)).sum::<f64>() / rows.len() as f64
     };
-    let uploaded: u64 = rows.iter().map(|r| r.stats.scene.bytes_uploaded).sum();
+    // What the GPU received: tile blocks, or cluster blocks with clusters on.
+    let uploaded: u64 = rows.iter().map(|r| r.stats.calls.bytes_uploaded).sum();
     let last = rows.last().expect("rows is not empty");
     writeln!(out)?;
     writeln!(out, "  frames            {}", rows.len())?;
@@ -334,10 +371,11 @@ fn print_summary(rows: &[Row], memory: &MemoryReport) -> Result<()> {
     )?;
     writeln!(
         out,
-        "  tiles             mean {:.0} ({:.0} triangles, {:.0} draw calls)",
+        "  tiles             mean {:.0} ({:.0} triangles, {:.0} draw calls, {:.0} clusters)",
         mean(&|s| s.scene.tiles as f64),
         mean(&|s| s.scene.triangles as f64),
-        mean(&|s| s.draw_calls as f64)
+        mean(&|s| s.draw_calls as f64),
+        mean(&|s| s.scene.clusters as f64)
     )?;
     writeln!(
         out,
@@ -377,5 +415,49 @@ fn print_summary(rows: &[Row], memory: &MemoryReport) -> Result<()> {
         mb(memory.resident_peak_bytes),
         mb(memory.driver_and_rest_bytes)
     )?;
+    write_tau(&mut out, rows)?;
+    write_split_tests(&mut out, rows)?;
     super::print(&out)
+}
+
+/// The tau line: the bound asked for and, when a budget loosened it, on
+/// how many frames and how far. A loosened bound is never left unsaid.
+fn write_tau(out: &mut String, rows: &[Row]) -> Result<()> {
+    use std::fmt::Write as _;
+    let requested = rows[0].stats.tau_requested_px;
+    let loosened = rows.iter().filter(|r| r.stats.tau_loosened()).count();
+    let mut taus: Vec<f64> = rows.iter().map(|r| r.stats.scene.tau_px).collect();
+    taus.sort_by(f64::total_cmp);
+    if loosened == 0 {
+        writeln!(out, "  tau               {requested} px on every frame (as requested)")?;
+    } else {
+        writeln!(
+            out,
+            "  tau               LOOSENED on {loosened} of {} frames: requested {requested} px, \
+             achieved p50 {:.2}, max {:.2} px (the bound the display held)",
+            rows.len(),
+            taus[taus.len() / 2],
+            taus[taus.len() - 1]
+        )?;
+    }
+    Ok(())
+}
+
+/// The valid life's line: split tests made against those a full
+/// re-evaluation makes.
+fn write_split_tests(out: &mut String, rows: &[Row]) -> Result<()> {
+    use std::fmt::Write as _;
+    let n = rows.len() as f64;
+    let life = |f: &dyn Fn(&ridgeline::lod::life::LifeStats) -> f64| {
+        rows.iter().map(|r| f(&r.stats.scene.life)).sum::<f64>() / n
+    };
+    let full = rows.iter().filter(|r| r.stats.scene.life.full).count();
+    writeln!(
+        out,
+        "  split tests       {:.1} of {:.1} made a frame ({:.1} % mean; valid life), {full} full re-evaluations",
+        life(&|l| l.re_evaluated as f64),
+        life(&|l| l.candidates as f64),
+        100.0 * life(&|l| l.fraction())
+    )?;
+    Ok(())
 }

@@ -7,6 +7,9 @@ use std::path::Path;
 
 use anyhow::Result;
 use glam::UVec2;
+use ridgeline::display::DisplayConfig;
+use ridgeline::flight::FlightPath;
+use ridgeline::lod::budget::{BudgetConfig, BudgetTarget};
 
 pub mod accuracy;
 pub mod fly;
@@ -64,6 +67,19 @@ pub struct ViewArgs {
     /// error), which draw 4 times fewer triangles for the same bound.
     #[arg(long)]
     pub regular_grid: bool,
+    /// Triangles a frame to hold by raising tau above --tau (never below);
+    /// every frame records the tau it achieved.
+    #[arg(long, conflicts_with = "frame_ms")]
+    pub triangle_budget: Option<u64>,
+    /// Milliseconds a frame to aim at, through the same controller as
+    /// --triangle-budget.
+    #[arg(long, allow_hyphen_values = true)]
+    pub frame_ms: Option<f64>,
+    /// The camera's largest speed, metres a second, that split tests'
+    /// valid life assumes (faster frames re-test every tile); the path's
+    /// fastest leg when omitted.
+    #[arg(long, allow_hyphen_values = true)]
+    pub max_speed: Option<f64>,
 }
 
 impl ViewArgs {
@@ -78,10 +94,43 @@ impl ViewArgs {
         if let Some(error) = self.mesh_error.filter(|e| !(e.is_finite() && *e > 0.0)) {
             anyhow::bail!("--mesh-error {error} must be a number of metres above 0");
         }
+        if self.triangle_budget == Some(0) {
+            anyhow::bail!("--triangle-budget 0: a frame needs at least 1 triangle");
+        }
+        if let Some(ms) = self.frame_ms.filter(|m| !(m.is_finite() && *m > 0.0)) {
+            anyhow::bail!("--frame-ms {ms} must be a number of milliseconds above 0");
+        }
+        if let Some(speed) = self.max_speed.filter(|v| !(v.is_finite() && *v > 0.0)) {
+            anyhow::bail!("--max-speed {speed} must be a number of metres a second above 0");
+        }
         Ok(())
     }
 
     /// Opens the terrain (see [`terrain`]).
+    /// The frame budget the options ask for, if any.
+    fn budget(&self) -> Option<BudgetConfig> {
+        let target = match (self.triangle_budget, self.frame_ms) {
+            (Some(n), _) => BudgetTarget::Triangles(n),
+            (None, Some(ms)) => BudgetTarget::FrameMs(ms),
+            (None, None) => return None,
+        };
+        Some(BudgetConfig::new(target))
+    }
+
+    /// Applies tau, the field of view, the budget and the valid life's
+    /// declared travel (`--max-speed`, else `path`'s fastest leg, times
+    /// `frame_interval_s`) to `config`.
+    fn configure(&self, config: &mut DisplayConfig, path: &FlightPath, frame_interval_s: f64) {
+        config.scene.lod.tau_px = self.tau;
+        config.fov_x_deg = self.fov;
+        config.budget = self.budget();
+        let speed = self.max_speed.unwrap_or_else(|| path.max_speed());
+        config.scene.lod.max_travel_m = Some((speed * frame_interval_s * 1.001).max(1e-3));
+    }
+
+    /// Opens the terrain: the pyramid, the source the display pages nodes
+    /// from (with their adaptive meshes unless `--regular-grid`), and the
+    /// per-level errors its rings are computed from.
     fn open_terrain(&self, progress: &dyn ridgeline::pyramid::Progress) -> Result<Terrain> {
         Terrain::open(self, progress)
     }

@@ -43,6 +43,8 @@ pub struct DisplayConfig {
     /// Ridgeline's own heap and GPU buffer together, bytes (see
     /// [`PipelineConfig::memory_budget_bytes`]).
     pub memory_budget_bytes: Option<u64>,
+    /// A frame budget (triangles or milliseconds) that may raise tau.
+    pub budget: Option<crate::lod::budget::BudgetConfig>,
 }
 
 impl DisplayConfig {
@@ -58,6 +60,7 @@ impl DisplayConfig {
             loader: LoaderMode::Thread { queue: 256 },
             sentinel: None,
             memory_budget_bytes: None,
+            budget: None,
         }
     }
 
@@ -70,6 +73,7 @@ impl DisplayConfig {
             load_budget: self.load_budget,
             loader: self.loader,
             memory_budget_bytes: self.memory_budget_bytes,
+            budget: self.budget,
         }
     }
 }

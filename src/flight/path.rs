@@ -109,6 +109,23 @@ impl FlightPath {
         self.end_time() - self.start_time()
     }
 
+    /// The fastest the camera moves, metres a second: positions are
+    /// interpolated linearly, so the fastest leg's speed (0 for one waypoint).
+    pub fn max_speed(&self) -> f64 {
+        let leg = |pair: &[Waypoint]| {
+            pair[0].pose.position.distance(pair[1].pose.position) / (pair[1].t - pair[0].t)
+        };
+        self.waypoints.windows(2).map(leg).fold(0.0, f64::max)
+    }
+
+    /// The most the camera moves between two of `n` evenly spaced frames
+    /// ([`FlightPath::frame_times`]), metres, with a margin of one part in a
+    /// thousand against rounding: the valid life's declared travel.
+    pub fn max_travel_per_frame(&self, n: u32) -> f64 {
+        let interval = self.duration() / n.saturating_sub(1).max(1) as f64;
+        self.max_speed() * interval * 1.001
+    }
+
     /// The pose at time `t`, interpolated between the waypoints around it (see
     /// [`Pose::lerp`]). Times before the first or after the last waypoint give
     /// that waypoint's pose; a NaN time gives the first.

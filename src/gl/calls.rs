@@ -138,6 +138,13 @@ impl<'a> Calls<'a> {
         }
     }
 
+    /// glUniform4fv of `v.len() / 4` vectors from `at` on (one call).
+    pub unsafe fn uniform_4v(&self, at: Option<&glow::UniformLocation>, v: &[f32]) {
+        if self.uniform(at) {
+            self.gl.uniform_4_f32_slice(at, v);
+        }
+    }
+
     pub unsafe fn uniform_3(&self, at: Option<&glow::UniformLocation>, v: [f32; 3]) {
         if self.uniform(at) {
             self.gl.uniform_3_f32(at, v[0], v[1], v[2]);

@@ -133,6 +133,9 @@ impl RenderBackend for GlRenderer {
 
     fn render(&mut self, frame: &FrameOutput<'_>) -> Result<(), GlError> {
         self.upload(frame.staging, frame.dirty)?;
+        if let Some((staging, dirty)) = frame.indices {
+            self.terrain.upload_indices(staging, dirty)?;
+        }
         self.draw(frame.list)
     }
 

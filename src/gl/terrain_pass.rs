@@ -16,8 +16,9 @@ use super::error::GlError;
 use super::handle::Gl;
 use super::objects::{Buffer, BufferTarget, BufferUsage, Program, VertexArray};
 use crate::gl_check;
+use crate::render::cluster::{MAX_MEMBERS, MEMBER_FLOATS};
 use crate::render::{
-    check_uploads, palette, DrawList, FrameUniforms, RenderError, Slice, TileUniforms,
+    check_uploads, palette, Cluster, DrawList, FrameUniforms, RenderError, Slice, TileUniforms,
 };
 use crate::tiles::block::{HEIGHT_OFFSET, NORMAL_OFFSET, VERTEX_BYTES};
 
@@ -32,9 +33,8 @@ const VERTEX_STRIDE: i32 = VERTEX_BYTES as i32;
 
 struct Locations {
     view_projection: Option<glow::UniformLocation>,
-    tile: Option<glow::UniformLocation>,
+    members: Option<glow::UniformLocation>,
     posts: Option<glow::UniformLocation>,
-    morph: Option<glow::UniformLocation>,
     frame: Option<glow::UniformLocation>,
     sun: Option<glow::UniformLocation>,
     awareness: Option<glow::UniformLocation>,
@@ -74,9 +74,8 @@ impl TerrainProgram {
         let program = Program::build(gl, name, VERTEX_SOURCE, fragment, &attributes)?;
         let at = Locations {
             view_projection: program.uniform_location("u_view_projection"),
-            tile: program.uniform_location("u_tile"),
+            members: program.uniform_location("u_members"),
             posts: program.uniform_location("u_posts"),
-            morph: program.uniform_location("u_morph"),
             frame: program.uniform_location("u_frame"),
             sun: program.uniform_location("u_sun"),
             awareness: program.uniform_location("u_awareness"),
@@ -93,8 +92,11 @@ pub struct TerrainPass {
     /// rejection, so only tiles with voids use it).
     colour: [TerrainProgram; 2],
     position: [TerrainProgram; 2],
-    /// The tiles' blocks, at the allocator's offsets.
+    /// The tiles' blocks, at the allocator's offsets (with clusters: the
+    /// clusters' vertex blocks).
     blocks: Buffer,
+    /// With clusters: their index blocks, made at the first clustered upload.
+    indices: Option<Buffer>,
     vertex_array: Option<VertexArray>,
 }
 
@@ -119,7 +121,7 @@ impl TerrainPass {
             Buffer::new(gl, BufferTarget::Vertices, buffer_bytes as usize, BufferUsage::Dynamic)?;
         let vertex_array =
             if gl.caps().vertex_array_objects { Some(VertexArray::new(gl)?) } else { None };
-        Ok(TerrainPass { gl: Rc::clone(gl), colour, position, blocks, vertex_array })
+        Ok(TerrainPass { gl: Rc::clone(gl), colour, position, blocks, indices: None, vertex_array })
     }
 
     /// Copies the dirty ranges of the staging copy into the tile buffer at
@@ -128,7 +130,32 @@ impl TerrainPass {
     pub fn upload(&self, staging: &[u8], ranges: &[std::ops::Range<u32>]) -> Result<(), GlError> {
         check_uploads(staging, self.blocks.size() as u32, ranges)?;
         for range in ranges {
-            self.sub_data(range.start, &staging[range.start as usize..range.end as usize]);
+            self.sub_data(
+                &self.blocks,
+                range.start,
+                &staging[range.start as usize..range.end as usize],
+            );
+        }
+        gl_check!(self.gl)
+    }
+
+    /// Copies the dirty ranges of the cluster index staging copy into the
+    /// index buffer (made the size of `staging` on first use), as
+    /// [`Self::upload`] does for the vertex buffer.
+    pub fn upload_indices(
+        &mut self,
+        staging: &[u8],
+        ranges: &[std::ops::Range<u32>],
+    ) -> Result<(), GlError> {
+        if self.indices.is_none() {
+            let size = staging.len();
+            let buffer = Buffer::new(&self.gl, BufferTarget::Indices, size, BufferUsage::Dynamic)?;
+            self.indices = Some(buffer);
+        }
+        let buffer = self.indices.as_ref().expect("made above");
+        check_uploads(staging, buffer.size() as u32, ranges)?;
+        for range in ranges {
+            self.sub_data(buffer, range.start, &staging[range.start as usize..range.end as usize]);
         }
         gl_check!(self.gl)
     }
@@ -146,13 +173,13 @@ impl TerrainPass {
                 RenderError::UploadPastBuffer { start: offset, end, capacity, staging }.into()
             );
         }
-        self.sub_data(offset, bytes);
+        self.sub_data(&self.blocks, offset, bytes);
         gl_check!(self.gl)
     }
 
-    /// `bytes` into the tile buffer at `offset`, which the caller checked.
+    /// `bytes` into `buffer` at `offset`, which the caller checked.
     #[allow(unsafe_code)]
-    fn sub_data(&self, offset: u32, bytes: &[u8]) {
+    fn sub_data(&self, buffer: &Buffer, offset: u32, bytes: &[u8]) {
         let calls = Calls::new(&self.gl);
         // SAFETY: the range lies inside the buffer (checked by the caller);
         // the vertex array is unbound first so the bind changes none.
@@ -160,8 +187,8 @@ impl TerrainPass {
             if self.vertex_array.is_some() {
                 calls.bind_vertex_array(None);
             }
-            calls.bind_buffer(&self.blocks);
-            calls.buffer_sub_data(&self.blocks, offset as usize, bytes);
+            calls.bind_buffer(buffer);
+            calls.buffer_sub_data(buffer, offset as usize, bytes);
         }
     }
 
@@ -211,15 +238,22 @@ impl TerrainPass {
             // The index binding is the vertex array's state where there is
             // one, the context's where there is none (ES 2.0): bound here,
             // every frame, either way.
-            calls.bind_buffer_to(&self.blocks, BufferTarget::Indices);
+            let indices = match (&self.indices, list.clustered()) {
+                (Some(indices), true) => indices,
+                _ => &self.blocks,
+            };
+            calls.bind_buffer_to(indices, BufferTarget::Indices);
             calls.bind_buffer(&self.blocks);
             calls.enable_attribute(GRID);
             calls.enable_attribute(HEIGHT);
             calls.enable_attribute(NORMAL);
             // Far slice first; then a clear depth for the near slice.
             let mut on_plain = true;
+            // The attribute base last set (clusters share theirs).
+            let mut base = None;
             if let Some(far) = frame.slices.far {
-                on_plain = self.draw_slice(calls, programs, list, far, Slice::Far, blocks);
+                let b = &mut base;
+                on_plain = self.draw_slice(calls, programs, list, far, Slice::Far, blocks, b);
                 calls.clear(glow::DEPTH_BUFFER_BIT);
             }
             if !on_plain {
@@ -227,7 +261,7 @@ impl TerrainPass {
                 set_frame_uniforms(calls, &program.at, &frame);
             }
             let near = frame.slices.near;
-            self.draw_slice(calls, programs, list, near, Slice::Near, blocks);
+            self.draw_slice(calls, programs, list, near, Slice::Near, blocks, &mut base);
             calls.disable_attribute(GRID);
             calls.disable_attribute(HEIGHT);
             calls.disable_attribute(NORMAL);
@@ -243,7 +277,7 @@ impl TerrainPass {
     /// `view_projection`: those without voids with the plain program (bound
     /// on entry), then those with voids with the other. Returns whether the
     /// plain program is still bound.
-    #[allow(unsafe_code)]
+    #[allow(unsafe_code, clippy::too_many_arguments)]
     fn draw_slice(
         &self,
         calls: Calls<'_>,
@@ -252,14 +286,14 @@ impl TerrainPass {
         view_projection: glam::Mat4,
         slice: Slice,
         blocks: TileBlocks<'_>,
+        base: &mut Option<u32>,
     ) -> bool {
         let frame = list.uniforms.expect("drawn lists have uniforms");
         let [plain, voids] = programs;
         // SAFETY: the plain program is bound and its location comes from it.
         unsafe { calls.uniform_matrix(plain.at.view_projection.as_ref(), &view_projection) };
-        self.draw_tiles(calls, &plain.at, list.tiles_with(slice, false), blocks);
-        let mut with_voids = list.tiles_with(slice, true).peekable();
-        if with_voids.peek().is_none() {
+        self.draw_part(calls, &plain.at, list, slice, false, blocks, base);
+        if !list.has_voids_in(slice) {
             return true;
         }
         // SAFETY: a linked program of this context; its locations come from it.
@@ -268,8 +302,29 @@ impl TerrainPass {
             set_frame_uniforms(calls, &voids.at, &frame);
             calls.uniform_matrix(voids.at.view_projection.as_ref(), &view_projection);
         }
-        self.draw_tiles(calls, &voids.at, with_voids, blocks);
+        self.draw_part(calls, &voids.at, list, slice, true, blocks, base);
         false
+    }
+
+    /// Draws the tiles or clusters of `slice` with or without `voids`.
+    #[allow(clippy::too_many_arguments)]
+    fn draw_part(
+        &self,
+        calls: Calls<'_>,
+        at: &Locations,
+        list: &DrawList,
+        slice: Slice,
+        voids: bool,
+        blocks: TileBlocks<'_>,
+        base: &mut Option<u32>,
+    ) {
+        if list.clustered() {
+            for cluster in list.clusters_with(slice, voids, *base) {
+                draw_cluster(calls, at, list, cluster, slice, base);
+            }
+        } else {
+            self.draw_tiles(calls, at, list.tiles_with(slice, voids), blocks);
+        }
     }
 
     fn draw_tiles<'t>(
@@ -308,16 +363,50 @@ impl TerrainPass {
         // from `vertices`, its indices (numbering only those vertices) from
         // `indices`.
         unsafe {
-            let [x, y] = tile.first_post;
-            calls.uniform_4(at.tile.as_ref(), [x, y, tile.vertex_step, tile.skirt_edges as f32]);
-            let [start, end] = tile.morph;
-            calls.uniform_4(at.morph.as_ref(), [start, end, tile.skirt_depth, 0.0]);
-            calls.attribute_pointer(GRID, 3, glow::UNSIGNED_SHORT, false, VERTEX_STRIDE, vertices);
-            let heights = vertices + HEIGHT_OFFSET as i32;
-            calls.attribute_pointer(HEIGHT, 2, glow::FLOAT, false, VERTEX_STRIDE, heights);
-            let normals = vertices + NORMAL_OFFSET as i32;
-            calls.attribute_pointer(NORMAL, 4, glow::BYTE, true, VERTEX_STRIDE, normals);
+            calls.uniform_4v(at.members.as_ref(), &tile.member_uniforms());
+            attribute_pointers(calls, vertices);
             calls.draw_triangles(tile.index_count as i32, indices);
+        }
+    }
+}
+
+/// Points the three attributes at vertices from byte `vertices` of the
+/// bound buffer.
+#[allow(unsafe_code)]
+unsafe fn attribute_pointers(calls: Calls<'_>, vertices: i32) {
+    // Post, skirt edge and member slot: four 16-bit integers.
+    calls.attribute_pointer(GRID, 4, glow::UNSIGNED_SHORT, false, VERTEX_STRIDE, vertices);
+    let heights = vertices + HEIGHT_OFFSET as i32;
+    calls.attribute_pointer(HEIGHT, 2, glow::FLOAT, false, VERTEX_STRIDE, heights);
+    let normals = vertices + NORMAL_OFFSET as i32;
+    calls.attribute_pointer(NORMAL, 4, glow::BYTE, true, VERTEX_STRIDE, normals);
+}
+
+/// Draws `cluster`'s members in `slice`: its members' uniforms in one
+/// write, the attribute pointers when its base is not `base` (the last
+/// set), one glDrawElements per run of members in the slice.
+#[allow(unsafe_code)]
+fn draw_cluster(
+    calls: Calls<'_>,
+    at: &Locations,
+    list: &DrawList,
+    cluster: &Cluster,
+    slice: Slice,
+    base: &mut Option<u32>,
+) {
+    let mut uniforms = [0.0; MAX_MEMBERS * MEMBER_FLOATS];
+    let used = list.cluster_uniforms(cluster, &mut uniforms);
+    // SAFETY: the bound buffer holds the cluster's block: its vertices
+    // from `cluster.base` on (every index numbers a vertex of the block
+    // from there, below 2^16), its indices at the runs' offsets.
+    unsafe {
+        calls.uniform_4v(at.members.as_ref(), &uniforms[..used]);
+        if *base != Some(cluster.base) {
+            *base = Some(cluster.base);
+            attribute_pointers(calls, cluster.base as i32);
+        }
+        for run in list.runs(cluster, slice) {
+            calls.draw_triangles(run.index_count as i32, run.index_byte_offset as i32);
         }
     }
 }

@@ -127,8 +127,12 @@ impl TruthPass {
                 voids: chunk.voids,
             })
             .collect();
-        let mut list =
-            DrawList { uniforms: Some(*frame), tiles, grid_size: CHUNK_CELLS, drawn: Vec::new() };
+        let mut list = DrawList {
+            uniforms: Some(*frame),
+            tiles,
+            grid_size: CHUNK_CELLS,
+            ..DrawList::default()
+        };
         // As the display does: a fair brute force gets early z too.
         list.sort_front_to_back(CHUNK_CELLS);
         self.terrain.draw(&list, output)

@@ -15,11 +15,14 @@
 //!   and the coarser one is unmorphed where they meet (see [`rings`]);
 //! - tiles below the horizon are culled beside the frustum ([`horizon`]).
 
+pub mod budget;
 pub mod census;
 pub mod horizon;
+pub mod life;
 pub mod morph;
 pub mod rings;
 pub mod select;
+pub mod split_zone;
 
 pub use rings::LevelRings;
 pub use select::{SelectedTile, TileSelector};
@@ -77,6 +80,10 @@ pub struct LodConfig {
     /// Most tiles one frame may select; refinement stops (keeping coarser
     /// tiles, never leaving a hole) rather than exceed it.
     pub max_tiles: usize,
+    /// The camera's declared largest move a frame, metres: split tests are
+    /// redone only when their valid life runs out ([`life`]). `None`:
+    /// every tile is tested every frame.
+    pub max_travel_m: Option<f64>,
 }
 
 impl Default for LodConfig {
@@ -87,6 +94,7 @@ impl Default for LodConfig {
             morph_range: 0.3,
             tau_px: 1.0,
             max_tiles: 2048,
+            max_travel_m: None,
         }
     }
 }
@@ -117,6 +125,9 @@ pub enum LodError {
     /// `max_tiles` is 0.
     #[error("max tiles must be at least 1")]
     MaxTiles,
+    /// `max_travel_m` is not a finite number above 0 metres.
+    #[error("the declared travel {0} m a frame must be a finite number above 0")]
+    MaxTravel(f64),
 }
 
 impl LodConfig {
@@ -140,6 +151,9 @@ impl LodConfig {
         }
         if self.max_tiles == 0 {
             return Err(LodError::MaxTiles);
+        }
+        if let Some(travel) = self.max_travel_m.filter(|t| !(t.is_finite() && *t > 0.0)) {
+            return Err(LodError::MaxTravel(travel));
         }
         Ok(())
     }

@@ -69,6 +69,29 @@ impl LevelRings {
         self.morph_range = config.morph_range;
     }
 
+    /// The tau above which rings for `inputs` stop shrinking, pixels: past
+    /// it Ulrich's rule is under the other two at every level, so a budget
+    /// gains nothing by raising tau further. `scratch` is left holding the
+    /// rings without Ulrich's rule (no allocation once sized).
+    pub fn tau_ceiling(
+        scratch: &mut LevelRings,
+        config: &LodConfig,
+        inputs: RingInputs<'_>,
+    ) -> f64 {
+        scratch.update(&LodConfig { tau_px: f64::INFINITY, ..*config }, inputs);
+        let keep = 1.0 - config.morph_range;
+        let ceiling = |level: usize| {
+            let delta = inputs.delta_per_level.get(level).copied().unwrap_or(0.0);
+            let ring = scratch.split[level];
+            if ring > 0.0 {
+                delta * inputs.perspective_scale / (keep * ring)
+            } else {
+                0.0
+            }
+        };
+        (1..scratch.split.len()).map(ceiling).fold(0.0, f64::max)
+    }
+
     /// Levels covered (the root level is `levels() - 1`).
     pub fn levels(&self) -> usize {
         self.split.len() - 1
@@ -114,6 +137,23 @@ mod tests {
             let (start, _) = r.morph(level);
             assert!(start >= r.split_distance(level) + diagonal - 1e-6, "level {level}");
         }
+    }
+
+    #[test]
+    fn past_the_ceiling_tau_changes_no_ring() {
+        let deltas = [0.0, 5.0, 12.0, 30.0, 70.0];
+        let config = LodConfig::default();
+        let inputs = RingInputs {
+            tile_size_m: 1000.0,
+            delta_per_level: &deltas,
+            height_range_m: 2000.0,
+            perspective_scale: 1000.0,
+        };
+        let mut scratch = rings(&deltas, 1.0);
+        let ceiling = LevelRings::tau_ceiling(&mut scratch, &config, inputs);
+        assert!(ceiling > 1.0 && ceiling.is_finite());
+        assert_eq!(rings(&deltas, ceiling * 1.001), rings(&deltas, ceiling * 100.0));
+        assert_ne!(rings(&deltas, ceiling * 0.9), rings(&deltas, ceiling * 100.0));
     }
 
     #[test]

@@ -8,8 +8,14 @@
 //! Both lists are allocated once, at `max_tiles`; a frame never allocates.
 //! When refining further would exceed `max_tiles`, the tile is kept whole:
 //! the view gets coarser, never a hole.
+//!
+//! With a declared travel per frame (`LodConfig::max_travel_m`) the split
+//! test of a tile is taken from its valid life ([`super::life`]) while it
+//! lasts; culling, the tile budget and the finer-data test are made on every
+//! visit, so the selection is the one a full re-evaluation makes.
 
 use super::horizon::Horizon;
+use super::life::{LifeStats, ValidLife};
 use super::{LevelRings, LodConfig, TileKey};
 use crate::camera::{curvature_drop, Frustum};
 use crate::node::{NodeId, NodeLayout};
@@ -48,6 +54,8 @@ pub struct TileSelector {
     culled: usize,
     /// Tiles inside the frustum dropped below the horizon in the last frame.
     horizon_culled: usize,
+    /// Valid lives of the split tests, when a travel per frame is declared.
+    life: Option<ValidLife>,
 }
 
 /// A view to select tiles for: camera position, frustum and rings.
@@ -66,8 +74,8 @@ pub struct View<'a> {
 
 /// Why a tile is not drawn, or how far it is.
 enum Visibility {
-    /// Inside the frustum and above the horizon, this far from the eye.
-    Visible(f64),
+    /// Inside the frustum and above the horizon: distance and height bounds.
+    Visible(f64, (f32, f32)),
     /// Outside the frustum.
     Outside,
     /// Inside the frustum but hidden below the horizon.
@@ -83,7 +91,14 @@ impl TileSelector {
             selected: Vec::with_capacity(config.max_tiles),
             culled: 0,
             horizon_culled: 0,
+            life: config.max_travel_m.map(|m| ValidLife::new(m, config.max_tiles + 4)),
         }
+    }
+
+    /// What the valid life did in the last selection; `None` without one
+    /// (every tile tested every frame).
+    pub fn life_stats(&self) -> Option<LifeStats> {
+        self.life.as_ref().map(ValidLife::stats)
     }
 
     /// The tiling parameters it selects with.
@@ -109,6 +124,9 @@ impl TileSelector {
         self.culled = 0;
         self.horizon_culled = 0;
         let root = (view.rings.levels() - 1) as u8;
+        if let Some(life) = &mut self.life {
+            life.begin(view.eye, view.rings.levels(), |l| view.rings.split_distance(l));
+        }
         let [nx, ny] = tiles_at(terrain.posts(), self.config.grid_size, root);
         for y in (0..ny).rev() {
             for x in (0..nx).rev() {
@@ -116,8 +134,8 @@ impl TileSelector {
             }
         }
         while let Some(key) = self.stack.pop() {
-            let distance = match self.visibility(key, view, terrain) {
-                Visibility::Visible(distance) => distance,
+            let (distance, bounds) = match self.visibility(key, view, terrain) {
+                Visibility::Visible(distance, bounds) => (distance, bounds),
                 Visibility::Outside => {
                     self.culled += 1;
                     continue;
@@ -129,7 +147,7 @@ impl TileSelector {
             };
             // Children replace this tile on the stack; keep room for the worst case.
             let room = self.selected.len() + self.stack.len() + 4 <= self.config.max_tiles;
-            let split = key.level > 0 && distance < view.rings.split_distance(key.level);
+            let split = key.level > 0 && self.split_test(key, distance, bounds, view);
             if split && room && terrain.has_finer_data(key, self.config.grid_size) {
                 let [nx, ny] = tiles_at(terrain.posts(), self.config.grid_size, key.level - 1);
                 for child in key.children().into_iter().rev() {
@@ -144,9 +162,31 @@ impl TileSelector {
         &self.selected
     }
 
-    /// Distance to the tile's box, or why it is not drawn.
+    /// Whether a tile of level above 0, `distance` from the eye, is inside
+    /// its ring: kept from its valid life while that lasts.
+    fn split_test(
+        &mut self,
+        key: TileKey,
+        distance: f64,
+        bounds: (f32, f32),
+        view: &View<'_>,
+    ) -> bool {
+        let ring = view.rings.split_distance(key.level);
+        match &mut self.life {
+            None => distance < ring,
+            Some(life) => {
+                let split = life.splits(key, bounds, ring, || distance);
+                // The distance is at hand anyway: check the kept outcome.
+                debug_assert_eq!(split, distance < ring, "a stale split test kept for {key:?}");
+                split
+            }
+        }
+    }
+
+    /// Distance to the tile's box and its height bounds, or why it is not drawn.
     fn visibility(&self, key: TileKey, view: &View<'_>, terrain: &dyn TileBounds) -> Visibility {
-        let (min, max) = tile_box(key, self.config.grid_size, terrain, view.eye);
+        let bounds = terrain.height_bounds(key, self.config.grid_size);
+        let (min, max) = box_of(key, self.config.grid_size, terrain.spacing_m(), bounds, view.eye);
         let distance = box_distance(min, max);
         let (mut lo, hi) = (min, max);
         if view.curvature {
@@ -166,7 +206,7 @@ impl TileSelector {
         if hidden {
             Visibility::BelowHorizon
         } else {
-            Visibility::Visible(distance)
+            Visibility::Visible(distance, bounds)
         }
     }
 }
@@ -201,9 +241,18 @@ pub fn tile_box(
     terrain: &dyn TileBounds,
     eye: DVec3,
 ) -> (DVec3, DVec3) {
-    let [sx, sy] = terrain.spacing_m();
+    box_of(key, grid_size, terrain.spacing_m(), terrain.height_bounds(key, grid_size), eye)
+}
+
+/// The box of `key` with height `bounds`, relative to `eye`.
+fn box_of(
+    key: TileKey,
+    grid_size: u32,
+    [sx, sy]: [f64; 2],
+    (lo_h, hi_h): (f32, f32),
+    eye: DVec3,
+) -> (DVec3, DVec3) {
     let span = ((grid_size as u64) << key.level) as f64;
-    let (lo_h, hi_h) = terrain.height_bounds(key, grid_size);
     let min = DVec3::new(key.x as f64 * span * sx, key.y as f64 * span * sy, lo_h as f64);
     let max = DVec3::new(min.x + span * sx, min.y + span * sy, hi_h as f64);
     (min - eye, max - eye)

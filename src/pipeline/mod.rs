@@ -6,8 +6,10 @@
 //! the staging copy the GPU buffer mirrors.
 //!
 //! Nothing is carried from one frame to the next but named state: the
-//! clipmap's atlas, the tile cache and the last frame's draw list (whose
-//! uniforms passes drawn beside the frame reuse).
+//! clipmap's atlas, the tile cache, the last frame's draw list (whose
+//! uniforms passes drawn beside the frame reuse), the selector's valid lives
+//! and, with a frame budget, the tau controller fed each frame's triangles
+//! or milliseconds ([`crate::lod::budget`]).
 
 mod sizing;
 
@@ -20,9 +22,12 @@ use glam::DVec3;
 
 use crate::camera::Camera;
 use crate::clipmap::{Clipmap, ClipmapConfig, ClipmapError, ClipmapStats, LoaderMode, ViewId};
+use crate::lod::budget::{BudgetConfig, BudgetError, BudgetTarget, TauController};
 use crate::node::NodeSource;
 use crate::render::{CallStats, DrawList, FrameOutput, RenderBackend};
-use crate::scene::{ClipmapTerrain, Scene, SceneConfig, SceneError, SceneStats, TerrainSummary};
+use crate::scene::{
+    ClipmapTerrain, Scene, SceneConfig, SceneError, SceneStats, TerrainSummary, TriangleBand,
+};
 
 /// Everything fixed for one pipeline.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -42,6 +47,9 @@ pub struct PipelineConfig {
     /// atlas, the staging copy and the GPU buffer at start ([`plan_memory`]);
     /// `None` sizes them for the view and takes `scene.buffer_bytes`.
     pub memory_budget_bytes: Option<u64>,
+    /// A frame budget: triangles or milliseconds a frame, held by raising
+    /// tau above `scene.lod.tau_px` (never below it). `None`: tau as set.
+    pub budget: Option<BudgetConfig>,
 }
 
 impl PipelineConfig {
@@ -54,6 +62,7 @@ impl PipelineConfig {
             load_budget: 32,
             loader: LoaderMode::Thread { queue: 256 },
             memory_budget_bytes: None,
+            budget: None,
         }
     }
 }
@@ -80,6 +89,9 @@ pub enum PipelineError {
         /// Bytes a node buffer is counted at.
         node_bytes: u64,
     },
+    /// The frame budget's target or settings are invalid.
+    #[error("frame budget: {0}")]
+    Budget(#[from] BudgetError),
 }
 
 /// Why a frame failed: in the pipeline or in the backend drawing it.
@@ -113,6 +125,15 @@ pub struct FrameStats {
     pub gl_ms: f64,
     /// The whole frame, milliseconds.
     pub frame_ms: f64,
+    /// The tau asked for, pixels; `scene.tau_px` is the one achieved.
+    pub tau_requested_px: f64,
+}
+
+impl FrameStats {
+    /// Whether the frame's bound was loosened: selected with a tau above the requested.
+    pub fn tau_loosened(&self) -> bool {
+        self.scene.tau_px > self.tau_requested_px
+    }
 }
 
 /// The clipmap and the scene over one node source.
@@ -122,6 +143,7 @@ pub struct FramePipeline {
     view: ViewId,
     summary: TerrainSummary,
     memory: Option<MemoryPlan>,
+    budget: Option<TauController>,
 }
 
 impl FramePipeline {
@@ -156,7 +178,9 @@ impl FramePipeline {
         let view = clipmap.add_view(view_config, DVec3::ZERO)?;
         let terrain = ClipmapTerrain { clipmap: &clipmap, summary: &summary };
         let scene = Scene::new(scene_config, &terrain)?;
-        Ok(FramePipeline { clipmap, scene, view, summary, memory })
+        let tau = config.scene.lod.tau_px;
+        let budget = config.budget.map(|b| TauController::new(tau, b)).transpose()?;
+        Ok(FramePipeline { clipmap, scene, view, summary, memory, budget })
     }
 
     /// Pages, tiles, uploads and draws one frame for `camera` on `backend`,
@@ -171,16 +195,21 @@ impl FramePipeline {
         let start = Instant::now();
         let update = self.page(camera)?;
         let paged = Instant::now();
+        if let Some(budget) = &self.budget {
+            self.scene.set_tau(budget.tau_px()).map_err(PipelineError::from)?;
+            self.scene.set_triangle_band(triangle_band(budget.config()));
+        }
         let terrain = ClipmapTerrain { clipmap: &self.clipmap, summary: &self.summary };
         let scene = self.scene.frame(camera, &terrain).map_err(PipelineError::from)?;
         let tiled = Instant::now();
-        let (staging, dirty) = self.scene.uploads();
-        let output = FrameOutput { list: self.scene.draw_list(), staging, dirty };
+        let (staging, dirty) = self.scene.gpu_uploads();
+        let indices = self.scene.index_uploads();
+        let output = FrameOutput { list: self.scene.draw_list(), staging, dirty, indices };
         backend.render(&output).map_err(FrameError::Backend)?;
         backend.finish();
         let done = Instant::now();
         let calls = backend.take_calls();
-        Ok(FrameStats {
+        let stats = FrameStats {
             scene,
             draw_calls: calls.draw_calls,
             calls,
@@ -189,7 +218,24 @@ impl FramePipeline {
             clipmap_ms: ms(start, paged),
             gl_ms: ms(tiled, done),
             frame_ms: ms(start, done),
-        })
+            tau_requested_px: self.scene.config().lod.tau_px,
+        };
+        if let Some(budget) = &mut self.budget {
+            budget.set_ceiling(self.scene.tau_ceiling());
+            if stats.scene.reselected > 0 && stats.scene.coarsened == 0 {
+                budget.adopt(stats.scene.tau_px);
+            }
+            budget.observe(match budget.config().target {
+                BudgetTarget::Triangles(_) => stats.scene.triangles as f64,
+                BudgetTarget::FrameMs(_) => stats.frame_ms,
+            });
+        }
+        Ok(stats)
+    }
+
+    /// The frame budget's controller, when there is a budget.
+    pub fn budget(&self) -> Option<&TauController> {
+        self.budget.as_ref()
     }
 
     fn page(&mut self, camera: &Camera) -> Result<ClipmapStats, PipelineError> {
@@ -221,7 +267,8 @@ impl FramePipeline {
         self.scene.draw_list()
     }
 
-    /// The staging copy the backend's GPU buffer mirrors.
+    /// The tile cache's staging copy: what the draw list's tiles' offsets
+    /// refer to (the GPU buffer mirrors it when clusters are off).
     pub fn staging(&self) -> &[u8] {
         self.scene.uploads().0
     }
@@ -265,6 +312,18 @@ fn plan(
     };
     plan_memory(budget, node_bytes, wanted, queue, config.scene.buffer_bytes)
         .ok_or(PipelineError::MemoryBudget { budget, least: MIN_BUDGET_BYTES, node_bytes })
+}
+
+/// The band a triangle budget holds within each frame: the controller's
+/// deadband plus one percent (the frame's estimate is per tile); none for a
+/// frame-time target, which only the next frame can measure.
+fn triangle_band(config: &BudgetConfig) -> Option<TriangleBand> {
+    match config.target {
+        BudgetTarget::Triangles(n) => {
+            Some(TriangleBand { target: n as f64, tolerance: config.deadband + 0.01 })
+        }
+        BudgetTarget::FrameMs(_) => None,
+    }
 }
 
 fn ms(from: Instant, to: Instant) -> f64 {

@@ -142,13 +142,18 @@ pub fn sky(model: &CostModel) -> CallStats {
 
 /// The terrain pass: nine state calls, glUseProgram, five frame uniforms, the
 /// VAO bind, the tile buffer bound as index and as vertex buffer, three
-/// attribute enables; then per depth slice one matrix uniform and per tile
-/// two uniforms, three pointers (position, heights, normals at the tile's
-/// block) and a glDrawElements of the tile's own indices, the tiles with
-/// voids last, after a switch to the program that drops their triangles
-/// (glUseProgram, five frame uniforms, the matrix) and back to the plain one
-/// for the next slice; a depth clear between slices; three attribute
-/// disables and the VAO unbind.
+/// attribute enables; then per depth slice one matrix uniform and the
+/// slice's draws, those with voids last, after a switch to the program that
+/// drops their triangles (glUseProgram, five frame uniforms, the matrix) and
+/// back to the plain one for the next slice; a depth clear between slices;
+/// three attribute disables and the VAO unbind.
+///
+/// Per tile: one uniform array write (two vectors), three pointers at the
+/// tile's block and a glDrawElements of its own indices. Per cluster
+/// ([`DrawList::clustered`]): one uniform array write (its members'
+/// vectors), three pointers only when its attribute base differs from the
+/// last one set in the pass, and a glDrawElements per run of members in the
+/// slice ([`DrawList::runs`]).
 pub fn terrain(model: &CostModel, list: &DrawList) -> CallStats {
     let Some(frame) = list.uniforms else { return CallStats::default() };
     let mut stats = CallStats {
@@ -163,6 +168,7 @@ pub fn terrain(model: &CostModel, list: &DrawList) -> CallStats {
     let slices: &[Slice] =
         if frame.slices.far.is_some() { &[Slice::Far, Slice::Near] } else { &[Slice::Near] };
     let mut on_plain = true;
+    let mut base = None;
     for &slice in slices {
         let switch = |stats: &mut CallStats| {
             stats.program_binds += 1;
@@ -174,15 +180,31 @@ pub fn terrain(model: &CostModel, list: &DrawList) -> CallStats {
             switch(&mut stats);
             on_plain = true;
         }
-        if list.tiles_with(slice, true).next().is_some() {
+        if list.has_voids_in(slice) {
             switch(&mut stats);
             on_plain = false;
         }
-        for tile in list.tiles_in(slice) {
-            stats.uniform_writes += 2;
-            stats.attribute_pointer_changes += 3;
-            stats.draw_calls += 1;
-            stats.triangles += tile.triangles();
+        if !list.clustered() {
+            for tile in list.tiles_in(slice) {
+                stats.uniform_writes += 1;
+                stats.attribute_pointer_changes += 3;
+                stats.draw_calls += 1;
+                stats.triangles += tile.triangles();
+            }
+            continue;
+        }
+        for voids in [false, true] {
+            for cluster in list.clusters_with(slice, voids, base) {
+                stats.uniform_writes += 1;
+                if base != Some(cluster.base) {
+                    base = Some(cluster.base);
+                    stats.attribute_pointer_changes += 3;
+                }
+                for run in list.runs(cluster, slice) {
+                    stats.draw_calls += 1;
+                    stats.triangles += run.index_count as u64 / 3;
+                }
+            }
         }
     }
     stats.clears += slices.len() as u64 - 1;

@@ -15,6 +15,8 @@ use crate::tiles::block::{BLOCK_ALIGNMENT, INDEX_BYTES};
 use crate::tiles::{TileBlock, TileCoverage, TileDraw};
 use glam::{DVec2, Mat4, Vec3};
 
+use super::cluster::{Cluster, ClusterMorph, ClusterOrder, Member};
+
 /// Uniforms shared by every tile of a frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrameUniforms {
@@ -247,6 +249,16 @@ pub struct DrawList {
     /// The frame's tiles, sorted by tile: what [`skirt_edges`] looks
     /// neighbours up in.
     pub drawn: Vec<DrawnTile>,
+    /// Drawn as clusters (`clusters`, `members`), not one draw per tile.
+    pub(crate) clustered: bool,
+    /// The frame's clusters, in draw order (when clustered).
+    pub clusters: Vec<Cluster>,
+    /// Every cluster's members.
+    pub members: Vec<Member>,
+    /// Which morph range a cluster's members take.
+    pub cluster_morph: ClusterMorph,
+    /// In which order clusters are drawn.
+    pub cluster_order: ClusterOrder,
 }
 
 /// What [`skirt_edges`] needs of a neighbour.
@@ -290,6 +302,11 @@ impl DrawList {
             tiles: Vec::with_capacity(tiles),
             grid_size: 0,
             drawn: Vec::with_capacity(tiles),
+            clustered: false,
+            clusters: Vec::with_capacity(tiles),
+            members: Vec::with_capacity(tiles),
+            cluster_morph: ClusterMorph::PerMember,
+            cluster_order: ClusterOrder::ByBase,
         }
     }
 
@@ -335,6 +352,9 @@ impl DrawList {
         self.grid_size = geometry.grid_size;
         self.tiles.clear();
         self.drawn.clear();
+        self.clustered = false;
+        self.clusters.clear();
+        self.members.clear();
         self.drawn.extend(draws.iter().map(|draw| DrawnTile {
             key: draw.key,
             source_level: draw.source_level,

@@ -3,11 +3,14 @@
 //! the [`null::NullBackend`] only counts them, so tests can check what would
 //! be drawn without any context.
 
+pub mod cluster;
+pub mod cluster_draws;
 pub mod cost;
 pub mod draw_list;
 pub mod null;
 pub mod palette;
 
+pub use cluster::{Cluster, ClusterMorph, ClusterOrder, ClusterRun, Member};
 pub use cost::{CallStats, CostModel};
 pub use draw_list::{
     DepthSlices, DrawList, DrawnTile, FrameUniforms, PostFrame, Slice, TileUniforms,
@@ -27,6 +30,9 @@ pub struct FrameOutput<'a> {
     /// The byte ranges of `staging` written since the last frame: one
     /// transfer each.
     pub dirty: &'a [Range<u32>],
+    /// With clusters: the index buffer's staging copy and its ranges to
+    /// upload (the buffer `staging` mirrors then holds only vertices).
+    pub indices: Option<(&'a [u8], &'a [Range<u32>])>,
 }
 
 /// What a renderer does with a frame. Implemented by the GL renderer, the

@@ -33,6 +33,10 @@ impl RenderBackend for NullBackend {
     fn render(&mut self, frame: &FrameOutput<'_>) -> Result<(), RenderError> {
         check_uploads(frame.staging, self.capacity, frame.dirty)?;
         self.calls.add(&cost::upload(&self.model, frame.dirty));
+        if let Some((staging, dirty)) = frame.indices {
+            check_uploads(staging, staging.len() as u32, dirty)?;
+            self.calls.add(&cost::upload(&self.model, dirty));
+        }
         self.calls.add(&cost::frame(&self.model, frame.list));
         Ok(())
     }

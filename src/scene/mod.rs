@@ -6,22 +6,27 @@
 //! again with rings half as wide (coarser tiles), down to the root level,
 //! whose tiles are always resident: the picture gets coarser, never a hole.
 
+mod band;
 mod clipmap_terrain;
 mod terrain;
+
+pub use band::{TriangleBand, MAX_RESELECTIONS};
 
 pub use clipmap_terrain::{ClipmapTerrain, TerrainSummary};
 pub use terrain::{PreloadedTerrain, TerrainData};
 
 use crate::camera::{Camera, CameraError, Frustum, EARTH_RADIUS_M};
+use crate::clusters::{ClusterCache, ClusterConfig, ClusterError};
 use crate::lod::census::{frustum_census, Census, CensusView};
 use crate::lod::horizon::Horizon;
+use crate::lod::life::LifeStats;
 use crate::lod::rings::RingInputs;
 use crate::lod::select::View;
 use crate::lod::{LevelRings, LodConfig, LodError, TileSelector};
 use crate::node::NodeLayout;
 use crate::render::draw_list::TileGeometry;
 use crate::render::draw_list::{DepthSlices, PostFrame};
-use crate::render::{palette, DrawList, FrameUniforms};
+use crate::render::{palette, ClusterMorph, ClusterOrder, DrawList, FrameUniforms};
 use crate::tiles::{TileCache, TileCacheConfig, TileError};
 use std::time::Instant;
 
@@ -65,6 +70,13 @@ pub struct SceneConfig {
     pub warning_above_m: f32,
     /// Terrain less than this many metres below the aircraft is amber.
     pub caution_below_m: f32,
+    /// Draw the tiles as clusters (Judnich & Ling; `crate::clusters`): the
+    /// GPU buffer then holds the clusters' blocks, not the tiles'.
+    pub clusters: bool,
+    /// Which morph range a cluster's members take (tests break it on purpose).
+    pub cluster_morph: ClusterMorph,
+    /// In which order clusters are drawn.
+    pub cluster_order: ClusterOrder,
 }
 
 impl Default for SceneConfig {
@@ -78,6 +90,9 @@ impl Default for SceneConfig {
             horizon_culling: true,
             warning_above_m: palette::DEFAULT_WARNING_ABOVE_M,
             caution_below_m: palette::DEFAULT_CAUTION_BELOW_M,
+            clusters: false,
+            cluster_morph: ClusterMorph::PerMember,
+            cluster_order: ClusterOrder::ByBase,
         }
     }
 }
@@ -95,6 +110,10 @@ pub enum SceneError {
     /// coarsened down to the root level.
     #[error("tiles: {0}")]
     Tiles(#[from] TileError),
+    /// The cluster cache could not be built or could not take the frame's
+    /// clusters, even coarsened down to the root level.
+    #[error("clusters: {0}")]
+    Clusters(#[from] ClusterError),
 }
 
 /// CPU time of each stage of a frame, milliseconds.
@@ -132,6 +151,20 @@ pub struct SceneStats {
     pub allocator_workspace_bytes: u32,
     /// Times the selection was coarsened because the buffer was full.
     pub coarsened: u32,
+    /// The tau the frame's tiles were selected with, pixels: the bound it
+    /// achieved (above the requested one when a budget or a full buffer
+    /// loosened it).
+    pub tau_px: f64,
+    /// The valid life's split tests in the final selection (all zero without one).
+    pub life: LifeStats,
+    /// Selections redone to keep a triangle budget's band ([`TriangleBand`]).
+    pub reselected: u32,
+    /// Clusters drawn (0 when tiles are drawn one by one).
+    pub clusters: usize,
+    /// Clusters whose block was made this frame.
+    pub clusters_made: usize,
+    /// Bytes of cluster blocks uploaded (the GPU's uploads when clustered).
+    pub cluster_bytes_uploaded: u64,
     /// CPU time of each stage.
     pub cpu_ms: StageTimes,
 }
@@ -145,6 +178,15 @@ pub struct Scene {
     draw_list: DrawList,
     deltas: Vec<f64>,
     height_range_m: f64,
+    /// Tau of the next frame, pixels: the configured one unless a budget set it.
+    tau_px: f64,
+    /// Rings without Ulrich's rule, and the tau past which rings stop
+    /// shrinking (a budget's ceiling), of the last frame.
+    loose_rings: LevelRings,
+    tau_ceiling: f64,
+    band: band::BandState,
+    /// With clusters on: their blocks, which the GPU buffer then mirrors.
+    clusters: Option<ClusterCache>,
 }
 
 /// The near plane sits this share of the way to the nearest drawn tile's
@@ -165,24 +207,51 @@ impl Scene {
         };
         let deltas = terrain.delta_per_level();
         let (lo, hi) = terrain.height_range();
-        let draw_list = DrawList::with_capacity(cache_config.max_tiles as usize);
+        let mut draw_list = DrawList::with_capacity(cache_config.max_tiles as usize);
+        draw_list.cluster_morph = config.cluster_morph;
+        draw_list.cluster_order = config.cluster_order;
+        let clusters = if config.clusters {
+            Some(ClusterCache::new(ClusterConfig {
+                capacity_bytes: config.buffer_bytes,
+                index_capacity_bytes: config.buffer_bytes / 2,
+                max_clusters: cache_config.max_tiles,
+                transfer_cap: config.transfer_cap,
+                frames_in_flight: config.frames_in_flight,
+            })?)
+        } else {
+            None
+        };
+        let inputs = RingInputs {
+            tile_size_m: 1.0,
+            delta_per_level: &deltas,
+            height_range_m: 0.0,
+            perspective_scale: 1.0,
+        };
         Ok(Scene {
+            loose_rings: LevelRings::new(&config.lod, inputs),
+            tau_ceiling: f64::INFINITY,
+            band: band::BandState::default(),
+            clusters,
             config,
             selector: TileSelector::new(config.lod),
             cache: TileCache::new(cache_config, terrain)?,
-            rings: LevelRings::new(
-                &config.lod,
-                RingInputs {
-                    tile_size_m: 1.0,
-                    delta_per_level: &deltas,
-                    height_range_m: 0.0,
-                    perspective_scale: 1.0,
-                },
-            ),
+            rings: LevelRings::new(&config.lod, inputs),
             draw_list,
             height_range_m: (hi - lo) as f64,
             deltas,
+            tau_px: config.lod.tau_px,
         })
+    }
+
+    /// Sets the tau the next frames select with (a frame budget's), pixels;
+    /// Kühnert's view distance shrinks by the same factor, down to 1 tile.
+    /// Refused when it is not finite or below the configured tau.
+    pub fn set_tau(&mut self, tau_px: f64) -> Result<(), SceneError> {
+        if !(tau_px.is_finite() && tau_px >= self.config.lod.tau_px) {
+            return Err(LodError::Tau(tau_px).into());
+        }
+        self.tau_px = tau_px;
+        Ok(())
     }
 
     /// The configuration the scene was built with.
@@ -195,9 +264,45 @@ impl Scene {
         &self.draw_list
     }
 
-    /// The byte ranges the GPU buffer must receive this frame, and the staging copy.
+    /// The tile cache's staging copy (what the draw list's tile offsets
+    /// refer to) and the ranges of it made this frame. Without clusters
+    /// the GPU buffer mirrors it.
     pub fn uploads(&self) -> (&[u8], &[std::ops::Range<u32>]) {
         (self.cache.staging(), self.cache.dirty_ranges())
+    }
+
+    /// Keeps the next frames' triangles inside `band` (a triangle budget's)
+    /// by selecting again within the frame; `None`: no band.
+    pub fn set_triangle_band(&mut self, band: Option<TriangleBand>) {
+        self.band.band = band;
+    }
+
+    /// The tau past which the last frame's rings stop shrinking, pixels,
+    /// with the view distance shrinking alongside ([`Scene::set_tau`]): a
+    /// budget raising tau further gains nothing.
+    pub fn tau_ceiling(&self) -> f64 {
+        self.tau_ceiling
+    }
+
+    /// The staging copy the GPU buffer mirrors and the ranges it must
+    /// receive this frame: the cluster cache's with clusters on, else
+    /// [`Self::uploads`].
+    pub fn gpu_uploads(&self) -> (&[u8], &[std::ops::Range<u32>]) {
+        match &self.clusters {
+            Some(clusters) => (clusters.staging(), clusters.dirty_ranges()),
+            None => self.uploads(),
+        }
+    }
+
+    /// With clusters on, the cluster index buffer's staging copy and the
+    /// ranges of it to upload this frame.
+    pub fn index_uploads(&self) -> Option<(&[u8], &[std::ops::Range<u32>])> {
+        self.clusters.as_ref().map(|c| (c.index_staging(), c.index_dirty_ranges()))
+    }
+
+    /// The cluster cache, with clusters on.
+    pub fn clusters(&self) -> Option<&ClusterCache> {
+        self.clusters.as_ref()
     }
 
     /// The rings of the last frame.
@@ -220,8 +325,14 @@ impl Scene {
         let frustum = Frustum::from_view_projection(camera.projection(near, far) * camera.view());
         let mut report = SceneStats::default();
         let horizon = self.horizon(camera, terrain);
-        let mut lod = self.config.lod;
+        let mut lod = loosened(&self.config.lod, self.tau_px);
         let mut nearest_m: f64;
+        let inputs = ring_inputs(&layout, grid_size, &self.deltas, self.height_range_m, camera);
+        let loosest = LodConfig { view_distance: 1.0, ..self.config.lod };
+        let ceiling = LevelRings::tau_ceiling(&mut self.loose_rings, &loosest, inputs);
+        let requested = self.config.lod;
+        self.tau_ceiling = ceiling.max(requested.tau_px * requested.view_distance);
+        let mut search = self.band.search(requested.tau_px, self.tau_ceiling);
         loop {
             let start = Instant::now();
             let inputs = ring_inputs(&layout, grid_size, &self.deltas, self.height_range_m, camera);
@@ -234,44 +345,80 @@ impl Scene {
                 horizon,
             };
             let selected = self.selector.select(&view, terrain);
+            let retarget = match (&mut search, report.coarsened) {
+                (Some(search), 0) => {
+                    let cache = &self.cache;
+                    let tiles =
+                        selected.iter().map(|t| (t.key.level, cache.resident_triangles(t.key)));
+                    search.next(self.band.estimate(tiles), lod.tau_px)
+                }
+                _ => None,
+            };
+            if let Some(tau_px) = retarget {
+                lod = loosened(&self.config.lod, tau_px);
+                report.reselected += 1;
+                report.cpu_ms.select_ms += ms(start, Instant::now());
+                continue;
+            }
             nearest_m = selected.iter().map(|t| t.distance).fold(f64::INFINITY, f64::min);
             let selected_at = Instant::now();
             report.cpu_ms.select_ms += ms(start, selected_at);
-            let outcome = self.cache.update(selected, terrain);
+            let outcome =
+                self.cache.update(selected, terrain).map(|_| ()).map_err(SceneError::from);
             report.cpu_ms.tiles_ms += ms(selected_at, Instant::now());
+            let outcome = outcome.and_then(|()| {
+                let near_m = (nearest_m * NEAR_SHARE).min(f32::MAX as f64) as f32;
+                let uniforms = frame_uniforms(&self.config, camera, terrain, near_m);
+                let start = Instant::now();
+                let geometry = TileGeometry {
+                    grid_size,
+                    node_size: layout.node_size,
+                    spacing_m: layout.spacing_m,
+                    delta_per_level: &self.deltas,
+                };
+                self.draw_list.build(uniforms, self.cache.draws(), &self.rings, geometry);
+                if let Some(clusters) = &mut self.clusters {
+                    let (staging, dirty) = (self.cache.staging(), self.cache.dirty_ranges());
+                    clusters.update(&mut self.draw_list, staging, dirty)?;
+                }
+                report.cpu_ms.draw_list_ms = ms(start, Instant::now());
+                Ok(())
+            });
+            let full = matches!(
+                outcome,
+                Err(SceneError::Tiles(TileError::BufferFull(_)))
+                    | Err(SceneError::Clusters(ClusterError::BufferFull(_)))
+            );
             match outcome {
-                Ok(_) => break,
-                Err(TileError::BufferFull(_)) if lod.view_distance > 1.0 || lod.tau_px < 1e6 => {
+                Ok(()) => break,
+                Err(_) if full && (lod.view_distance > 1.0 || lod.tau_px < 1e6) => {
                     // Coarser: half the rings (Ulrich's rule through tau, Kühnert's through distance).
                     lod.view_distance = (lod.view_distance / 2.0).max(1.0);
                     lod.tau_px *= 2.0;
                     report.coarsened += 1;
                 }
-                Err(error) => return Err(error.into()),
+                Err(error) => return Err(error),
             }
         }
-        let near_m = (nearest_m * NEAR_SHARE).min(f32::MAX as f64) as f32;
-        let uniforms = frame_uniforms(&self.config, camera, terrain, near_m);
-        let start = Instant::now();
-        let geometry = TileGeometry {
-            grid_size,
-            node_size: layout.node_size,
-            spacing_m: layout.spacing_m,
-            delta_per_level: &self.deltas,
-        };
-        let draws = self.cache.draws();
-        self.draw_list.build(uniforms, draws, &self.rings, geometry);
-        report.cpu_ms.draw_list_ms = ms(start, Instant::now());
         let stats = self.cache.stats();
         report.tiles = self.draw_list.tiles.len();
         report.culled = self.selector.culled();
         report.horizon_culled = self.selector.horizon_culled();
+        report.tau_px = lod.tau_px;
+        report.life = self.selector.life_stats().unwrap_or_default();
         report.triangles = self.draw_list.triangles();
+        self.band.learn(self.draw_list.tiles.iter().map(|t| (t.key.level, t.triangles())));
         report.bytes_uploaded = stats.bytes_uploaded;
         report.transfers = stats.transfers;
         report.generated = stats.generated;
         report.allocator_used_bytes = stats.allocator_used_bytes;
         report.allocator_workspace_bytes = stats.allocator_workspace_bytes;
+        if let Some(clusters) = &self.clusters {
+            let stats = clusters.stats();
+            report.clusters = stats.clusters;
+            report.clusters_made = stats.made;
+            report.cluster_bytes_uploaded = stats.bytes_uploaded;
+        }
         Ok(report)
     }
 }
@@ -355,6 +502,16 @@ pub fn ring_inputs<'a>(
         height_range_m,
         perspective_scale: camera.perspective_scale(),
     }
+}
+
+/// The tiling for a budget's `tau_px`: tau itself, and Kühnert's view
+/// distance shrunk by as much as tau grew (never below 1 tile), so the rings
+/// shrink even where his rule, not Ulrich's, sets them (node meshes). The
+/// bound drawn is still `tau_px`: Ulrich's rule is kept at every level.
+fn loosened(requested: &LodConfig, tau_px: f64) -> LodConfig {
+    let factor = tau_px / requested.tau_px;
+    let view_distance = (requested.view_distance / factor).max(1.0);
+    LodConfig { tau_px, view_distance, ..*requested }
 }
 
 fn ms(from: Instant, to: Instant) -> f64 {

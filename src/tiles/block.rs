@@ -26,7 +26,9 @@ pub struct TileVertex {
     /// (lowered by the tile's skirt depth when that edge hangs a skirt), or
     /// 0 for a vertex of the surface (`a_grid.z`).
     pub skirt: u16,
-    /// Always 0; aligns the heights to 4 bytes.
+    /// 0 in a tile's block; in a cluster's block (`crate::clusters`) the
+    /// member slot that selects the tile's uniforms (`a_grid.w`). Aligns the
+    /// heights to 4 bytes.
     pub _pad: u16,
     /// Height of this level's surface, metres ([`super::NO_DATA`] where the
     /// data have none).

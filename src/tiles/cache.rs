@@ -384,6 +384,14 @@ impl TileCache {
         self.stats
     }
 
+    /// Triangles of `key`'s block, skirts included, when it is resident
+    /// (a frame budget's estimate before the tiles are made).
+    pub fn resident_triangles(&self, key: TileKey) -> Option<u64> {
+        let slot = *self.by_key.get(&key)?;
+        let resident = self.slots.get(slot as usize)?.as_ref()?;
+        Some(resident.mesh.indices as u64 / 3)
+    }
+
     /// Resident tiles (for statistics and tests).
     pub fn resident_count(&self) -> usize {
         self.by_key.len()

@@ -1,0 +1,84 @@
+//! Cluster draws (Judnich & Ling's batches): what the GL terrain pass and the
+//! cost model need to draw a frame's clusters, each of up to 16 tiles, with
+//! one glDrawElements per cluster and depth slice.
+//!
+//! A cluster's vertex block (made by `crate::clusters`) holds its member
+//! tiles' vertices one after another, each vertex carrying its member's
+//! slot; its index block one list of 16-bit indices numbered from the
+//! cluster's attribute base ([`Cluster::base`]). Clusters whose bases agree share their attribute
+//! pointers, so the pass sets them only when the base changes. The vertex
+//! shader takes the member's placement, morph and skirts from
+//! `u_members[2 slot]` and `u_members[2 slot + 1]` (a uniform array indexed
+//! by a vertex attribute: GLSL ES 1.00 allows it in vertex shaders).
+
+/// Most tiles a cluster holds: the 16 of a two-level cluster.
+pub const MAX_MEMBERS: usize = 16;
+
+/// Floats of one member's uniforms: two vec4.
+pub const MEMBER_FLOATS: usize = 8;
+
+/// Which morph range each member of a cluster takes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub enum ClusterMorph {
+    /// Its own tile's (what per-tile drawing does): the right one.
+    #[default]
+    PerMember,
+    /// The first member's, for every member: deliberately broken, so
+    /// tests can show that the crack and pop tests catch a wrong cluster
+    /// morph (members of two levels then morph over one level's range).
+    FirstMember,
+}
+
+/// In which order a frame's clusters are drawn.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub enum ClusterOrder {
+    /// Grouped by attribute base (each base's pointers set once a part),
+    /// the groups by their nearest cluster, nearest first within a group.
+    #[default]
+    ByBase,
+    /// Nearest first (by each cluster's nearest member), as tiles are:
+    /// early depth rejection, at the price of more pointer changes.
+    NearestFirst,
+}
+
+/// One cluster of the frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Cluster {
+    /// Byte offset, in the GPU buffer, of vertex 0 of its indices: where
+    /// its attribute pointers point (a multiple of the vertex size).
+    pub base: u32,
+    /// Byte offset of its first index.
+    pub index_byte_offset: u32,
+    /// Its first member in [`super::DrawList::members`] (its members follow in
+    /// block order).
+    pub first_member: u32,
+    /// How many members it has (1 to [`MAX_MEMBERS`]).
+    pub member_count: u32,
+    /// Some member has posts without data: drawn by the voids program.
+    pub voids: bool,
+    /// The parts of the terrain pass it is drawn in ([`super::cluster_draws::part_bit`]).
+    pub parts: u8,
+}
+
+/// One member tile of a cluster.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Member {
+    /// The tile, an index into [`super::DrawList::tiles`].
+    pub tile: u32,
+    /// Its slot in the cluster (0..16): which `u_members` entries its
+    /// vertices read.
+    pub slot: u8,
+    /// Its first index, counted from the cluster's first index.
+    pub first_index: u32,
+    /// Its indices (its tile's, rebased).
+    pub index_count: u32,
+}
+
+/// One glDrawElements of a cluster: consecutive members in one depth slice.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ClusterRun {
+    /// Byte offset of its first index.
+    pub index_byte_offset: u32,
+    /// Indices drawn.
+    pub index_count: u32,
+}
