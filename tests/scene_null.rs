@@ -215,8 +215,9 @@ fn every_tile_carries_its_mesh_in_its_block() {
         }
     }
     assert!(cut > list.tiles.len() / 2, "{cut} of {} tiles cut from node meshes", list.tiles.len());
-    // A mesh is finer than its level's grid where the data are rough, but
-    // coarser over all.
-    assert!(cut_triangles < cut * grid.indices.len() / 3, "{cut_triangles} triangles");
+    // A mesh is at most its level's grid with every cell a fan of four
+    // (meshes::fan); near the camera, at level 0, it is about the grid
+    // plus the fans (15 % more over this view), coarser further out.
+    assert!(cut_triangles < 2 * cut * grid.indices.len() / 3, "{cut_triangles} triangles");
     assert_eq!(report.triangles, list.triangles());
 }
