@@ -2,6 +2,9 @@
 
 mod cli;
 
+#[global_allocator]
+static HEAP: cli::heap::Counting = cli::heap::Counting;
+
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 

@@ -293,6 +293,14 @@ pub trait NodeSource: Send + Sync {
     /// Writes node `id` into `out`, reusing its buffers.
     fn read_node(&self, id: NodeId, out: &mut NodeData) -> Result<(), NodeError>;
 
+    /// The most heap, bytes, a [`NodeData`] holding any node of this source
+    /// takes (its buffers grow to the largest node read into them): what a
+    /// memory budget counts an atlas slot at. The default: the heights.
+    fn node_bytes(&self) -> u64 {
+        let side = self.layout().stored_side() as u64;
+        side * side * std::mem::size_of::<f32>() as u64
+    }
+
     /// The height at `(x_m, y_m)` at full resolution: the level-0 posts
     /// joined as triangles (the surface every `delta` is measured against).
     /// The default reads the level-0 node holding the point, which allocates

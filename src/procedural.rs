@@ -65,6 +65,14 @@ impl EarthParams {
         }
         EarthParams { node_size, levels, border: 1, spacing_m: 2.4, seed }
     }
+
+    /// The earth `--dataset procedural` draws: 2^20 posts of 38.4 m a side
+    /// (40 000 km), nodes of 64 cells with two border posts, seed 11 (the
+    /// earth of `tests/render_stress.rs`). Out to a 10 km cruise's horizon
+    /// its level 0 holds about 10^8 posts inside a 60-degree frustum.
+    pub fn display_earth() -> Self {
+        EarthParams { node_size: 64, levels: 15, border: 2, spacing_m: 38.4, seed: 11 }
+    }
 }
 
 /// Why the parameters cannot make an earth.
@@ -187,6 +195,29 @@ impl ProceduralEarth {
     /// Level 0 is exact (its posts are the samples): 0.
     pub fn delta_bound(&self, lod: u8) -> f32 {
         self.delta_by_level[lod as usize]
+    }
+
+    /// A bound on the slope of the exact surface ([`NodeSource::exact_height`]:
+    /// the level-0 samples joined as triangles), metres per metre.
+    ///
+    /// Along one axis an octave of amplitude `a` and wavelength `w` metres
+    /// changes by at most `2 a F1 / w` per metre (its lattice values differ
+    /// by at most 2, the fade's slope is at most `F1`), so two neighbouring
+    /// samples differ by at most the sum of that times the spacing. A
+    /// triangle's gradient has those two differences over the spacing as
+    /// components: at most `sqrt(2)` times the per-axis sum, plus the f32
+    /// rounding of two samples over the spacing.
+    pub fn slope_bound(&self) -> f64 {
+        let spacing = self.layout.spacing_m[0];
+        let per_axis: f64 = self
+            .octaves
+            .iter()
+            .map(|o| {
+                2.0 * o.amplitude_m * FADE_SLOPE_MAX
+                    / ((1u64 << o.log2_wavelength) as f64 * spacing)
+            })
+            .sum();
+        std::f64::consts::SQRT_2 * (per_axis + 2.0 * ROUNDING_SLACK_M / spacing)
     }
 
     /// Lowest and highest height any sample can have: base -/+ the amplitudes.

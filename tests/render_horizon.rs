@@ -16,7 +16,7 @@
 use glam::DVec3;
 use ridgeline::camera::{Camera, EARTH_RADIUS_M};
 use ridgeline::display::{DisplayConfig, DisplayParts};
-use ridgeline::flight::default_flight;
+use ridgeline::flight::{default_flight, FlightPath};
 use ridgeline::gl::{GlBackend, GlesVersion};
 use ridgeline::scene::TerrainSummary;
 use testkit::builtin_pyramid;
@@ -66,6 +66,47 @@ fn no_frame_of_the_default_flight_shows_sky_below_the_geometric_horizon() {
         ..DisplayConfig::new(GlBackend::Egl, VIEWPORT.into())
     };
     let mut display = DisplayParts::open(&config, pyramid.clone(), summary).expect("EGL display");
+    fly_showing_no_sky_below_the_horizon(&mut display, &path);
+}
+
+/// With a 24 MB budget (`ridgeline fly --memory-mb 24`, without snapshots)
+/// the default flight over the node meshes draws coarser, never holes, and
+/// Ridgeline's heap (counted from before the display opens) plus its GPU
+/// buffer stay within the budget.
+#[test]
+fn a_24_mb_budget_flies_the_default_flight_within_it_and_without_holes() {
+    const BUDGET: u64 = 24 << 20;
+    let _turn = take_turn();
+    let pyramid = builtin_pyramid();
+    let source = testkit::builtin_terrain_for(1.0);
+    let summary = testkit::summary_of(&source);
+    let path = default_flight(&pyramid);
+    let config = DisplayConfig {
+        version: GlesVersion::Es3,
+        sentinel: Some(SENTINEL),
+        fov_x_deg: FOV_X_DEG,
+        memory_budget_bytes: Some(BUDGET),
+        ..DisplayConfig::new(GlBackend::Egl, VIEWPORT.into())
+    };
+    let before = testkit::alloc::bytes_in_use();
+    testkit::alloc::reset_peak();
+    let mut display = DisplayParts::open(&config, source, summary).expect("EGL display");
+    fly_showing_no_sky_below_the_horizon(&mut display, &path);
+    let heap = testkit::alloc::peak_bytes() - before;
+    let gpu = display.pipeline.scene().config().buffer_bytes as u64;
+    let plan = display.pipeline.memory_plan().expect("a budget was given");
+    println!("24 MB budget: heap peak {heap} + GPU buffer {gpu} bytes; {plan:?}");
+    // The check's own read-back (4 bytes a pixel) and mask (1) are not the display's.
+    let check = 5 * VIEWPORT[0] as u64 * VIEWPORT[1] as u64;
+    assert!(
+        heap + gpu <= BUDGET + check,
+        "heap {heap} + GPU buffer {gpu} bytes exceed {BUDGET} and the check's {check}"
+    );
+}
+
+/// Flies `path` on `display` as `ridgeline fly` does (settled once at the
+/// start) and fails on a frame with sky below the geometric horizon.
+fn fly_showing_no_sky_below_the_horizon(display: &mut DisplayParts, path: &FlightPath) {
     let first = path.sample(path.start_time()).camera(FOV_X_DEG, VIEWPORT);
     display.pipeline.settle(&first, 10_000).expect("settle");
     let mut worst = (0, 0usize, 0usize);

@@ -86,12 +86,16 @@ const CENTIMETRE: f64 = 0.01;
 /// (its spacing at 65 km is 4 mm), so positions are checked against f64.
 const EXACT_RADIUS_M: f64 = 65_000.0;
 
+/// Horizon culling off: the views check the precision of every level
+/// drawn far out, and the band view's last tiles lie below the horizon.
 fn earth_config() -> DisplayConfig {
-    DisplayConfig {
+    let mut config = DisplayConfig {
         loader: LoaderMode::Inline,
         load_budget: 1000,
         ..DisplayConfig::new(GlBackend::Egl, EARTH_SIZE)
-    }
+    };
+    config.scene.horizon_culling = false;
+    config
 }
 
 /// A view near the origin; the far one is the same view moved by the shift.

@@ -70,7 +70,13 @@ fn select(
     let rings = LevelRings::new(&lod, inputs);
     let (near, far) = clip_planes(camera, terrain);
     let frustum = Frustum::from_view_projection(camera.projection(near, far) * camera.view());
-    let view = View { eye: camera.position, frustum: &frustum, rings: &rings, curvature: true };
+    let view = View {
+        eye: camera.position,
+        frustum: &frustum,
+        rings: &rings,
+        curvature: true,
+        horizon: None,
+    };
     selector.select(&view, terrain).to_vec()
 }
 

@@ -33,6 +33,7 @@
 //! | `lod_surface` | [`LodSurface`]: the drawn LOD surface evaluated on the CPU, morph included |
 //! | `tile_triangles` | the drawn tiles' surface triangles from their blocks, by cell, for `lod_surface` |
 //! | `pixel_error` | [`measure_view`]: per-pixel error and coverage of one view |
+//! | `ray_truth` | [`trace_truth`]: the full-resolution image by each pixel's ray on the CPU, where the mesh is too large to draw |
 //! | `summary` | [`ErrorSummary`]: percentiles over all views |
 //! | `heat_map` | the error image of a view as colours |
 
@@ -40,6 +41,7 @@ mod heat_map;
 mod lod_surface;
 mod pixel_error;
 mod positions;
+mod ray_truth;
 mod summary;
 mod tile_triangles;
 
@@ -47,4 +49,5 @@ pub use heat_map::{heat_map, HEAT_MISMATCH, HEAT_SKY};
 pub use lod_surface::LodSurface;
 pub use pixel_error::{measure_view, ExactHeight, ViewErrors, ViewGeometry};
 pub use positions::PositionImage;
+pub use ray_truth::{trace_truth, RayGround, HIT_TOLERANCE_M};
 pub use summary::{percentile, ErrorSummary};

@@ -9,14 +9,15 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use anyhow::{bail, Context, Result};
+use ridgeline::accuracy::RayGround;
 use ridgeline::camera::Camera;
-use ridgeline::display::measure::{measure_flight, AccuracyRun};
+use ridgeline::display::measure::{measure_flight_with, AccuracyRun, Truth};
 use ridgeline::display::{DisplayConfig, DisplayParts};
 use ridgeline::gl::{GlBackend, TruthMesh, TruthPass, TruthRegion};
-use ridgeline::node::NodeSource;
 use serde_json::json;
 
 use super::progress::Bar;
+use super::terrain::Ground;
 
 #[derive(clap::Args)]
 pub struct AccuracyArgs {
@@ -41,12 +42,15 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
     let bar = Bar::new();
     let terrain = args.view.open_terrain(&bar)?;
     bar.finish();
-    let pyramid = terrain.pyramid;
-    let path = super::flight_path(args.view.path.as_deref(), &pyramid)?;
-    let layout = *pyramid.layout();
-    let dataset_name = pyramid.path().display().to_string();
-    let (source, summary) = (terrain.source, terrain.summary);
+    let path = terrain.flight_path(args.view.path.as_deref(), args.view.flight)?;
+    let layout = *terrain.source.layout();
+    let dataset_name = terrain.name.clone();
+    let source = Arc::clone(&terrain.source);
+    let summary = terrain.summary.clone();
     let mut config = DisplayConfig::new(headless(args.backend), args.view.size);
+    config.scene.horizon_culling = terrain.gapless;
+    config.scene.lod.tau_px = args.view.tau;
+    config.fov_x_deg = args.view.fov;
     // Views are far apart: each is a jump, so every view re-tests all tiles.
     args.view.configure(&mut config, &path, 0.1);
     let grid_size = config.scene.lod.grid_size;
@@ -56,17 +60,33 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
         .frame_times(args.views.max(1))
         .map(|t| (t, path.sample(t).camera(args.view.fov, [args.view.size.x, args.view.size.y])))
         .collect();
-    // The full-resolution mesh around the flight: all of a single tile, a
-    // window of a layered pyramid's level 0 (which spans its whole base).
-    let positions = views.iter().map(|(_, c)| [c.position.x, c.position.y]);
-    let region = TruthRegion::around_positions(&layout, grid_size, positions);
-    let mesh = TruthMesh::load(source.as_ref(), region)
-        .with_context(|| format!("{dataset_name}: the full-resolution mesh"))?;
-    let truth = TruthPass::new(display.context.gl(), &mesh)
-        .context("uploading the full-resolution mesh")?;
-    let exact = |x: f64, y: f64| pyramid.exact_height(x, y);
-    let run = measure_flight(&mut display, &truth, &exact, layout.spacing_m, &views)
-        .context("measuring the views")?;
+    let exact = |x: f64, y: f64| terrain.exact_height(x, y);
+    let run = match &terrain.ground {
+        Ground::Procedural(earth) => {
+            // Out to the horizon the full-resolution mesh is 10^8 triangles
+            // and more: follow each pixel's ray on the CPU instead.
+            let ground = RayGround {
+                exact: &exact,
+                slope: earth.slope_bound(),
+                top_m: earth.height_bounds()[1],
+                spacing_m: layout.spacing_m[0].min(layout.spacing_m[1]),
+            };
+            measure_flight_with(&mut display, Truth::Rays(ground), &exact, layout.spacing_m, &views)
+        }
+        Ground::Pyramid(_) => {
+            // The full-resolution mesh around the flight: all of a single
+            // tile, a window of a layered pyramid's level 0 (which spans its
+            // whole base).
+            let positions = views.iter().map(|(_, c)| [c.position.x, c.position.y]);
+            let region = TruthRegion::around_positions(&layout, grid_size, positions);
+            let mesh = TruthMesh::load(source.as_ref(), region)
+                .with_context(|| format!("{dataset_name}: the full-resolution mesh"))?;
+            let truth = TruthPass::new(display.context.gl(), &mesh)
+                .context("uploading the full-resolution mesh")?;
+            measure_flight_with(&mut display, Truth::Mesh(&truth), &exact, layout.spacing_m, &views)
+        }
+    }
+    .context("measuring the views")?;
     let info = display.context.info();
     let report = json!({
         "dataset": dataset_name,
@@ -75,6 +95,9 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
         "size": [args.view.size.x, args.view.size.y],
         "fov_x_deg": args.view.fov,
         "tau_px": run.tau_px,
+        "flight": format!("{:?}", args.view.flight).to_lowercase(),
+        "truth": run.truth,
+        "horizon_culled": mean(&run, |v| v.horizon_culled as f64),
         "tau_achieved_max_px": run.tau_achieved_max_px,
         "tau_loosened_views": run.tau_loosened_views,
         "triangle_budget": args.view.triangle_budget,
@@ -214,11 +237,20 @@ fn print_tables(run: &AccuracyRun) -> Result<()> {
     )?;
     let ratio =
         mean(run, |v| v.triangles_truth as f64) / mean(run, |v| v.triangles_lod as f64).max(1.0);
+    let counted = if run.truth == "cpu_rays" { ", counted in the frustum" } else { "" };
     writeln!(
         out,
-        "  triangles         LOD {:.0}, full resolution {:.0} ({ratio:.2}x)",
+        "  triangles         LOD {:.0}, full resolution {:.0}{counted} ({ratio:.2}x)",
         mean(run, |v| v.triangles_lod as f64),
         mean(run, |v| v.triangles_truth as f64)
+    )?;
+    if run.truth == "cpu_rays" {
+        writeln!(out, "  truth             each pixel's ray on the CPU against the exact heights")?;
+    }
+    writeln!(
+        out,
+        "  horizon culled    {:.0} tiles a view (in the frustum, below the horizon)",
+        mean(run, |v| v.horizon_culled as f64)
     )?;
     let (lod_ms, truth_ms) = (mean(run, |v| v.lod_frame_ms), mean(run, |v| v.truth_frame_ms));
     writeln!(

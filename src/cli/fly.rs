@@ -48,8 +48,17 @@ pub struct FlyArgs {
     /// PNG snapshots written along a headless flight (the last frame always is).
     #[arg(long, default_value_t = 6)]
     pub snapshots: u32,
+    /// Ridgeline's own memory, MB (its heap and its GPU tile buffer): sizes
+    /// the node atlas, the staging copy and the GPU buffer at start. A small
+    /// budget draws coarser tiles, never holes.
+    #[arg(long, default_value_t = DEFAULT_MEMORY_MB)]
+    pub memory_mb: u32,
 }
 
+/// The default `--memory-mb`: a quarter of a 256 MB board.
+pub const DEFAULT_MEMORY_MB: u32 = 64;
+/// The smallest and largest `--memory-mb`.
+const MEMORY_MB_RANGE: std::ops::RangeInclusive<u32> = 4..=65_536;
 /// The frame rate a window is taken to keep for the valid life's declared travel.
 const WINDOW_RATE_HZ: f64 = 10.0;
 
@@ -61,13 +70,24 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     {
         bail!("--warning-above and --caution-below must be finite metres, the caution band not negative");
     }
+    if !MEMORY_MB_RANGE.contains(&args.memory_mb) {
+        bail!(
+            "--memory-mb {} must be between {} and {} MB",
+            args.memory_mb,
+            MEMORY_MB_RANGE.start(),
+            MEMORY_MB_RANGE.end()
+        );
+    }
     let bar = Bar::new();
     let terrain = args.view.open_terrain(&bar)?;
     bar.finish();
-    let path = super::flight_path(args.view.path.as_deref(), &terrain.pyramid)?;
-    let dataset_name = terrain.pyramid.path().display().to_string();
+    let path = terrain.flight_path(args.view.path.as_deref(), args.view.flight)?;
+    let dataset_name = terrain.name.clone();
+    let gapless = terrain.gapless;
     let (source, summary) = (terrain.source, terrain.summary);
     let mut config = DisplayConfig::new(args.backend, args.view.size);
+    config.scene.horizon_culling = gapless;
+    config.memory_budget_bytes = Some(display_budget(args)?);
     config.version = if args.es2 { GlesVersion::Es2 } else { GlesVersion::Es3 };
     config.scene.warning_above_m = args.warning_above;
     config.scene.caution_below_m = args.caution_below;
@@ -103,10 +123,83 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     } else {
         fly_headless(args, &mut display, &path)?
     };
+    let memory = memory_report(args, &display);
     if info.backend != OpenedBackend::Window {
-        write_stats(args, &info, &dataset_name, &rows, config.scene.lod.max_travel_m)?;
+        let travel = config.scene.lod.max_travel_m;
+        write_stats(args, &info, &dataset_name, &rows, &memory, travel)?;
     }
-    print_summary(&rows)
+    print_summary(&rows, &memory)
+}
+
+const MB: u64 = 1 << 20;
+
+/// Heap a headless snapshot takes while it is read back and encoded (the
+/// image, its flipped copy, the PNG encoder's buffers), per pixel: measured
+/// 8.9 MB at 1280x720.
+const SNAPSHOT_BYTES_PER_PIXEL: u64 = 12;
+
+/// The part of `--memory-mb` the display gets: all of it, less what a
+/// headless run's snapshots take.
+fn display_budget(args: &FlyArgs) -> Result<u64> {
+    let budget = args.memory_mb as u64 * MB;
+    let snapshot = SNAPSHOT_BYTES_PER_PIXEL * args.view.size.x as u64 * args.view.size.y as u64;
+    match budget.checked_sub(snapshot).filter(|&left| left >= ridgeline::pipeline::MIN_BUDGET_BYTES)
+    {
+        Some(left) => Ok(left),
+        None => bail!(
+            "--memory-mb {}: {:.1} MB go to snapshots at {}x{}, too little is left for the display",
+            args.memory_mb,
+            snapshot as f64 / MB as f64,
+            args.view.size.x,
+            args.view.size.y
+        ),
+    }
+}
+
+/// What the run took of the board's memory (stats.json's `memory`).
+#[derive(serde::Serialize)]
+struct MemoryReport {
+    /// `--memory-mb`, bytes.
+    budget_bytes: u64,
+    /// Of it, what the display was planned for (the rest: snapshots).
+    display_budget_bytes: u64,
+    /// Ridgeline's own heap at its peak (the counting allocator).
+    heap_peak_bytes: u64,
+    /// Ridgeline's own heap at the end of the run.
+    heap_bytes: u64,
+    /// The GPU tile buffer.
+    gpu_buffer_bytes: u64,
+    /// Heap peak plus GPU buffer: what the budget bounds.
+    own_bytes: u64,
+    /// Node atlas slots the budget allowed.
+    atlas_slots: u32,
+    /// The process's peak and current resident memory (VmHWM, VmRSS).
+    resident_peak_bytes: u64,
+    resident_bytes: u64,
+    /// Resident peak minus Ridgeline's heap peak: the GL driver (on
+    /// llvmpipe the GPU buffer too, and every buffer the driver keeps),
+    /// code and memory-mapped data.
+    driver_and_rest_bytes: u64,
+}
+
+fn memory_report(args: &FlyArgs, display: &Display) -> MemoryReport {
+    let pipeline = display.pipeline();
+    let heap_peak_bytes = super::heap::peak() as u64;
+    let gpu_buffer_bytes = pipeline.scene().config().buffer_bytes as u64;
+    let (resident_peak_bytes, resident_bytes) = super::heap::resident().unwrap_or((0, 0));
+    let plan = pipeline.memory_plan();
+    MemoryReport {
+        budget_bytes: args.memory_mb as u64 * MB,
+        display_budget_bytes: plan.map_or(0, |p| p.budget_bytes),
+        heap_peak_bytes,
+        heap_bytes: super::heap::in_use() as u64,
+        gpu_buffer_bytes,
+        own_bytes: heap_peak_bytes + gpu_buffer_bytes,
+        atlas_slots: pipeline.clipmap().atlas().slot_count(),
+        resident_peak_bytes,
+        resident_bytes,
+        driver_and_rest_bytes: resident_peak_bytes.saturating_sub(heap_peak_bytes),
+    }
 }
 
 /// One row of stats.json.
@@ -170,6 +263,7 @@ fn write_stats(
     info: &ridgeline::gl::GlInfo,
     dataset: &str,
     rows: &[Row],
+    memory: &MemoryReport,
     max_travel_m: Option<f64>,
 ) -> Result<()> {
     let frames: Vec<serde_json::Value> = rows
@@ -195,6 +289,8 @@ fn write_stats(
                 "resident_nodes": s.resident_nodes,
                 "nodes_loaded": s.nodes_loaded,
                 "coarsened": s.scene.coarsened,
+                "culled": s.scene.culled,
+                "horizon_culled": s.scene.horizon_culled,
                 "tau_px": s.scene.tau_px,
                 "tau_requested_px": s.tau_requested_px,
                 "tau_loosened": s.tau_loosened(),
@@ -231,6 +327,8 @@ fn write_stats(
         "tau_loosened_frames": rows.iter().filter(|r| r.stats.tau_loosened()).count(),
         "clusters": args.clusters,
         "fov_x_deg": args.view.fov,
+        "flight": format!("{:?}", args.view.flight).to_lowercase(),
+        "memory": memory,
         "frames": frames,
     });
     let path = args.out.join("stats.json");
@@ -239,7 +337,7 @@ fn write_stats(
     Ok(())
 }
 
-fn print_summary(rows: &[Row]) -> Result<()> {
+fn print_summary(rows: &[Row], memory: &MemoryReport) -> Result<()> {
     use std::fmt::Write as _;
     if rows.is_empty() {
         return Ok(());
@@ -298,6 +396,25 @@ fn print_summary(rows: &[Row]) -> Result<()> {
         last.stats.scene.allocator_used_bytes as f64 / 1e6
     )?;
     writeln!(out, "  resident nodes    {} at the end", last.stats.resident_nodes)?;
+    let kept = mean(&|s| s.scene.tiles as f64);
+    let hidden = mean(&|s| s.scene.horizon_culled as f64);
+    writeln!(
+        out,
+        "  horizon culled    mean {hidden:.0} tiles a frame ({:.1} % of the tiles the frustum kept)",
+        100.0 * hidden / (hidden + kept).max(1.0)
+    )?;
+    let mb = |b: u64| b as f64 / MB as f64;
+    writeln!(
+        out,
+        "  memory            own {:.1} MB of {:.0} MB (heap peak {:.1}, GPU buffer {:.1}); \
+         resident peak {:.1} MB, of which the driver and the rest {:.1} MB",
+        mb(memory.own_bytes),
+        mb(memory.budget_bytes),
+        mb(memory.heap_peak_bytes),
+        mb(memory.gpu_buffer_bytes),
+        mb(memory.resident_peak_bytes),
+        mb(memory.driver_and_rest_bytes)
+    )?;
     write_tau(&mut out, rows)?;
     write_split_tests(&mut out, rows)?;
     super::print(&out)

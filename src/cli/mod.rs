@@ -5,23 +5,21 @@
 
 use std::path::Path;
 
-use std::sync::Arc;
-
 use anyhow::Result;
 use glam::UVec2;
 use ridgeline::display::DisplayConfig;
-use ridgeline::flight::{default_flight, FlightPath};
+use ridgeline::flight::FlightPath;
 use ridgeline::lod::budget::{BudgetConfig, BudgetTarget};
-use ridgeline::meshes::{MeshOptions, MeshedSource};
-use ridgeline::node::NodeSource;
-use ridgeline::pyramid::Pyramid;
-use ridgeline::scene::TerrainSummary;
 
 pub mod accuracy;
 pub mod fly;
+pub mod heap;
 pub mod import;
 pub mod info;
 mod progress;
+pub mod terrain;
+
+use terrain::{Flight, Terrain};
 
 /// Writes `text` to standard output. A reader that has gone away (a closed
 /// pipe, as in `ridgeline info ... | head`) is not an error.
@@ -37,14 +35,19 @@ pub fn print(text: &str) -> anyhow::Result<()> {
 /// how the view is drawn.
 #[derive(clap::Args)]
 pub struct ViewArgs {
-    /// Terrain: a cache name under cache/, or a path to a pyramid; the
+    /// Terrain: a cache name under cache/, a path to a pyramid, or
+    /// `procedural` (the earth-size procedural source, 38.4 m posts); the
     /// built-in SRTM tile when omitted.
     #[arg(long)]
     pub dataset: Option<String>,
     /// Camera path CSV: t,x,y,alt,heading,pitch,roll (or lat,lon for x,y);
-    /// the built-in approach when omitted.
-    #[arg(long)]
+    /// the built-in flight (`--flight`) when omitted.
+    #[arg(long, conflicts_with = "flight")]
     pub path: Option<std::path::PathBuf>,
+    /// Built-in flight: `approach` (descending over the best data) or
+    /// `cruise` (level at 10 km, out to the horizon).
+    #[arg(long, value_enum, default_value_t = Flight::Approach)]
+    pub flight: Flight,
     /// Image or window size, WIDTHxHEIGHT.
     #[arg(long, default_value = "1280x720", value_parser = parse_size)]
     pub size: UVec2,
@@ -103,6 +106,7 @@ impl ViewArgs {
         Ok(())
     }
 
+    /// Opens the terrain (see [`terrain`]).
     /// The frame budget the options ask for, if any.
     fn budget(&self) -> Option<BudgetConfig> {
         let target = match (self.triangle_budget, self.frame_ms) {
@@ -128,28 +132,8 @@ impl ViewArgs {
     /// from (with their adaptive meshes unless `--regular-grid`), and the
     /// per-level errors its rings are computed from.
     fn open_terrain(&self, progress: &dyn ridgeline::pyramid::Progress) -> Result<Terrain> {
-        let cache = Path::new("cache");
-        let pyramid = Arc::new(ridgeline::dataset::open(self.dataset.as_deref(), cache, progress)?);
-        let mut summary = TerrainSummary::from_pyramid(pyramid.info());
-        if self.regular_grid {
-            let source: Arc<dyn NodeSource> = pyramid.clone();
-            return Ok(Terrain { pyramid, source, summary });
-        }
-        let options = match self.mesh_error {
-            Some(error_m) => MeshOptions { error_m, ..MeshOptions::default() },
-            None => MeshOptions::for_tau(self.tau),
-        };
-        let chunked = MeshedSource::open_or_build(Arc::clone(&pyramid), options, progress)?;
-        summary.delta_per_level = chunked.delta_per_level();
-        Ok(Terrain { pyramid, source: Arc::new(chunked), summary })
+        Terrain::open(self, progress)
     }
-}
-
-/// An opened terrain (see [`ViewArgs::open_terrain`]).
-struct Terrain {
-    pyramid: Arc<Pyramid>,
-    source: Arc<dyn NodeSource>,
-    summary: TerrainSummary,
 }
 
 /// Writes `bytes` beside `path` and renames them into place, so a reader
@@ -184,14 +168,4 @@ fn parse_size(text: &str) -> Result<UVec2, String> {
         return Err(format!("size `{text}` must be between 1x1 and 16384x16384"));
     }
     Ok(size)
-}
-
-/// The camera path of a run: the CSV at `path`, else the built-in approach
-/// over `pyramid`.
-fn flight_path(path: Option<&Path>, pyramid: &Pyramid) -> Result<FlightPath> {
-    let layout = *pyramid.layout();
-    match path {
-        Some(file) => Ok(FlightPath::read(file, &pyramid.info().georef, layout.posts)?),
-        None => Ok(default_flight(pyramid)),
-    }
 }

@@ -4,14 +4,19 @@
 //! three passes over that frame's output with its uniforms: the LOD tiles as
 //! positions, the full-resolution truth in colour (timed) and as positions;
 //! and measures the per-pixel error. It keeps the heat map of the worst view.
+//!
+//! Where the full-resolution mesh is too large to draw (a cruise out to the
+//! horizon), the truth's positions come from each pixel's ray followed on
+//! the CPU against the exact heights instead ([`Truth::Rays`]), and its
+//! triangles are counted in the frustum, not drawn.
 
 use glam::DVec2;
 use image::RgbaImage;
 
 use super::{DisplayError, DisplayParts};
 use crate::accuracy::{
-    heat_map, measure_view, percentile, ErrorSummary, ExactHeight, LodSurface, PositionImage,
-    ViewErrors, ViewGeometry,
+    heat_map, measure_view, percentile, trace_truth, ErrorSummary, ExactHeight, LodSurface,
+    PositionImage, RayGround, ViewErrors, ViewGeometry,
 };
 use crate::camera::Camera;
 use crate::gl::{GlError, OffscreenTarget, TruthFrameStats, TruthPass};
@@ -67,6 +72,8 @@ pub struct ViewRow {
     pub draw_calls_truth: usize,
     /// LOD tiles per level, finest first.
     pub tiles_per_level: Vec<usize>,
+    /// Tiles the frustum kept that the horizon hid (not selected, made or drawn).
+    pub horizon_culled: usize,
     /// The LOD frame (paging, tiling, upload, draw, to glFinish) drawn at the
     /// view's pose after a first frame there made its tiles, and the truth's
     /// draw right after it.
@@ -89,6 +96,8 @@ pub struct WorstView {
 pub struct AccuracyRun {
     /// The tau requested, pixels.
     pub tau_px: f64,
+    /// Where the full-resolution image came from ([`Truth::route`]).
+    pub truth: &'static str,
     /// The largest tau any view was selected with, pixels (a frame budget
     /// may raise it above `tau_px`): the bound the measured error is held to.
     pub tau_achieved_max_px: f64,
@@ -111,12 +120,43 @@ pub struct AccuracyRun {
     pub worst: Option<WorstView>,
 }
 
+/// Where the full-resolution image of a view comes from.
+#[derive(Clone, Copy)]
+pub enum Truth<'a> {
+    /// The full-resolution mesh, drawn on the GPU in the display's context.
+    Mesh(&'a TruthPass),
+    /// Each pixel's ray followed on the CPU against the exact heights
+    /// ([`trace_truth`]); triangles counted in the frustum, not drawn.
+    Rays(RayGround<'a>),
+}
+
+impl Truth<'_> {
+    /// The route's name in `accuracy.json`: `gpu_mesh` or `cpu_rays`.
+    pub fn route(&self) -> &'static str {
+        match self {
+            Truth::Mesh(_) => "gpu_mesh",
+            Truth::Rays(_) => "cpu_rays",
+        }
+    }
+}
+
 /// Measures `views` (times along a path with their cameras) on `display`,
 /// against `truth` drawn in the same context and `exact`, the
 /// full-resolution surface over level-0 posts `spacing_m` apart.
 pub fn measure_flight(
     display: &mut DisplayParts,
     truth: &TruthPass,
+    exact: ExactHeight<'_>,
+    spacing_m: [f64; 2],
+    views: &[(f64, Camera)],
+) -> Result<AccuracyRun, DisplayError> {
+    measure_flight_with(display, Truth::Mesh(truth), exact, spacing_m, views)
+}
+
+/// [`measure_flight`] against either [`Truth`].
+pub fn measure_flight_with(
+    display: &mut DisplayParts,
+    truth: Truth<'_>,
     exact: ExactHeight<'_>,
     spacing_m: [f64; 2],
     views: &[(f64, Camera)],
@@ -134,7 +174,9 @@ pub fn measure_flight(
         // Warm-up, untimed: shaders compile and buffers fault in on first use.
         display.pipeline.settle(first, SETTLE_UPDATES)?;
         display.frame(first)?;
-        draw_truth(display, truth)?;
+        if let Truth::Mesh(truth) = truth {
+            draw_truth(display, truth)?;
+        }
     }
     for (t, camera) in views {
         let passes = Passes { truth, positions: &positions };
@@ -165,6 +207,7 @@ pub fn measure_flight(
     let tau_loosened_views = rows.iter().filter(|r| r.tau_px > tau_px).count();
     Ok(AccuracyRun {
         tau_px,
+        truth: truth.route(),
         tau_achieved_max_px,
         tau_loosened_views,
         summary,
@@ -180,7 +223,7 @@ pub fn measure_flight(
 /// The passes drawn beside each LOD frame.
 #[derive(Clone, Copy)]
 struct Passes<'a> {
-    truth: &'a TruthPass,
+    truth: Truth<'a>,
     positions: &'a OffscreenTarget,
 }
 
@@ -212,13 +255,20 @@ fn measure_one(
     passes.positions.bind();
     display.renderer.draw_positions(display.pipeline.draw_list())?;
     passes.positions.read_positions(lod)?;
-    let truth_stats = draw_truth(display, passes.truth)?;
-    passes.positions.bind();
-    display.renderer.draw_positions(&DrawList { uniforms: Some(frame), ..DrawList::default() })?;
-    passes.truth.draw(&frame, crate::gl::TerrainOutput::Position)?;
-    passes.positions.read_positions(truth_positions)?;
-    display.context.bind_target();
     let geometry = ViewGeometry::new(camera, &frame);
+    let truth_stats = match passes.truth {
+        Truth::Mesh(truth) => {
+            let stats = draw_truth(display, truth)?;
+            passes.positions.bind();
+            let background = DrawList { uniforms: Some(frame), ..DrawList::default() };
+            display.renderer.draw_positions(&background)?;
+            truth.draw(&frame, crate::gl::TerrainOutput::Position)?;
+            passes.positions.read_positions(truth_positions)?;
+            stats
+        }
+        Truth::Rays(ground) => trace_view(display, &geometry, &ground, camera, truth_positions),
+    };
+    display.context.bind_target();
     let scene = display.pipeline.scene();
     let list = scene.draw_list();
     let grid_size = scene.config().lod.grid_size;
@@ -254,9 +304,26 @@ fn measure_one(
         draw_calls_lod: lod_stats.draw_calls as usize,
         draw_calls_truth: truth_stats.draw_calls,
         tiles_per_level,
+        horizon_culled: lod_stats.scene.horizon_culled,
         lod_frame_ms: lod_stats.frame_ms,
         truth_frame_ms: truth_stats.frame_ms,
     })
+}
+
+/// The truth of one view by rays: its positions, the rays' time, and the
+/// full-resolution triangles in its frustum above the horizon, counted.
+fn trace_view(
+    display: &DisplayParts,
+    geometry: &ViewGeometry,
+    ground: &RayGround<'_>,
+    camera: &Camera,
+    out: &mut PositionImage,
+) -> TruthFrameStats {
+    let start = Instant::now();
+    trace_truth(geometry, ground, out);
+    let frame_ms = start.elapsed().as_secs_f64() * 1e3;
+    let census = display.pipeline.scene().census(camera, &display.pipeline.terrain());
+    TruthFrameStats { triangles: 2 * census.cells, draw_calls: 0, frame_ms }
 }
 
 /// The uniforms of the frame the pipeline drew last.

@@ -40,6 +40,9 @@ pub struct DisplayConfig {
     pub loader: LoaderMode,
     /// Clear to this colour and skip the sky (hole detection in tests).
     pub sentinel: Option<[f32; 4]>,
+    /// Ridgeline's own heap and GPU buffer together, bytes (see
+    /// [`PipelineConfig::memory_budget_bytes`]).
+    pub memory_budget_bytes: Option<u64>,
     /// A frame budget (triangles or milliseconds) that may raise tau.
     pub budget: Option<crate::lod::budget::BudgetConfig>,
 }
@@ -56,6 +59,7 @@ impl DisplayConfig {
             load_budget: 32,
             loader: LoaderMode::Thread { queue: 256 },
             sentinel: None,
+            memory_budget_bytes: None,
             budget: None,
         }
     }
@@ -68,6 +72,7 @@ impl DisplayConfig {
             viewport: self.size.into(),
             load_budget: self.load_budget,
             loader: self.loader,
+            memory_budget_bytes: self.memory_budget_bytes,
             budget: self.budget,
         }
     }
@@ -117,8 +122,9 @@ impl DisplayParts {
         request.title = "Ridgeline".to_owned();
         let context = GlContext::new(&request)?;
         let pipeline = FramePipeline::new(&config.pipeline(), source, summary)?;
-        let scene = config.scene;
-        let mut renderer = GlRenderer::new(context.gl(), scene.buffer_bytes)?;
+        // The buffer the pipeline's staging copy mirrors (a memory budget may have shrunk it).
+        let buffer_bytes = pipeline.scene().config().buffer_bytes;
+        let mut renderer = GlRenderer::new(context.gl(), buffer_bytes)?;
         renderer.set_sentinel(config.sentinel);
         Ok(DisplayParts { renderer, context, pipeline })
     }
@@ -152,6 +158,11 @@ impl Display {
     /// The context's version and renderer strings.
     pub fn info(&self) -> &GlInfo {
         self.parts.context.info()
+    }
+
+    /// The frame pipeline (its scene, clipmap and memory plan).
+    pub fn pipeline(&self) -> &FramePipeline {
+        &self.parts.pipeline
     }
 
     /// Pages, tiles, uploads and draws one frame for `camera`, then waits for

@@ -12,9 +12,12 @@
 //!   level `l` is never drawn nearer than `delta_l * K / (tau * (1 - morph_range))`,
 //!   so even its morph toward the parent stays within `tau` pixels;
 //! - rings also grow fast enough that neighbours differ by at most one level
-//!   and the coarser one is unmorphed where they meet (see [`rings`]).
+//!   and the coarser one is unmorphed where they meet (see [`rings`]);
+//! - tiles below the horizon are culled beside the frustum ([`horizon`]).
 
 pub mod budget;
+pub mod census;
+pub mod horizon;
 pub mod life;
 pub mod morph;
 pub mod rings;

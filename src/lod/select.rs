@@ -2,6 +2,9 @@
 //! on the CPU with an explicit stack, culling each tile against the terrain's
 //! extent and the view frustum before deciding to split it.
 //!
+//! Tiles the frustum keeps may still lie below the horizon: those are
+//! dropped too (see [`super::horizon`]) and counted apart.
+//!
 //! Both lists are allocated once, at `max_tiles`; a frame never allocates.
 //! When refining further would exceed `max_tiles`, the tile is kept whole:
 //! the view gets coarser, never a hole.
@@ -11,6 +14,7 @@
 //! lasts; culling, the tile budget and the finer-data test are made on every
 //! visit, so the selection is the one a full re-evaluation makes.
 
+use super::horizon::Horizon;
 use super::life::{LifeStats, ValidLife};
 use super::{LevelRings, LodConfig, TileKey};
 use crate::camera::{curvature_drop, Frustum};
@@ -48,6 +52,8 @@ pub struct TileSelector {
     selected: Vec<SelectedTile>,
     /// Tiles dropped by the frustum in the last frame (for statistics).
     culled: usize,
+    /// Tiles inside the frustum dropped below the horizon in the last frame.
+    horizon_culled: usize,
     /// Valid lives of the split tests, when a travel per frame is declared.
     life: Option<ValidLife>,
 }
@@ -62,6 +68,18 @@ pub struct View<'a> {
     pub rings: &'a LevelRings,
     /// Apply the earth's curvature to bounding boxes.
     pub curvature: bool,
+    /// Cull tiles below this horizon (`None`: no horizon culling).
+    pub horizon: Option<Horizon>,
+}
+
+/// Why a tile is not drawn, or how far it is.
+enum Visibility {
+    /// Inside the frustum and above the horizon: distance and height bounds.
+    Visible(f64, (f32, f32)),
+    /// Outside the frustum.
+    Outside,
+    /// Inside the frustum but hidden below the horizon.
+    BelowHorizon,
 }
 
 impl TileSelector {
@@ -72,6 +90,7 @@ impl TileSelector {
             stack: Vec::with_capacity(config.max_tiles + 4),
             selected: Vec::with_capacity(config.max_tiles),
             culled: 0,
+            horizon_culled: 0,
             life: config.max_travel_m.map(|m| ValidLife::new(m, config.max_tiles + 4)),
         }
     }
@@ -92,12 +111,18 @@ impl TileSelector {
         self.culled
     }
 
+    /// Tiles the frustum kept but the horizon hid, in the last selection.
+    pub fn horizon_culled(&self) -> usize {
+        self.horizon_culled
+    }
+
     /// Selects the tiles for `view` over `terrain`; the result is valid until
     /// the next call.
     pub fn select(&mut self, view: &View<'_>, terrain: &dyn TileBounds) -> &[SelectedTile] {
         self.selected.clear();
         self.stack.clear();
         self.culled = 0;
+        self.horizon_culled = 0;
         let root = (view.rings.levels() - 1) as u8;
         if let Some(life) = &mut self.life {
             life.begin(view.eye, view.rings.levels(), |l| view.rings.split_distance(l));
@@ -109,9 +134,16 @@ impl TileSelector {
             }
         }
         while let Some(key) = self.stack.pop() {
-            let Some((distance, bounds)) = self.visible_distance(key, view, terrain) else {
-                self.culled += 1;
-                continue;
+            let (distance, bounds) = match self.visibility(key, view, terrain) {
+                Visibility::Visible(distance, bounds) => (distance, bounds),
+                Visibility::Outside => {
+                    self.culled += 1;
+                    continue;
+                }
+                Visibility::BelowHorizon => {
+                    self.horizon_culled += 1;
+                    continue;
+                }
             };
             // Children replace this tile on the stack; keep room for the worst case.
             let room = self.selected.len() + self.stack.len() + 4 <= self.config.max_tiles;
@@ -151,14 +183,8 @@ impl TileSelector {
         }
     }
 
-    /// Distance to the tile's box and its height bounds, or `None` if the
-    /// frustum excludes it.
-    fn visible_distance(
-        &self,
-        key: TileKey,
-        view: &View<'_>,
-        terrain: &dyn TileBounds,
-    ) -> Option<(f64, (f32, f32))> {
+    /// Distance to the tile's box and its height bounds, or why it is not drawn.
+    fn visibility(&self, key: TileKey, view: &View<'_>, terrain: &dyn TileBounds) -> Visibility {
         let bounds = terrain.height_bounds(key, self.config.grid_size);
         let (min, max) = box_of(key, self.config.grid_size, terrain.spacing_m(), bounds, view.eye);
         let distance = box_distance(min, max);
@@ -170,7 +196,18 @@ impl TileSelector {
                 .length();
             lo.z -= curvature_drop(far);
         }
-        view.frustum.intersects_box(lo.as_vec3(), hi.as_vec3()).then_some((distance, bounds))
+        if !view.frustum.intersects_box(lo.as_vec3(), hi.as_vec3()) {
+            return Visibility::Outside;
+        }
+        let hidden = view.horizon.is_some_and(|horizon| {
+            let nearest = glam::DVec2::ZERO.clamp(min.truncate(), max.truncate()).length();
+            horizon.hides(nearest, max.z + view.eye.z)
+        });
+        if hidden {
+            Visibility::BelowHorizon
+        } else {
+            Visibility::Visible(distance, bounds)
+        }
     }
 }
 

@@ -229,6 +229,25 @@ impl MeshFile {
         Ok(MeshFile { path: path.to_path_buf(), map, header, table, nodes })
     }
 
+    /// The heap, bytes, the largest mesh of the file takes once read
+    /// (its vertices and indices; [`MeshFile::read`] reserves exactly).
+    pub fn largest_mesh_bytes(&self) -> u64 {
+        let vertex = std::mem::size_of::<MeshVertex>() as u64;
+        (0..self.nodes as usize)
+            .map(|index| {
+                let at = self.table + index * ENTRY_LEN;
+                let entry = Entry::decode(&self.map[at..at + ENTRY_LEN]);
+                let present = entry.offset != ABSENT;
+                if present {
+                    vertex * entry.vertices as u64 + 2 * entry.indices as u64
+                } else {
+                    0
+                }
+            })
+            .max()
+            .unwrap_or(0)
+    }
+
     /// What the header says.
     pub fn header(&self) -> &MeshHeader {
         &self.header
@@ -283,9 +302,13 @@ fn decode_record(record: &[u8], entry: &Entry, out: &mut NodeMesh) -> Result<(),
         return Err(format!("mesh record is not a mesh ({entry:?})"));
     }
     out.post_level = post_level as u8;
+    // Exactly: a buffer grows to the largest mesh read into it, no further
+    // (what a memory budget counts a slot at).
     out.vertices.clear();
+    out.vertices.reserve_exact(vertices.len());
     out.vertices.extend_from_slice(vertices);
     out.indices.clear();
+    out.indices.reserve_exact(indices.len());
     out.indices.extend_from_slice(indices);
     Ok(())
 }

@@ -72,6 +72,12 @@ impl NodeSource for MeshedSource {
         self.pyramid.has_node(id)
     }
 
+    /// The heights and the largest mesh of the file.
+    fn node_bytes(&self) -> u64 {
+        let side = self.pyramid.layout().stored_side() as u64;
+        side * side * std::mem::size_of::<f32>() as u64 + self.file.largest_mesh_bytes()
+    }
+
     fn exact_height(&self, x_m: f64, y_m: f64) -> Result<f32, NodeError> {
         NodeSource::exact_height(self.pyramid.as_ref(), x_m, y_m)
     }

@@ -13,7 +13,7 @@
 
 mod sizing;
 
-pub use sizing::clipmap_view;
+pub use sizing::{clipmap_view, plan_memory, MemoryPlan, MIN_BUDGET_BYTES};
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -43,6 +43,10 @@ pub struct PipelineConfig {
     /// Load nodes on a thread (flying) or inline up to the budget (tests that
     /// want every frame complete and repeatable).
     pub loader: LoaderMode,
+    /// Ridgeline's own heap and GPU buffer together, bytes: sizes the node
+    /// atlas, the staging copy and the GPU buffer at start ([`plan_memory`]);
+    /// `None` sizes them for the view and takes `scene.buffer_bytes`.
+    pub memory_budget_bytes: Option<u64>,
     /// A frame budget: triangles or milliseconds a frame, held by raising
     /// tau above `scene.lod.tau_px` (never below it). `None`: tau as set.
     pub budget: Option<BudgetConfig>,
@@ -57,6 +61,7 @@ impl PipelineConfig {
             viewport,
             load_budget: 32,
             loader: LoaderMode::Thread { queue: 256 },
+            memory_budget_bytes: None,
             budget: None,
         }
     }
@@ -71,6 +76,19 @@ pub enum PipelineError {
     /// The camera or the tiling was invalid, or the buffer could not hold the root.
     #[error(transparent)]
     Scene(#[from] SceneError),
+    /// The memory budget is below what the display keeps aside.
+    #[error(
+        "memory budget {budget} bytes is too small: at least {least} bytes, and room for the \
+         loader and two atlas slots of {node_bytes} bytes (the largest node)"
+    )]
+    MemoryBudget {
+        /// The budget asked for, bytes.
+        budget: u64,
+        /// The least budget, bytes.
+        least: u64,
+        /// Bytes a node buffer is counted at.
+        node_bytes: u64,
+    },
     /// The frame budget's target or settings are invalid.
     #[error("frame budget: {0}")]
     Budget(#[from] BudgetError),
@@ -124,6 +142,7 @@ pub struct FramePipeline {
     scene: Scene,
     view: ViewId,
     summary: TerrainSummary,
+    memory: Option<MemoryPlan>,
     budget: Option<TauController>,
 }
 
@@ -137,18 +156,31 @@ impl FramePipeline {
     ) -> Result<FramePipeline, PipelineError> {
         let layout = *source.layout();
         let view_config = clipmap_view(config, &summary, &layout)?;
+        let wanted = sizing::atlas_slots(&view_config, layout.levels);
+        let mut scene_config = config.scene;
+        let mut loader = config.loader;
+        let memory = match config.memory_budget_bytes {
+            Some(budget) => Some(plan(config, budget, source.node_bytes(), wanted)?),
+            None => None,
+        };
+        if let Some(plan) = memory {
+            scene_config.buffer_bytes = plan.buffer_bytes;
+            if let LoaderMode::Thread { queue } = &mut loader {
+                *queue = plan.loader_queue as usize;
+            }
+        }
         let clipmap_config = ClipmapConfig {
-            atlas_slots: sizing::atlas_slots(&view_config, layout.levels),
+            atlas_slots: memory.map_or(wanted, |plan| plan.atlas_slots),
             budget: config.load_budget,
-            loader: config.loader,
+            loader,
         };
         let mut clipmap = Clipmap::new(source, clipmap_config)?;
         let view = clipmap.add_view(view_config, DVec3::ZERO)?;
         let terrain = ClipmapTerrain { clipmap: &clipmap, summary: &summary };
-        let scene = Scene::new(config.scene, &terrain)?;
+        let scene = Scene::new(scene_config, &terrain)?;
         let tau = config.scene.lod.tau_px;
         let budget = config.budget.map(|b| TauController::new(tau, b)).transpose()?;
-        Ok(FramePipeline { clipmap, scene, view, summary, budget })
+        Ok(FramePipeline { clipmap, scene, view, summary, memory, budget })
     }
 
     /// Pages, tiles, uploads and draws one frame for `camera` on `backend`,
@@ -251,6 +283,11 @@ impl FramePipeline {
         &self.clipmap
     }
 
+    /// How the memory budget was shared, if one was given.
+    pub fn memory_plan(&self) -> Option<MemoryPlan> {
+        self.memory
+    }
+
     /// The data's per-level error and height range.
     pub fn summary(&self) -> &TerrainSummary {
         &self.summary
@@ -260,6 +297,21 @@ impl FramePipeline {
     pub fn terrain(&self) -> ClipmapTerrain<'_> {
         ClipmapTerrain { clipmap: &self.clipmap, summary: &self.summary }
     }
+}
+
+/// The memory plan for `budget` bytes, or why there is none.
+fn plan(
+    config: &PipelineConfig,
+    budget: u64,
+    node_bytes: u64,
+    wanted: u32,
+) -> Result<MemoryPlan, PipelineError> {
+    let queue = match config.loader {
+        LoaderMode::Thread { queue } => queue.min(u32::MAX as usize) as u32,
+        LoaderMode::Inline => 0,
+    };
+    plan_memory(budget, node_bytes, wanted, queue, config.scene.buffer_bytes)
+        .ok_or(PipelineError::MemoryBudget { budget, least: MIN_BUDGET_BYTES, node_bytes })
 }
 
 /// The band a triangle budget holds within each frame: the controller's

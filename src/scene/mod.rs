@@ -17,6 +17,8 @@ pub use terrain::{PreloadedTerrain, TerrainData};
 
 use crate::camera::{Camera, CameraError, Frustum, EARTH_RADIUS_M};
 use crate::clusters::{ClusterCache, ClusterConfig, ClusterError};
+use crate::lod::census::{frustum_census, Census, CensusView};
+use crate::lod::horizon::Horizon;
 use crate::lod::life::LifeStats;
 use crate::lod::rings::RingInputs;
 use crate::lod::select::View;
@@ -60,6 +62,10 @@ pub struct SceneConfig {
     pub frames_in_flight: u32,
     /// Whether the earth's curvature lowers distant terrain (in culling and drawing).
     pub curvature: bool,
+    /// Cull tiles hidden below the horizon (with the curvature, and only while
+    /// the camera is over the data). Holes do not hide what is behind them:
+    /// leave it off for data with no-data posts.
+    pub horizon_culling: bool,
     /// Terrain this many metres above the aircraft, or higher, is red.
     pub warning_above_m: f32,
     /// Terrain less than this many metres below the aircraft is amber.
@@ -81,6 +87,7 @@ impl Default for SceneConfig {
             transfer_cap: Some(DEFAULT_TRANSFER_CAP),
             frames_in_flight: 0,
             curvature: true,
+            horizon_culling: true,
             warning_above_m: palette::DEFAULT_WARNING_ABOVE_M,
             caution_below_m: palette::DEFAULT_CAUTION_BELOW_M,
             clusters: false,
@@ -127,6 +134,9 @@ pub struct SceneStats {
     pub tiles: usize,
     /// Tiles dropped by the frustum in the frame's final selection.
     pub culled: usize,
+    /// Tiles inside the frustum dropped below the horizon in the frame's
+    /// final selection: neither selected, nor made, nor drawn.
+    pub horizon_culled: usize,
     /// Triangles of the tiles in the draw list, skirts included (each tile once).
     pub triangles: u64,
     /// Bytes of the staging copy uploaded.
@@ -314,6 +324,7 @@ impl Scene {
         let (near, far) = clip_planes(camera, terrain);
         let frustum = Frustum::from_view_projection(camera.projection(near, far) * camera.view());
         let mut report = SceneStats::default();
+        let horizon = self.horizon(camera, terrain);
         let mut lod = loosened(&self.config.lod, self.tau_px);
         let mut nearest_m: f64;
         let inputs = ring_inputs(&layout, grid_size, &self.deltas, self.height_range_m, camera);
@@ -331,6 +342,7 @@ impl Scene {
                 frustum: &frustum,
                 rings: &self.rings,
                 curvature: self.config.curvature,
+                horizon,
             };
             let selected = self.selector.select(&view, terrain);
             let retarget = match (&mut search, report.coarsened) {
@@ -391,6 +403,7 @@ impl Scene {
         let stats = self.cache.stats();
         report.tiles = self.draw_list.tiles.len();
         report.culled = self.selector.culled();
+        report.horizon_culled = self.selector.horizon_culled();
         report.tau_px = lod.tau_px;
         report.life = self.selector.life_stats().unwrap_or_default();
         report.triangles = self.draw_list.triangles();
@@ -407,6 +420,39 @@ impl Scene {
             report.cluster_bytes_uploaded = stats.bytes_uploaded;
         }
         Ok(report)
+    }
+}
+
+impl Scene {
+    /// The horizon tiles are culled below for `camera`: over the data's
+    /// lowest height, when the curvature is drawn, horizon culling is on and
+    /// the camera is over the data's rectangle (see [`crate::lod::horizon`]).
+    fn horizon(&self, camera: &Camera, terrain: &dyn TerrainData) -> Option<Horizon> {
+        let layout = terrain.layout();
+        let inside = |at: f64, posts: u32, spacing: f64| {
+            at >= 0.0 && at <= posts.saturating_sub(1) as f64 * spacing
+        };
+        let p = camera.position;
+        let over_data = inside(p.x, layout.posts[0], layout.spacing_m[0])
+            && inside(p.y, layout.posts[1], layout.spacing_m[1]);
+        let on = self.config.horizon_culling && self.config.curvature && over_data;
+        on.then(|| Horizon::new(p.z, terrain.height_range().0 as f64)).flatten()
+    }
+
+    /// The level-0 cells a frame for `camera` holds in its frustum, above
+    /// and below the horizon (counted, not drawn; see [`frustum_census`]).
+    pub fn census(&self, camera: &Camera, terrain: &dyn TerrainData) -> Census {
+        let (near, far) = clip_planes(camera, terrain);
+        let frustum = Frustum::from_view_projection(camera.projection(near, far) * camera.view());
+        let view = CensusView {
+            eye: camera.position,
+            frustum: &frustum,
+            curvature: self.config.curvature,
+            horizon: self.horizon(camera, terrain),
+            grid_size: self.config.lod.grid_size,
+            root: terrain.layout().levels - 1,
+        };
+        frustum_census(&view, terrain)
     }
 }
 

@@ -29,6 +29,10 @@ pub struct TileSquare {
     pub step: u32,
 }
 
+/// Node-mesh triangles each lie inside one of this many squares a node
+/// side (`MeshOptions::tile_cells`, 8 node posts of 64, by default).
+pub const NODE_MESH_SQUARES: u64 = 8;
+
 impl TileSquare {
     /// The square of tile `key` (of `grid_size` cells) in the mesh of
     /// `node`, if the tile lies inside the node on whole mesh posts.
@@ -46,7 +50,11 @@ impl TileSquare {
         let node0 = [node.x as u64 * node_span, node.y as u64 * node_span];
         let inside =
             (0..2).all(|k| tile0[k] >= node0[k] && tile0[k] + tile_span <= node0[k] + node_span);
-        if !inside || tile_span % step != 0 {
+        // A tile smaller than the squares the mesh's triangles keep to
+        // would cut them and leave holes (a tile drawn from an ancestor
+        // three levels or more above it, when the atlas is short of slots).
+        let whole_triangles = tile_span * NODE_MESH_SQUARES >= node_span;
+        if !inside || !whole_triangles || tile_span % step != 0 {
             return None;
         }
         let origin = [0, 1].map(|k| ((tile0[k] - node0[k]) / step) as u32);

@@ -1,0 +1,136 @@
+//! The terrain and camera path of a `fly` or `accuracy` run: a pyramid (the
+//! built-in terrain, a cache name or a path) or `--dataset procedural`, the
+//! earth-size procedural source; `--path FILE.csv` or a built-in flight
+//! (`--flight approach|cruise`).
+
+use std::path::Path;
+use std::sync::Arc;
+
+use anyhow::{bail, Result};
+use ridgeline::flight::{builtin_approach_over, builtin_cruise, default_flight, FlightPath};
+use ridgeline::meshes::{MeshOptions, MeshedSource};
+use ridgeline::node::NodeSource;
+use ridgeline::procedural::{EarthParams, ProceduralEarth};
+use ridgeline::pyramid::{Progress, Pyramid};
+use ridgeline::scene::TerrainSummary;
+
+use super::ViewArgs;
+
+/// The `--dataset` name of the earth-size procedural source.
+pub const PROCEDURAL: &str = "procedural";
+/// Side of the square, metres, the built-in flights fly over the
+/// procedural earth, in its middle (the whole earth is 40 000 km a side).
+const PROCEDURAL_AREA_M: f64 = 100_000.0;
+
+/// A built-in flight, flown when no `--path` is given.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Flight {
+    /// The descending approach over the best data.
+    Approach,
+    /// Level at 10 km, looking out to the horizon.
+    Cruise,
+}
+
+/// Where a terrain's heights come from.
+pub enum Ground {
+    /// A node pyramid on disk.
+    Pyramid(Arc<Pyramid>),
+    /// The earth-size procedural source.
+    Procedural(Arc<ProceduralEarth>),
+}
+
+/// An opened terrain: its heights, the source the display pages nodes
+/// from, the per-level errors its rings are computed from, its name.
+pub struct Terrain {
+    pub ground: Ground,
+    pub source: Arc<dyn NodeSource>,
+    pub summary: TerrainSummary,
+    pub name: String,
+    /// Every post has data, so the horizon may hide what is behind it.
+    pub gapless: bool,
+}
+
+impl Terrain {
+    /// Opens what `view` names (see the module doc).
+    pub fn open(view: &ViewArgs, progress: &dyn Progress) -> Result<Terrain> {
+        if view.dataset.as_deref() == Some(PROCEDURAL) {
+            return open_procedural(view);
+        }
+        let cache = Path::new("cache");
+        let pyramid = Arc::new(ridgeline::dataset::open(view.dataset.as_deref(), cache, progress)?);
+        let mut summary = TerrainSummary::from_pyramid(pyramid.info());
+        let name = pyramid.path().display().to_string();
+        let gapless = pyramid.info().stats.posts_no_data == 0;
+        let source: Arc<dyn NodeSource> = if view.regular_grid {
+            pyramid.clone()
+        } else {
+            let options = match view.mesh_error {
+                Some(error_m) => MeshOptions { error_m, ..MeshOptions::default() },
+                None => MeshOptions::for_tau(view.tau),
+            };
+            let meshed = MeshedSource::open_or_build(Arc::clone(&pyramid), options, progress)?;
+            summary.delta_per_level = meshed.delta_per_level();
+            Arc::new(meshed)
+        };
+        Ok(Terrain { ground: Ground::Pyramid(pyramid), source, summary, name, gapless })
+    }
+
+    /// The full-resolution height at a local point, metres (`None` outside the data).
+    pub fn exact_height(&self, x: f64, y: f64) -> Option<f32> {
+        match &self.ground {
+            Ground::Pyramid(pyramid) => pyramid.exact_height(x, y),
+            Ground::Procedural(earth) => earth.exact_height(x, y).ok(),
+        }
+    }
+
+    /// The camera path: `path`'s CSV, else the built-in `flight` over the
+    /// best data (the middle of the procedural earth).
+    pub fn flight_path(&self, path: Option<&Path>, flight: Flight) -> Result<FlightPath> {
+        let height = |x: f64, y: f64| self.exact_height(x, y);
+        match (&self.ground, path) {
+            (Ground::Pyramid(pyramid), Some(file)) => {
+                let layout = *pyramid.layout();
+                Ok(FlightPath::read(file, &pyramid.info().georef, layout.posts)?)
+            }
+            (Ground::Procedural(_), Some(_)) => {
+                bail!("--path over --dataset procedural: it has no georeference; use --flight")
+            }
+            (Ground::Pyramid(pyramid), None) if flight == Flight::Approach => {
+                Ok(default_flight(pyramid))
+            }
+            (Ground::Pyramid(pyramid), None) => {
+                let (origin, extent) = pyramid.finest_area_m();
+                Ok(builtin_cruise(origin, extent, &height))
+            }
+            (Ground::Procedural(earth), None) => {
+                let layout = earth.layout();
+                let side = |k: usize| (layout.posts[k] - 1) as f64 * layout.spacing_m[k];
+                let half = PROCEDURAL_AREA_M / 2.0;
+                let origin = [side(0) / 2.0 - half, side(1) / 2.0 - half];
+                let extent = [PROCEDURAL_AREA_M; 2];
+                Ok(match flight {
+                    Flight::Approach => {
+                        builtin_approach_over(origin, extent, &|x, y| height(x, y).unwrap_or(0.0))
+                    }
+                    Flight::Cruise => builtin_cruise(origin, extent, &height),
+                })
+            }
+        }
+    }
+}
+
+/// The procedural earth of [`EarthParams::display_earth`], drawn as regular grids.
+fn open_procedural(view: &ViewArgs) -> Result<Terrain> {
+    if view.mesh_error.is_some() {
+        bail!("--mesh-error: --dataset procedural has no node meshes (it draws regular grids)");
+    }
+    let earth = Arc::new(ProceduralEarth::new(EarthParams::display_earth())?);
+    let [low, high] = earth.height_bounds();
+    let summary = TerrainSummary {
+        delta_per_level: (0..earth.layout().levels).map(|l| earth.delta_bound(l) as f64).collect(),
+        height_range: (low as f32, high as f32),
+    };
+    let source: Arc<dyn NodeSource> = earth.clone();
+    let name = PROCEDURAL.to_string();
+    Ok(Terrain { ground: Ground::Procedural(earth), source, summary, name, gapless: true })
+}
