@@ -50,13 +50,12 @@ pub struct FlyArgs {
     pub snapshots: u32,
     /// Ridgeline's own memory, MB (its heap and its GPU tile buffer): sizes
     /// the node atlas, the staging copy and the GPU buffer at start. A small
-    /// budget draws coarser tiles, never holes.
-    #[arg(long, default_value_t = DEFAULT_MEMORY_MB)]
-    pub memory_mb: u32,
+    /// budget draws coarser tiles, never holes. Unset: sized for the view.
+    /// Not yet the default: the atlas counts every slot at the largest node
+    /// mesh, so 64 MB holds 25 nodes where the default flight wants 200.
+    #[arg(long)]
+    pub memory_mb: Option<u32>,
 }
-
-/// The default `--memory-mb`: a quarter of a 256 MB board.
-pub const DEFAULT_MEMORY_MB: u32 = 64;
 /// The smallest and largest `--memory-mb`.
 const MEMORY_MB_RANGE: std::ops::RangeInclusive<u32> = 4..=65_536;
 /// The frame rate a window is taken to keep for the valid life's declared travel.
@@ -70,10 +69,9 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     {
         bail!("--warning-above and --caution-below must be finite metres, the caution band not negative");
     }
-    if !MEMORY_MB_RANGE.contains(&args.memory_mb) {
+    if let Some(mb) = args.memory_mb.filter(|mb| !MEMORY_MB_RANGE.contains(mb)) {
         bail!(
-            "--memory-mb {} must be between {} and {} MB",
-            args.memory_mb,
+            "--memory-mb {mb} must be between {} and {} MB",
             MEMORY_MB_RANGE.start(),
             MEMORY_MB_RANGE.end()
         );
@@ -87,7 +85,7 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     let (source, summary) = (terrain.source, terrain.summary);
     let mut config = DisplayConfig::new(args.backend, args.view.size);
     config.scene.horizon_culling = gapless;
-    config.memory_budget_bytes = Some(display_budget(args)?);
+    config.memory_budget_bytes = args.memory_mb.map(|mb| display_budget(args, mb)).transpose()?;
     config.version = if args.es2 { GlesVersion::Es2 } else { GlesVersion::Es3 };
     config.scene.warning_above_m = args.warning_above;
     config.scene.caution_below_m = args.caution_below;
@@ -140,15 +138,15 @@ const SNAPSHOT_BYTES_PER_PIXEL: u64 = 12;
 
 /// The part of `--memory-mb` the display gets: all of it, less what a
 /// headless run's snapshots take.
-fn display_budget(args: &FlyArgs) -> Result<u64> {
-    let budget = args.memory_mb as u64 * MB;
+fn display_budget(args: &FlyArgs, memory_mb: u32) -> Result<u64> {
+    let budget = memory_mb as u64 * MB;
     let snapshot = SNAPSHOT_BYTES_PER_PIXEL * args.view.size.x as u64 * args.view.size.y as u64;
     match budget.checked_sub(snapshot).filter(|&left| left >= ridgeline::pipeline::MIN_BUDGET_BYTES)
     {
         Some(left) => Ok(left),
         None => bail!(
             "--memory-mb {}: {:.1} MB go to snapshots at {}x{}, too little is left for the display",
-            args.memory_mb,
+            memory_mb,
             snapshot as f64 / MB as f64,
             args.view.size.x,
             args.view.size.y
@@ -159,8 +157,8 @@ fn display_budget(args: &FlyArgs) -> Result<u64> {
 /// What the run took of the board's memory (stats.json's `memory`).
 #[derive(serde::Serialize)]
 struct MemoryReport {
-    /// `--memory-mb`, bytes.
-    budget_bytes: u64,
+    /// `--memory-mb`, bytes (null: unset, sized for the view).
+    budget_bytes: Option<u64>,
     /// Of it, what the display was planned for (the rest: snapshots).
     display_budget_bytes: u64,
     /// Ridgeline's own heap at its peak (the counting allocator).
@@ -189,7 +187,7 @@ fn memory_report(args: &FlyArgs, display: &Display) -> MemoryReport {
     let (resident_peak_bytes, resident_bytes) = super::heap::resident().unwrap_or((0, 0));
     let plan = pipeline.memory_plan();
     MemoryReport {
-        budget_bytes: args.memory_mb as u64 * MB,
+        budget_bytes: args.memory_mb.map(|mb| mb as u64 * MB),
         display_budget_bytes: plan.map_or(0, |p| p.budget_bytes),
         heap_peak_bytes,
         heap_bytes: super::heap::in_use() as u64,
@@ -404,12 +402,13 @@ fn print_summary(rows: &[Row], memory: &MemoryReport) -> Result<()> {
         100.0 * hidden / (hidden + kept).max(1.0)
     )?;
     let mb = |b: u64| b as f64 / MB as f64;
+    let budget =
+        memory.budget_bytes.map_or("no budget".to_string(), |b| format!("of {:.0} MB", mb(b)));
     writeln!(
         out,
-        "  memory            own {:.1} MB of {:.0} MB (heap peak {:.1}, GPU buffer {:.1}); \
+        "  memory            own {:.1} MB {budget} (heap peak {:.1}, GPU buffer {:.1}); \
          resident peak {:.1} MB, of which the driver and the rest {:.1} MB",
         mb(memory.own_bytes),
-        mb(memory.budget_bytes),
         mb(memory.heap_peak_bytes),
         mb(memory.gpu_buffer_bytes),
         mb(memory.resident_peak_bytes),
