@@ -25,7 +25,7 @@
 //! The occluder must be drawn along the sight line: the selector only
 //! culls by the horizon when the camera is over the data's rectangle
 //! (convex, so the whole line lies over data) and the terrain says that
-//! every post there has data ([`Horizon::floor_m`] is `None` otherwise).
+//! every post there has data (`Horizon::floor_m` is `None` otherwise).
 
 use crate::camera::EARTH_RADIUS_M;
 

@@ -81,8 +81,8 @@ pub struct MemoryPlan {
 }
 
 /// Shares `budget_bytes` when the view wants `wanted_slots` atlas slots of
-/// `node_bytes` each and the loader up to `queue` requests: [`RESERVE_BYTES`]
-/// kept for the rest of the heap; the node buffers up to [`NODE_SHARE`] of
+/// `node_bytes` each and the loader up to `queue` requests: `RESERVE_BYTES`
+/// kept for the rest of the heap; the node buffers up to `NODE_SHARE` of
 /// what is left (a quarter of them, at most `queue`, for the loader, never
 /// more slots than wanted); half of the remainder each to the GPU buffer
 /// and its staging copy (never more than `max_buffer_bytes`). A smaller
