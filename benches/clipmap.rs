@@ -84,7 +84,7 @@ fn run(
     loader: LoaderMode,
     paced: bool,
 ) -> Run {
-    let config = ClipmapConfig { atlas_slots: SLOTS, budget: BUDGET, loader };
+    let config = ClipmapConfig { atlas_bytes: None, atlas_slots: SLOTS, budget: BUDGET, loader };
     let mut clipmap = Clipmap::new(earth.clone(), config).expect("clipmap");
     let pfd = clipmap.add_view(PFD, path[0]).expect("pfd view");
     let map =

@@ -254,6 +254,30 @@ impl NodeData {
         NodeData { heights: Vec::with_capacity(side * side), ..NodeData::default() }
     }
 
+    /// Heap the buffers take, bytes: their capacities, not their lengths,
+    /// because a buffer keeps what the largest node read into it needed.
+    pub fn heap_bytes(&self) -> u64 {
+        let vertex = std::mem::size_of::<MeshVertex>() as u64;
+        self.heights.capacity() as u64 * std::mem::size_of::<f32>() as u64
+            + self.mesh.vertices.capacity() as u64 * vertex
+            + self.mesh.indices.capacity() as u64 * std::mem::size_of::<u16>() as u64
+    }
+
+    /// Gives back the buffers' room beyond an eighth over their lengths,
+    /// so that a byte-accounted atlas counts a node at about its own size
+    /// and not at the largest node its buffer once held. Reallocates: the
+    /// loader thread calls it after a read, never a frame.
+    pub fn fit(&mut self) {
+        fn fit<T>(buffer: &mut Vec<T>) {
+            if buffer.capacity() > buffer.len() + buffer.len() / 8 {
+                buffer.shrink_to(buffer.len() + buffer.len() / 16);
+            }
+        }
+        fit(&mut self.heights);
+        fit(&mut self.mesh.vertices);
+        fit(&mut self.mesh.indices);
+    }
+
     /// Height of centre post `(i, j)` (`0..=node_size` each, border excluded).
     pub fn post(&self, layout: &NodeLayout, i: u32, j: u32) -> f32 {
         let side = layout.stored_side();
@@ -299,6 +323,14 @@ pub trait NodeSource: Send + Sync {
     fn node_bytes(&self) -> u64 {
         let side = self.layout().stored_side() as u64;
         side * side * std::mem::size_of::<f32>() as u64
+    }
+
+    /// The heap, bytes, node `id` takes once read and fitted
+    /// ([`NodeData::fit`]): what a byte-accounted atlas plans its loads
+    /// with before reading. The default: [`NodeSource::node_bytes`].
+    fn node_bytes_of(&self, id: NodeId) -> u64 {
+        let _ = id;
+        self.node_bytes()
     }
 
     /// The height at `(x_m, y_m)` at full resolution: the level-0 posts

@@ -112,7 +112,12 @@ fn flaky_clipmap(panic: bool, loader: LoaderMode) -> (Clipmap, ViewId, DVec3) {
     let earth = earth(13);
     let position = over_ground(&earth, 4e6, 4e6, 20.0);
     let source = Arc::new(Flaky { earth, panic });
-    let config = ridgeline::clipmap::ClipmapConfig { atlas_slots: 1500, budget: 50, loader };
+    let config = ridgeline::clipmap::ClipmapConfig {
+        atlas_bytes: None,
+        atlas_slots: 1500,
+        budget: 50,
+        loader,
+    };
     let mut clipmap = Clipmap::new(source, config).unwrap();
     let view = clipmap.add_view(VIEW, position).unwrap();
     (clipmap, view, position)

@@ -58,7 +58,7 @@ fn failing(failures: u32, corrupt: bool, loader: LoaderMode) -> (Clipmap, Arc<Fa
     let position = over_ground(&earth, 5e6, 5e6, 30.0);
     let target = earth.layout().locate(0, position.x, position.y).unwrap().id;
     let source = Arc::new(Failing { earth, target, failures, corrupt, reads: AtomicU32::new(0) });
-    let config = ClipmapConfig { atlas_slots: 3000, budget: 1000, loader };
+    let config = ClipmapConfig { atlas_bytes: None, atlas_slots: 3000, budget: 1000, loader };
     let mut clipmap = Clipmap::new(source.clone(), config).unwrap();
     let view = clipmap.add_view(VIEW, position).unwrap();
     (clipmap, source, view)
@@ -196,8 +196,12 @@ fn queued_loads_no_view_wants_are_cancelled_unread() {
         opened: Condvar::new(),
         log: Mutex::new(Vec::new()),
     });
-    let config =
-        ClipmapConfig { atlas_slots: 1500, budget: 50, loader: LoaderMode::Thread { queue: 6 } };
+    let config = ClipmapConfig {
+        atlas_bytes: None,
+        atlas_slots: 1500,
+        budget: 50,
+        loader: LoaderMode::Thread { queue: 6 },
+    };
     let mut clipmap = Clipmap::new(source.clone(), config).unwrap();
     let a = over_ground(&earth, 4e6, 4e6, 50.0);
     let view = clipmap.add_view(VIEW, a).unwrap();

@@ -201,7 +201,10 @@ fn refuses_bad_configurations_and_positions() {
     use ridgeline::clipmap::{ClipmapConfig, ClipmapError, LookupError, ViewConfig};
     let earth = earth(0);
     let make = |slots, budget, loader| {
-        Clipmap::new(earth.clone(), ClipmapConfig { atlas_slots: slots, budget, loader })
+        Clipmap::new(
+            earth.clone(),
+            ClipmapConfig { atlas_bytes: None, atlas_slots: slots, budget, loader },
+        )
     };
     assert!(matches!(make(1, 1, LoaderMode::Inline), Err(ClipmapError::TooFewSlots { .. })));
     assert!(matches!(make(8, 0, LoaderMode::Inline), Err(ClipmapError::ZeroBudget)));

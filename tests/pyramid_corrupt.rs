@@ -74,7 +74,7 @@ fn a_node_damaged_after_opening_is_reported_once_and_replaced_by_its_ancestor() 
 
     let ground = grid.at(152, 152) as f64;
     for loader in [LoaderMode::Inline, LoaderMode::Thread { queue: 4 }] {
-        let config = ClipmapConfig { atlas_slots: 600, budget: 50, loader };
+        let config = ClipmapConfig { atlas_bytes: None, atlas_slots: 600, budget: 50, loader };
         let mut clipmap = Clipmap::new(pyramid.clone(), config).expect("clipmap");
         let view = clipmap.add_view(VIEW, DVec3::new(centre.x, centre.y, ground + 60.0)).unwrap();
         let (mut failed, mut given_up, start) = (0, 0, Instant::now());

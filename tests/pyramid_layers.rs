@@ -366,7 +366,12 @@ fn the_clipmap_never_asks_for_absent_nodes_and_answers_from_the_best_data() {
     use glam::{DVec2, DVec3};
     use ridgeline::clipmap::{Clipmap, ClipmapConfig, LoaderMode, ViewConfig};
     let pyramid = std::sync::Arc::new(open(&[coarse(terrain), fine(terrain)], "clipmap"));
-    let config = ClipmapConfig { atlas_slots: 400, budget: 8, loader: LoaderMode::Inline };
+    let config = ClipmapConfig {
+        atlas_bytes: None,
+        atlas_slots: 400,
+        budget: 8,
+        loader: LoaderMode::Inline,
+    };
     let mut clipmap = Clipmap::new(pyramid.clone(), config).expect("a clipmap");
     let view_config = ViewConfig { node_count: 8, view_distance: 2.0, load_distance: 2.5 };
     // Over the coarse layer next to the fine one: views want level 0 there.

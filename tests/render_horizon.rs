@@ -69,13 +69,15 @@ fn no_frame_of_the_default_flight_shows_sky_below_the_geometric_horizon() {
     fly_showing_no_sky_below_the_horizon(&mut display, &path);
 }
 
-/// With a 24 MB budget (`ridgeline fly --memory-mb 24`, without snapshots)
-/// the default flight over the node meshes draws coarser, never holes, and
-/// Ridgeline's heap (counted from before the display opens) plus its GPU
-/// buffer stay within the budget.
+/// With an 18 MB budget (`ridgeline fly --memory-mb 18`, without snapshots)
+/// the default flight over the node meshes draws coarser, never holes, says
+/// so (each frame's bound is above the requested tau), and Ridgeline's heap
+/// (counted from before the display opens) plus its GPU buffer stay within
+/// the budget. At 16 MB one pixel of one frame (frame 12) shows sky through
+/// the terrain: a pinhole between fallback tiles, not yet found.
 #[test]
-fn a_24_mb_budget_flies_the_default_flight_within_it_and_without_holes() {
-    const BUDGET: u64 = 24 << 20;
+fn an_18_mb_budget_flies_the_default_flight_within_it_and_without_holes() {
+    const BUDGET: u64 = 18 << 20;
     let _turn = take_turn();
     let pyramid = builtin_pyramid();
     let source = testkit::builtin_terrain_for(1.0);
@@ -91,30 +93,35 @@ fn a_24_mb_budget_flies_the_default_flight_within_it_and_without_holes() {
     let before = testkit::alloc::bytes_in_use();
     testkit::alloc::reset_peak();
     let mut display = DisplayParts::open(&config, source, summary).expect("EGL display");
-    fly_showing_no_sky_below_the_horizon(&mut display, &path);
+    let loosened = fly_showing_no_sky_below_the_horizon(&mut display, &path);
     let heap = testkit::alloc::peak_bytes() - before;
     let gpu = display.pipeline.scene().config().buffer_bytes as u64;
     let plan = display.pipeline.memory_plan().expect("a budget was given");
-    println!("24 MB budget: heap peak {heap} + GPU buffer {gpu} bytes; {plan:?}");
+    println!("18 MB budget: heap peak {heap} + GPU buffer {gpu} bytes; {plan:?}");
     // The check's own read-back (4 bytes a pixel) and mask (1) are not the display's.
     let check = 5 * VIEWPORT[0] as u64 * VIEWPORT[1] as u64;
     assert!(
         heap + gpu <= BUDGET + check,
         "heap {heap} + GPU buffer {gpu} bytes exceed {BUDGET} and the check's {check}"
     );
+    // 18 MB cannot hold the view's nodes at tau 1: the frames must say so.
+    assert!(loosened > FRAMES as usize / 2, "only {loosened} of {FRAMES} frames said so");
 }
 
 /// Flies `path` on `display` as `ridgeline fly` does (settled once at the
-/// start) and fails on a frame with sky below the geometric horizon.
-fn fly_showing_no_sky_below_the_horizon(display: &mut DisplayParts, path: &FlightPath) {
+/// start) and fails on a frame with sky below the geometric horizon;
+/// returns how many frames said their bound was loosened.
+fn fly_showing_no_sky_below_the_horizon(display: &mut DisplayParts, path: &FlightPath) -> usize {
     let first = path.sample(path.start_time()).camera(FOV_X_DEG, VIEWPORT);
     display.pipeline.settle(&first, 10_000).expect("settle");
     let mut worst = (0, 0usize, 0usize);
     let mut evidence = None;
     let mut least_checked = usize::MAX;
+    let mut loosened = 0;
     for (k, t) in path.frame_times(FRAMES).enumerate() {
         let camera = path.sample(t).camera(FOV_X_DEG, VIEWPORT);
-        display.frame(&camera).expect("frame");
+        let stats = display.frame(&camera).expect("frame");
+        loosened += stats.tau_loosened() as usize;
         let mut image = display.context.read_pixels().expect("read back");
         let must = below_horizon(&camera, 2.0);
         let checked = must.iter().filter(|&&m| m).count();
@@ -145,4 +152,5 @@ fn fly_showing_no_sky_below_the_horizon(display: &mut DisplayParts, path: &Fligh
         "frame {} shows sky below the geometric horizon ({} of {} pixels); marked green at {evidence:?}",
         worst.0, worst.1, worst.2
     );
+    loosened
 }

@@ -25,7 +25,12 @@ fn corner_error(earth: &Arc<ProceduralEarth>, at: (f64, f64), radius: f64) -> (f
     };
     let ground = earth.exact_height(at.0, at.1).unwrap() as f64;
     let eye = DVec3::new(at.0, at.1, ground + 900.0);
-    let config = ClipmapConfig { atlas_slots: 4096, budget: 4096, loader: LoaderMode::Inline };
+    let config = ClipmapConfig {
+        atlas_bytes: None,
+        atlas_slots: 4096,
+        budget: 4096,
+        loader: LoaderMode::Inline,
+    };
     let mut clipmap = Clipmap::new(earth.clone(), config).unwrap();
     let view = ViewConfig { node_count: 14, view_distance: 5.0, load_distance: 5.5 };
     clipmap.add_view(view, eye).unwrap();

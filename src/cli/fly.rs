@@ -48,18 +48,27 @@ pub struct FlyArgs {
     /// PNG snapshots written along a headless flight (the last frame always is).
     #[arg(long, default_value_t = 6)]
     pub snapshots: u32,
-    /// Ridgeline's own memory, MB (its heap and its GPU tile buffer): sizes
-    /// the node atlas, the staging copy and the GPU buffer at start. A small
-    /// budget draws coarser tiles, never holes. Unset: sized for the view.
-    /// Not yet the default: the atlas counts every slot at the largest node
-    /// mesh, so 64 MB holds 25 nodes where the default flight wants 200.
-    #[arg(long)]
-    pub memory_mb: Option<u32>,
+    /// Ridgeline's own memory, MB (its heap and its GPU buffers, headless
+    /// snapshots included): sizes the node atlas (counted in bytes), the
+    /// loader, the staging copy and the GPU buffer at start. A budget too
+    /// small for the view draws coarser data, never holes, and the summary
+    /// and stats.json say the bound was loosened. 0: no budget, sized for
+    /// the view (every atlas slot holds the largest node; 276 MB on the
+    /// default flight).
+    #[arg(long, default_value_t = 64)]
+    pub memory_mb: u32,
 }
-/// The smallest and largest `--memory-mb`.
+/// The smallest and largest `--memory-mb` (besides 0, no budget).
 const MEMORY_MB_RANGE: std::ops::RangeInclusive<u32> = 4..=65_536;
 /// The frame rate a window is taken to keep for the valid life's declared travel.
 const WINDOW_RATE_HZ: f64 = 10.0;
+
+impl FlyArgs {
+    /// `--memory-mb`, `None` for 0 (no budget).
+    fn memory(&self) -> Option<u32> {
+        Some(self.memory_mb).filter(|&mb| mb > 0)
+    }
+}
 
 pub fn run(args: &FlyArgs) -> Result<()> {
     args.view.check()?;
@@ -69,7 +78,7 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     {
         bail!("--warning-above and --caution-below must be finite metres, the caution band not negative");
     }
-    if let Some(mb) = args.memory_mb.filter(|mb| !MEMORY_MB_RANGE.contains(mb)) {
+    if let Some(mb) = args.memory().filter(|mb| !MEMORY_MB_RANGE.contains(mb)) {
         bail!(
             "--memory-mb {mb} must be between {} and {} MB",
             MEMORY_MB_RANGE.start(),
@@ -85,7 +94,7 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     let (source, summary) = (terrain.source, terrain.summary);
     let mut config = DisplayConfig::new(args.backend, args.view.size);
     config.scene.horizon_culling = gapless;
-    config.memory_budget_bytes = args.memory_mb.map(|mb| display_budget(args, mb)).transpose()?;
+    config.memory_budget_bytes = args.memory().map(|mb| display_budget(args, mb)).transpose()?;
     config.version = if args.es2 { GlesVersion::Es2 } else { GlesVersion::Es3 };
     config.scene.warning_above_m = args.warning_above;
     config.scene.caution_below_m = args.caution_below;
@@ -121,7 +130,7 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     } else {
         fly_headless(args, &mut display, &path)?
     };
-    let memory = memory_report(args, &display);
+    let memory = memory_report(args, &display, &rows);
     if info.backend != OpenedBackend::Window {
         let travel = config.scene.lod.max_travel_m;
         write_stats(args, &info, &dataset_name, &rows, &memory, travel)?;
@@ -132,9 +141,9 @@ pub fn run(args: &FlyArgs) -> Result<()> {
 const MB: u64 = 1 << 20;
 
 /// Heap a headless snapshot takes while it is read back and encoded (the
-/// image, its flipped copy, the PNG encoder's buffers), per pixel: measured
-/// 8.9 MB at 1280x720.
-const SNAPSHOT_BYTES_PER_PIXEL: u64 = 12;
+/// image, flipped in place, and the PNG encoder's buffers), per pixel:
+/// measured 5.3 MB at 1280x720 (6 bytes a pixel).
+const SNAPSHOT_BYTES_PER_PIXEL: u64 = 8;
 
 /// The part of `--memory-mb` the display gets: all of it, less what a
 /// headless run's snapshots take.
@@ -169,8 +178,12 @@ struct MemoryReport {
     gpu_buffer_bytes: u64,
     /// Heap peak plus GPU buffer: what the budget bounds.
     own_bytes: u64,
-    /// Node atlas slots the budget allowed.
-    atlas_slots: u32,
+    /// The most bytes the atlas's nodes may take (null: no budget).
+    atlas_budget_bytes: Option<u64>,
+    /// The most the atlas's nodes took in a frame.
+    atlas_peak_bytes: u64,
+    /// How the budget was shared (null: no budget).
+    plan: Option<ridgeline::pipeline::MemoryPlan>,
     /// The process's peak and current resident memory (VmHWM, VmRSS).
     resident_peak_bytes: u64,
     resident_bytes: u64,
@@ -180,20 +193,26 @@ struct MemoryReport {
     driver_and_rest_bytes: u64,
 }
 
-fn memory_report(args: &FlyArgs, display: &Display) -> MemoryReport {
+fn memory_report(args: &FlyArgs, display: &Display, rows: &[Row]) -> MemoryReport {
     let pipeline = display.pipeline();
     let heap_peak_bytes = super::heap::peak() as u64;
-    let gpu_buffer_bytes = pipeline.scene().config().buffer_bytes as u64;
+    let config = pipeline.scene().config();
+    // With clusters the GPU holds the cluster vertex buffer and its index
+    // buffer at half the size, and not the tile buffer.
+    let copies = if config.clusters { 1.5 } else { 1.0 };
+    let gpu_buffer_bytes = (config.buffer_bytes as f64 * copies) as u64;
     let (resident_peak_bytes, resident_bytes) = super::heap::resident().unwrap_or((0, 0));
     let plan = pipeline.memory_plan();
     MemoryReport {
-        budget_bytes: args.memory_mb.map(|mb| mb as u64 * MB),
+        budget_bytes: args.memory().map(|mb| mb as u64 * MB),
         display_budget_bytes: plan.map_or(0, |p| p.budget_bytes),
         heap_peak_bytes,
         heap_bytes: super::heap::in_use() as u64,
         gpu_buffer_bytes,
         own_bytes: heap_peak_bytes + gpu_buffer_bytes,
-        atlas_slots: pipeline.clipmap().atlas().slot_count(),
+        atlas_budget_bytes: pipeline.clipmap().atlas().byte_budget(),
+        atlas_peak_bytes: rows.iter().map(|r| r.stats.atlas_bytes).max().unwrap_or(0),
+        plan,
         resident_peak_bytes,
         resident_bytes,
         driver_and_rest_bytes: resident_peak_bytes.saturating_sub(heap_peak_bytes),
@@ -286,6 +305,10 @@ fn write_stats(
                 "allocator_workspace_bytes": s.scene.allocator_workspace_bytes,
                 "resident_nodes": s.resident_nodes,
                 "nodes_loaded": s.nodes_loaded,
+                "nodes_over_budget": s.nodes_over_budget,
+                "atlas_bytes": s.atlas_bytes,
+                "fallback_tiles": s.scene.fallback_tiles,
+                "bound_px": s.scene.bound_px,
                 "coarsened": s.scene.coarsened,
                 "culled": s.scene.culled,
                 "horizon_culled": s.scene.horizon_culled,
@@ -406,11 +429,12 @@ fn print_summary(rows: &[Row], memory: &MemoryReport) -> Result<()> {
         memory.budget_bytes.map_or("no budget".to_string(), |b| format!("of {:.0} MB", mb(b)));
     writeln!(
         out,
-        "  memory            own {:.1} MB {budget} (heap peak {:.1}, GPU buffer {:.1}); \
-         resident peak {:.1} MB, of which the driver and the rest {:.1} MB",
+        "  memory            own {:.1} MB {budget} (heap peak {:.1}, GPU buffer {:.1}, nodes \
+         {:.1}); resident peak {:.1} MB, of which the driver and the rest {:.1} MB",
         mb(memory.own_bytes),
         mb(memory.heap_peak_bytes),
         mb(memory.gpu_buffer_bytes),
+        mb(memory.atlas_peak_bytes),
         mb(memory.resident_peak_bytes),
         mb(memory.driver_and_rest_bytes)
     )?;
@@ -419,26 +443,37 @@ fn print_summary(rows: &[Row], memory: &MemoryReport) -> Result<()> {
     super::print(&out)
 }
 
-/// The tau line: the bound asked for and, when a budget loosened it, on
-/// how many frames and how far. A loosened bound is never left unsaid.
+/// The tau line: the bound asked for and, when it was loosened (by a
+/// frame budget, or by tiles drawn from coarser data than their level's
+/// while nodes page in or stay out of the memory budget), on how many
+/// frames and how far. A loosened bound is never left unsaid.
 fn write_tau(out: &mut String, rows: &[Row]) -> Result<()> {
     use std::fmt::Write as _;
     let requested = rows[0].stats.tau_requested_px;
     let loosened = rows.iter().filter(|r| r.stats.tau_loosened()).count();
-    let mut taus: Vec<f64> = rows.iter().map(|r| r.stats.scene.tau_px).collect();
-    taus.sort_by(f64::total_cmp);
+    let mut bounds: Vec<f64> = rows.iter().map(|r| r.stats.scene.bound_px).collect();
+    bounds.sort_by(f64::total_cmp);
     if loosened == 0 {
         writeln!(out, "  tau               {requested} px on every frame (as requested)")?;
-    } else {
-        writeln!(
-            out,
-            "  tau               LOOSENED on {loosened} of {} frames: requested {requested} px, \
-             achieved p50 {:.2}, max {:.2} px (the bound the display held)",
-            rows.len(),
-            taus[taus.len() / 2],
-            taus[taus.len() - 1]
-        )?;
+        return Ok(());
     }
+    let raised = rows.iter().filter(|r| r.stats.scene.tau_px > requested).count();
+    let full = rows.iter().filter(|r| r.stats.scene.coarsened > 0).count();
+    let fallback = rows.iter().filter(|r| r.stats.scene.fallback_tiles > 0).count();
+    writeln!(
+        out,
+        "  tau               LOOSENED on {loosened} of {} frames: requested {requested} px, \
+         achieved p50 {:.2}, max {:.2} px (the bound the display held)",
+        rows.len(),
+        bounds[bounds.len() / 2],
+        bounds[bounds.len() - 1]
+    )?;
+    writeln!(
+        out,
+        "                    selected above tau on {raised} frames ({full} for a full tile \
+         buffer, the rest for the frame budget); coarser data drawn on {fallback} (nodes paging \
+         in, or left out by the memory budget)"
+    )?;
     Ok(())
 }
 

@@ -4,9 +4,18 @@
 //! resident as a cache, listed least recently used first and reused in that
 //! order once the empty slots are gone).
 //!
-//! All memory is taken at construction: every slot's height buffer holds a
-//! whole node, the id -> slot map has room for twice the slots (so removals'
-//! tombstones never make it grow), and the LRU list is intrusive.
+//! Counted in slots, all memory is taken at construction: every slot's
+//! height buffer holds a whole node, the id -> slot map has room for twice
+//! the slots (so removals' tombstones never make it grow), and the LRU list
+//! is intrusive.
+//!
+//! Counted in bytes (a memory budget), slots start without buffers and the
+//! atlas holds at most its byte budget of node buffers, each counted at its
+//! own size ([`NodeData::heap_bytes`]): a node is refused when the resident
+//! nodes no view wants cannot make room for it, and as many of those as it
+//! takes are evicted, least recently used first, their buffers freed. Node
+//! meshes differ threefold in size, so counting every slot at the largest
+//! would hold a third of the nodes the same memory can.
 
 use super::hash::{node_map, NodeMap};
 use super::lru::SlotList;
@@ -32,6 +41,8 @@ struct Slot {
     state: SlotState,
     /// The last frame a view wanted the node.
     last_used: u64,
+    /// Heap of `data` while resident, bytes (0 when empty).
+    bytes: u64,
 }
 
 /// Where [`NodeAtlas::insert`] put a node.
@@ -53,27 +64,80 @@ pub struct NodeAtlas {
     unused: SlotList,
     /// Nodes inserted or evicted since the last [`NodeAtlas::clear_changes`].
     changes: Vec<NodeId>,
+    /// The most bytes the resident nodes may take; `None`: counted in slots.
+    byte_budget: Option<u64>,
+    /// Bytes of the resident nodes (pinned, used and unused).
+    resident_bytes: u64,
+    /// Bytes of the unused ones: what eviction can free.
+    unused_bytes: u64,
+    /// Bytes of the pinned ones.
+    pinned_bytes: u64,
 }
 
 impl NodeAtlas {
-    /// An atlas of `slot_count` empty slots; `changes_per_frame` sizes the
+    /// An atlas of `slot_count` empty slots, holding at most `byte_budget`
+    /// bytes of nodes when one is given; `changes_per_frame` sizes the
     /// change list (two per insertion: the node and the one it evicts).
-    pub(crate) fn new(slot_count: u32, layout: &NodeLayout, changes_per_frame: usize) -> Self {
+    pub(crate) fn new(
+        slot_count: u32,
+        layout: &NodeLayout,
+        changes_per_frame: usize,
+        byte_budget: Option<u64>,
+    ) -> Self {
+        let buffer = || match byte_budget {
+            None => NodeData::with_capacity(layout),
+            // Buffers come with the nodes read into them.
+            Some(_) => NodeData::default(),
+        };
         let slots = (0..slot_count)
             .map(|_| Slot {
                 node: None,
-                data: NodeData::with_capacity(layout),
+                data: buffer(),
                 state: SlotState::Empty,
                 last_used: 0,
+                bytes: 0,
             })
             .collect();
+        // Bytes evict as many nodes as it takes, each a change.
+        let changes = changes_per_frame + byte_budget.map_or(0, |_| slot_count as usize);
         NodeAtlas {
             slots,
             index: node_map(2 * slot_count as usize),
             free: (0..slot_count).rev().collect(),
             unused: SlotList::new(slot_count),
-            changes: Vec::with_capacity(changes_per_frame),
+            changes: Vec::with_capacity(changes),
+            byte_budget,
+            resident_bytes: 0,
+            unused_bytes: 0,
+            pinned_bytes: 0,
         }
+    }
+
+    /// The most bytes the resident nodes may take, when counted in bytes.
+    pub fn byte_budget(&self) -> Option<u64> {
+        self.byte_budget
+    }
+
+    /// Bytes the resident nodes' buffers take.
+    pub fn resident_bytes(&self) -> u64 {
+        self.resident_bytes
+    }
+
+    /// Bytes the pinned nodes take: never evicted, always counted.
+    pub fn pinned_bytes(&self) -> u64 {
+        self.pinned_bytes
+    }
+
+    /// Bytes the node in `slot` takes (0 when empty).
+    pub fn bytes_in(&self, slot: u32) -> u64 {
+        self.slots[slot as usize].bytes
+    }
+
+    /// Bytes a new node may take now, evicting unused ones: `None` when
+    /// counted in slots.
+    pub fn byte_room(&self) -> Option<u64> {
+        let budget = self.byte_budget?;
+        Some((budget + self.unused_bytes).saturating_sub(self.resident_bytes))
     }
 
     /// Slots in the atlas, resident or not.
@@ -126,7 +190,10 @@ impl NodeAtlas {
         let entry = &mut self.slots[slot as usize];
         match entry.state {
             SlotState::Pinned => return,
-            SlotState::Unused => self.unused.remove(slot),
+            SlotState::Unused => {
+                self.unused.remove(slot);
+                self.unused_bytes -= entry.bytes;
+            }
             SlotState::Used => {}
             SlotState::Empty => unreachable!("slot {slot} is empty but indexed"),
         }
@@ -142,13 +209,16 @@ impl NodeAtlas {
             if entry.state == SlotState::Used && entry.last_used < frame {
                 entry.state = SlotState::Unused;
                 self.unused.push_back(slot);
+                self.unused_bytes += entry.bytes;
             }
         }
     }
 
     /// Makes `id` resident with the heights in `data`, taking an empty slot,
     /// else the least recently used unused one. The slot's previous buffer is
-    /// swapped into `data` for reuse. `None` when every slot is in use.
+    /// swapped into `data` for reuse. `None` when every slot is in use, or
+    /// when counted in bytes and the unused nodes cannot make room (pinned
+    /// nodes are always taken: without the root level there is no display).
     pub(crate) fn insert(
         &mut self,
         id: NodeId,
@@ -158,9 +228,23 @@ impl NodeAtlas {
     ) -> Option<Insertion> {
         debug_assert!(matches!(state, SlotState::Pinned | SlotState::Used));
         debug_assert!(!self.index.contains_key(&id), "{id:?} is already resident");
-        let slot = self.free.pop().or_else(|| self.unused.pop_front())?;
+        let bytes = data.heap_bytes();
+        let fits = self.byte_room().is_none_or(|room| bytes <= room);
+        if !fits && state != SlotState::Pinned {
+            return None;
+        }
+        let slot = match self.free.pop() {
+            Some(slot) => slot,
+            None => {
+                let slot = self.unused.pop_front()?;
+                self.unused_bytes -= self.slots[slot as usize].bytes;
+                slot
+            }
+        };
         let entry = &mut self.slots[slot as usize];
         let evicted = entry.node.replace(id);
+        self.resident_bytes = self.resident_bytes - entry.bytes + bytes;
+        entry.bytes = bytes;
         if let Some(old) = evicted {
             self.index.remove(&old);
             self.changes.push(old);
@@ -169,9 +253,32 @@ impl NodeAtlas {
         std::mem::swap(&mut entry.data, data);
         entry.state = state;
         entry.last_used = frame;
+        if state == SlotState::Pinned {
+            self.pinned_bytes += bytes;
+        }
         self.index.insert(id, slot);
         self.changes.push(id);
+        self.evict_over_budget();
         Some(Insertion { slot, evicted })
+    }
+
+    /// Counted in bytes: evicts unused nodes, least recently used first,
+    /// freeing their buffers, until the resident ones fit the budget.
+    fn evict_over_budget(&mut self) {
+        let Some(budget) = self.byte_budget else { return };
+        while self.resident_bytes > budget {
+            let Some(slot) = self.unused.pop_front() else { return };
+            let entry = &mut self.slots[slot as usize];
+            let old = entry.node.take().expect("unused slots hold a node");
+            self.resident_bytes -= entry.bytes;
+            self.unused_bytes -= entry.bytes;
+            entry.bytes = 0;
+            entry.data = NodeData::default();
+            entry.state = SlotState::Empty;
+            self.index.remove(&old);
+            self.free.push(slot);
+            self.changes.push(old);
+        }
     }
 
     /// Orders the changes coarsest first (so refreshing their footprints in
@@ -224,6 +331,20 @@ impl NodeAtlas {
         if counts[SlotState::Unused as usize] != self.unused.len() {
             return Err("the LRU list's length disagrees with the unused slots".into());
         }
+        let held = |unused_only: bool| -> u64 {
+            let counted =
+                |e: &&Slot| e.node.is_some() && (!unused_only || e.state == SlotState::Unused);
+            self.slots.iter().filter(counted).map(|e| e.bytes).sum()
+        };
+        if held(false) != self.resident_bytes || held(true) != self.unused_bytes {
+            return Err(format!(
+                "resident bytes {} (counted {}), unused {} (counted {})",
+                held(false),
+                self.resident_bytes,
+                held(true),
+                self.unused_bytes
+            ));
+        }
         let in_order =
             self.lru().zip(self.lru().skip(1)).all(|(a, b)| self.last_used(a) <= self.last_used(b));
         if !in_order {
@@ -247,7 +368,7 @@ mod tests {
 
     #[test]
     fn reuses_empty_slots_then_the_least_recently_used() {
-        let mut atlas = NodeAtlas::new(4, &layout(), 8);
+        let mut atlas = NodeAtlas::new(4, &layout(), 8, None);
         let root = NodeId::new(3, 0, 0);
         let ids: Vec<NodeId> = (0..5).map(|x| NodeId::new(0, x, 0)).collect();
         atlas.insert(root, &mut node(9.0), SlotState::Pinned, 0).unwrap();
@@ -290,5 +411,83 @@ mod tests {
         atlas.clear_changes();
         assert!(atlas.changes().is_empty());
         atlas.check().unwrap();
+    }
+
+    fn sized(bytes: usize) -> NodeData {
+        let mut data = NodeData { heights: Vec::with_capacity(bytes / 4), ..NodeData::default() };
+        data.heights.resize(bytes / 4, 0.0);
+        data
+    }
+
+    #[test]
+    fn a_byte_budget_evicts_unused_nodes_until_a_new_one_fits() {
+        let mut atlas = NodeAtlas::new(8, &layout(), 8, Some(1000));
+        let ids: Vec<NodeId> = (0..4).map(|x| NodeId::new(0, x, 0)).collect();
+        for &id in &ids[..3] {
+            atlas.insert(id, &mut sized(300), SlotState::Used, 1).unwrap();
+        }
+        assert_eq!(atlas.resident_bytes(), 900);
+        // All in use: a fourth does not fit, though slots are free.
+        assert_eq!(atlas.insert(ids[3], &mut sized(300), SlotState::Used, 1), None);
+        // Frame 2 wants only the last two: the first is evicted for the fourth.
+        for &id in &ids[1..3] {
+            atlas.mark_used(atlas.slot_of(id).unwrap(), 2);
+        }
+        atlas.release_unused(2);
+        assert_eq!(atlas.byte_room(), Some(400));
+        let mut big = sized(400);
+        assert!(atlas.insert(ids[3], &mut big, SlotState::Used, 2).is_some());
+        assert_eq!(atlas.slot_of(ids[0]), None, "evicted for room");
+        assert_eq!(atlas.resident_bytes(), 1000);
+        atlas.check().unwrap();
+    }
+
+    proptest::proptest! {
+        /// Against a model of what is resident and wanted: the byte budget
+        /// is never exceeded, a node is refused exactly when the unused
+        /// nodes cannot make room, only unused nodes are evicted, and the
+        /// invariants hold after every step.
+        #[test]
+        fn a_byte_budget_holds_against_a_model(
+            steps in proptest::collection::vec((0u32..12, 1usize..100, proptest::bool::ANY), 1..80),
+        ) {
+            const BUDGET: u64 = 1000;
+            let mut atlas = NodeAtlas::new(6, &layout(), 16, Some(BUDGET));
+            let mut frame = 1;
+            for (x, words, next_frame) in steps {
+                let id = NodeId::new(0, x, 0);
+                if next_frame {
+                    // A new frame wants the nodes of even x.
+                    frame += 1;
+                    for x in (0..12).step_by(2) {
+                        if let Some(slot) = atlas.slot_of(NodeId::new(0, x, 0)) {
+                            atlas.mark_used(slot, frame);
+                        }
+                    }
+                    atlas.release_unused(frame);
+                }
+                if atlas.slot_of(id).is_some() {
+                    continue;
+                }
+                let used: Vec<NodeId> = (0..12)
+                    .map(|x| NodeId::new(0, x, 0))
+                    .filter(|&n| atlas.slot_of(n).is_some_and(|s| atlas.state(s) == SlotState::Used))
+                    .collect();
+                let bytes = words as u64 * 4 * 4;
+                let room = BUDGET + unused_bytes(&atlas) - atlas.resident_bytes();
+                let slots = atlas.available() > 0;
+                let inserted = atlas.insert(id, &mut sized(bytes as usize), SlotState::Used, frame);
+                proptest::prop_assert_eq!(inserted.is_some(), bytes <= room && slots);
+                proptest::prop_assert!(atlas.resident_bytes() <= BUDGET);
+                for n in used {
+                    proptest::prop_assert!(atlas.slot_of(n).is_some(), "{:?} was in use", n);
+                }
+                proptest::prop_assert_eq!(atlas.check(), Ok(()));
+            }
+        }
+    }
+
+    fn unused_bytes(atlas: &NodeAtlas) -> u64 {
+        atlas.lru().map(|slot| atlas.bytes_in(slot)).sum()
     }
 }

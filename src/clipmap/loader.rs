@@ -130,10 +130,14 @@ pub(crate) struct Loader {
     given_up: NodeSet,
     worker: Option<Worker>,
     pool: usize,
+    /// Fit each buffer read to its node (an atlas counted in bytes).
+    fit: bool,
 }
 
 impl Loader {
-    pub fn new(source: Arc<dyn NodeSource>, mode: LoaderMode) -> std::io::Result<Self> {
+    /// A loader over `source`; with `fit`, each buffer read is fitted to
+    /// its node ([`NodeData::fit`]) for an atlas counted in bytes.
+    pub fn new(source: Arc<dyn NodeSource>, mode: LoaderMode, fit: bool) -> std::io::Result<Self> {
         let layout: NodeLayout = *source.layout();
         let pool = match mode {
             LoaderMode::Inline => 1,
@@ -143,7 +147,7 @@ impl Loader {
         let worker = match mode {
             LoaderMode::Inline => None,
             LoaderMode::Thread { queue } => {
-                Some(spawn(source.clone(), queue, pool, cancel.clone())?)
+                Some(spawn(source.clone(), queue, pool, cancel.clone(), fit)?)
             }
         };
         Ok(Loader {
@@ -156,6 +160,7 @@ impl Loader {
             given_up: node_set(RETRY_TABLE),
             worker,
             pool,
+            fit,
         })
     }
 
@@ -169,6 +174,11 @@ impl Loader {
 
     pub fn in_flight(&self) -> u32 {
         self.in_flight.len() as u32
+    }
+
+    /// The nodes with the loader thread.
+    pub fn in_flight_ids(&self) -> impl Iterator<Item = NodeId> + '_ {
+        self.in_flight.keys().copied()
     }
 
     /// Whether `id` may be requested in `frame`: not loading, not given up,
@@ -187,10 +197,7 @@ impl Loader {
     /// Reads `id` on this thread into a spare buffer.
     pub fn load_now(&mut self, id: NodeId) -> Loaded {
         let mut data = self.spare.pop().expect("the inline loader's buffer is out");
-        let outcome = match self.source.read_node(id, &mut data) {
-            Ok(()) => Outcome::Read,
-            Err(error) => Outcome::Failed(error),
-        };
+        let outcome = read(self.source.as_ref(), id, &mut data, self.fit);
         Loaded { id, data, outcome }
     }
 
@@ -291,6 +298,19 @@ impl Loader {
     }
 }
 
+/// Reads `id` into `data`, fitting its buffers to it when `fit`.
+fn read(source: &dyn NodeSource, id: NodeId, data: &mut NodeData, fit: bool) -> Outcome {
+    match source.read_node(id, data) {
+        Ok(()) => {
+            if fit {
+                data.fit();
+            }
+            Outcome::Read
+        }
+        Err(error) => Outcome::Failed(error),
+    }
+}
+
 /// The loader thread has stopped.
 #[derive(Debug)]
 pub(crate) struct LoaderStopped;
@@ -300,6 +320,7 @@ fn spawn(
     queue: usize,
     pool: usize,
     cancel: Arc<[AtomicBool]>,
+    fit: bool,
 ) -> std::io::Result<Worker> {
     let (request_tx, request_rx) = mpsc::sync_channel::<Request>(queue);
     let (result_tx, result_rx) = mpsc::sync_channel::<Loaded>(pool);
@@ -314,10 +335,7 @@ fn spawn(
                 let outcome = if cancel[ticket].load(Ordering::Acquire) {
                     Outcome::Cancelled
                 } else {
-                    match source.read_node(id, &mut data) {
-                        Ok(()) => Outcome::Read,
-                        Err(error) => Outcome::Failed(error),
-                    }
+                    read(source.as_ref(), id, &mut data, fit)
                 };
                 if result_tx.send(Loaded { id, data, outcome }).is_err() {
                     break;

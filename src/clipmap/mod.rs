@@ -48,6 +48,9 @@ use loader::{Loaded, Loader, Outcome, Verdict};
 pub struct ClipmapConfig {
     /// Slots in the node atlas; must exceed the root level's node count.
     pub atlas_slots: u32,
+    /// The most bytes the atlas's nodes may take (a memory budget), each
+    /// counted at its own size; `None`: counted in slots only.
+    pub atlas_bytes: Option<u64>,
     /// Most finished loads copied into the atlas per frame.
     pub budget: u32,
     /// Whether nodes are read inline or on a loader thread.
@@ -191,6 +194,10 @@ pub struct ClipmapStats {
     pub cancelled: u32,
     /// Requests still with the loader thread after the frame.
     pub in_flight: u32,
+    /// Missing nodes not requested because the atlas's byte budget has no
+    /// room for them, even by evicting every unused node: the views draw
+    /// their ancestors (coarser, never holes).
+    pub over_budget: u32,
 }
 
 /// A node not resident but wanted, with its priority.
@@ -236,7 +243,7 @@ impl Clipmap {
             return Err(ClipmapError::ZeroQueue);
         }
         let changes = 2 * config.budget as usize + roots as usize;
-        let mut atlas = NodeAtlas::new(config.atlas_slots, &layout, changes);
+        let mut atlas = NodeAtlas::new(config.atlas_slots, &layout, changes, config.atlas_bytes);
         let mut buffer = NodeData::with_capacity(&layout);
         for y in 0..ry {
             for x in 0..rx {
@@ -246,7 +253,9 @@ impl Clipmap {
             }
         }
         atlas.clear_changes(); // no view yet; each new view refreshes fully
-        let loader = Loader::new(source.clone(), config.loader).map_err(ClipmapError::Spawn)?;
+        let fit = config.atlas_bytes.is_some();
+        let loader =
+            Loader::new(source.clone(), config.loader, fit).map_err(ClipmapError::Spawn)?;
         Ok(Clipmap {
             source,
             layout,
@@ -357,6 +366,10 @@ impl Clipmap {
     /// the missing ones by priority.
     fn compare_with_atlas(&mut self, stats: &mut ClipmapStats) {
         self.candidates.clear();
+        stats.wanted = self.wanted.len() as u32;
+        if let Some(budget) = self.atlas.byte_budget() {
+            return self.compare_within_bytes(budget, stats);
+        }
         for (&id, &distance_m) in &self.wanted {
             match self.atlas.slot_of(id) {
                 Some(slot) => self.atlas.mark_used(slot, self.frame),
@@ -376,15 +389,70 @@ impl Clipmap {
                 .then(a.distance_m.total_cmp(&b.distance_m))
                 .then(a.id.cmp(&b.id))
         });
-        stats.wanted = self.wanted.len() as u32;
+    }
+
+    /// Step 2 with a byte budget: the wanted nodes in order of the error
+    /// their absence would draw (their size over their distance: a missing
+    /// node's tiles fall back to its parent, whose error is about twice
+    /// its own), kept while they fit `budget` bytes beside the pinned
+    /// nodes. Resident ones kept are marked used; those past the budget
+    /// are not, so they become unused and are evicted first; missing ones
+    /// kept become candidates, the others are counted as over budget.
+    /// Coarsest-first, as without a budget, would spend the budget on far
+    /// coarse nodes and leave out the finest under the camera.
+    fn compare_within_bytes(&mut self, budget: u64, stats: &mut ClipmapStats) {
+        let layout = self.layout;
+        let wanted = self.wanted.iter().map(|(&id, &distance_m)| Candidate { id, distance_m });
+        self.candidates.extend(wanted);
+        let priority = |c: &Candidate| layout.span(c.id.level) as f64 / c.distance_m.max(1.0);
+        self.candidates
+            .sort_unstable_by(|a, b| priority(b).total_cmp(&priority(a)).then(a.id.cmp(&b.id)));
+        let mut left = budget.saturating_sub(self.atlas.pinned_bytes());
+        let mut kept = 0;
+        let mut full = false;
+        for index in 0..self.candidates.len() {
+            let candidate = self.candidates[index];
+            let slot = self.atlas.slot_of(candidate.id);
+            if slot.is_none() {
+                stats.missing += 1;
+            }
+            if full {
+                stats.over_budget += slot.is_none() as u32;
+                continue;
+            }
+            let bytes = match slot {
+                Some(slot) if self.atlas.state(slot) == SlotState::Pinned => 0,
+                Some(slot) => self.atlas.bytes_in(slot),
+                None => self.source.node_bytes_of(candidate.id),
+            };
+            if bytes > left {
+                // Priority order: what does not fit holds back the rest.
+                full = true;
+                stats.over_budget += slot.is_none() as u32;
+                continue;
+            }
+            left -= bytes;
+            match slot {
+                Some(slot) => self.atlas.mark_used(slot, self.frame),
+                None if self.loader.may_request(candidate.id, self.frame) => {
+                    self.candidates[kept] = candidate;
+                    kept += 1;
+                }
+                None => {}
+            }
+        }
+        self.candidates.truncate(kept);
+        self.atlas.release_unused(self.frame);
     }
 
     /// Steps 2 (requests) and 3: loads missing nodes, at most as many as
-    /// the atlas can take and, per frame, at most `budget` applied.
+    /// the atlas can take (in slots, and in bytes with a budget) and, per
+    /// frame, at most `budget` applied.
     fn load(&mut self, stats: &mut ClipmapStats) -> Result<(), ClipmapError> {
         let room = self.atlas.available().saturating_sub(self.loader.in_flight()) as usize;
+        let count = self.fitting(room);
         if self.loader.is_threaded() {
-            for index in 0..self.candidates.len().min(room) {
+            for index in 0..count {
                 if !self.loader.request(self.candidates[index].id) {
                     break;
                 }
@@ -398,13 +466,34 @@ impl Clipmap {
                 }
             }
         } else {
-            let count = room.min(self.config.budget as usize).min(self.candidates.len());
-            for index in 0..count {
+            for index in 0..count.min(self.config.budget as usize) {
                 let loaded = self.loader.load_now(self.candidates[index].id);
                 self.apply(loaded, stats);
             }
         }
         Ok(())
+    }
+
+    /// How many of the candidates, in priority order, to request: at most
+    /// `room` slots, and with a byte budget as many as its room holds once
+    /// the loads under way arrive (each counted at
+    /// [`NodeSource::node_bytes_of`]).
+    fn fitting(&self, room: usize) -> usize {
+        let count = room.min(self.candidates.len());
+        let Some(bytes) = self.atlas.byte_room() else { return count };
+        let source = self.source.as_ref();
+        let coming: u64 = self.loader.in_flight_ids().map(|id| source.node_bytes_of(id)).sum();
+        let mut left = bytes.saturating_sub(coming);
+        for (index, candidate) in self.candidates[..count].iter().enumerate() {
+            let need = source.node_bytes_of(candidate.id);
+            if need > left {
+                // Priority order: a node that does not fit (until unused
+                // ones are evicted or loads arrive) holds back the rest.
+                return index;
+            }
+            left -= need;
+        }
+        count
     }
 
     /// Copies a finished load into the atlas if it is still wanted; a failed

@@ -33,8 +33,9 @@ const BUDGET_FRAMES: u32 = 40;
 pub struct ViewRow {
     /// Time along the flight path, seconds.
     pub t: f64,
-    /// The tau the view's tiles were selected with, pixels: above the
-    /// requested one when a frame budget loosened it.
+    /// The bound the view achieved, pixels ([`crate::scene::SceneStats::bound_px`]):
+    /// above the requested tau when a frame budget loosened it or tiles
+    /// were drawn from coarser data than their level's.
     pub tau_px: f64,
     /// Percentiles of this view's per-pixel error, pixels.
     #[serde(flatten)]
@@ -98,10 +99,11 @@ pub struct AccuracyRun {
     pub tau_px: f64,
     /// Where the full-resolution image came from ([`Truth::route`]).
     pub truth: &'static str,
-    /// The largest tau any view was selected with, pixels (a frame budget
-    /// may raise it above `tau_px`): the bound the measured error is held to.
+    /// The largest bound any view achieved, pixels (a frame budget, or
+    /// tiles drawn from coarser data than their level's, may raise it above
+    /// `tau_px`): the bound the measured error is held to.
     pub tau_achieved_max_px: f64,
-    /// Views selected with a tau above the requested.
+    /// Views whose bound was above the requested tau.
     pub tau_loosened_views: usize,
     /// Over every terrain pixel of every view.
     pub summary: ErrorSummary,
@@ -287,7 +289,7 @@ fn measure_one(
     }
     Ok(ViewRow {
         t,
-        tau_px: lod_stats.scene.tau_px,
+        tau_px: lod_stats.scene.bound_px,
         errors: ErrorSummary::of(&mut view_errors),
         coverage_mismatch: (errors.lod_only + errors.truth_only + errors.no_data) as f64
             / errors.errors_px.len().max(1) as f64,

@@ -115,7 +115,7 @@ pub(crate) fn read_positions(gl: &Gl, size: UVec2, out: &mut Vec<[f32; 4]>) -> R
 #[allow(unsafe_code)]
 pub(crate) fn read_rgba(gl: &Gl, size: UVec2) -> Result<RgbaImage, GlError> {
     let row_bytes = size.x as usize * 4;
-    let mut bottom_up = vec![0u8; row_bytes * size.y as usize];
+    let mut pixels = vec![0u8; row_bytes * size.y as usize];
     // SAFETY: RGBA/UNSIGNED_BYTE with pack alignment 1 writes exactly
     // width * height * 4 bytes, the length of `bottom_up`; sizes come from a
     // target the GL accepted, so they fit GLsizei.
@@ -128,13 +128,18 @@ pub(crate) fn read_rgba(gl: &Gl, size: UVec2) -> Result<RgbaImage, GlError> {
             size.y as i32,
             glow::RGBA,
             glow::UNSIGNED_BYTE,
-            glow::PixelPackData::Slice(Some(&mut bottom_up)),
+            glow::PixelPackData::Slice(Some(&mut pixels)),
         );
     }
     gl_check!(gl)?;
-    let top_down: Vec<u8> =
-        bottom_up.chunks_exact(row_bytes.max(1)).rev().flatten().copied().collect();
-    RgbaImage::from_raw(size.x, size.y, top_down).ok_or_else(|| {
+    // GL's rows run bottom up; flipped in place, so a read-back takes one
+    // image's heap (a memory budget counts snapshots).
+    let rows = size.y as usize;
+    for y in 0..rows / 2 {
+        let (top, bottom) = pixels.split_at_mut((rows - 1 - y) * row_bytes);
+        top[y * row_bytes..(y + 1) * row_bytes].swap_with_slice(&mut bottom[..row_bytes]);
+    }
+    RgbaImage::from_raw(size.x, size.y, pixels).ok_or_else(|| {
         GlError::InvalidRequest(format!("read-back of {}x{} pixels", size.x, size.y))
     })
 }

@@ -116,6 +116,11 @@ impl TileSelector {
         self.horizon_culled
     }
 
+    /// The last selection.
+    pub fn selected(&self) -> &[SelectedTile] {
+        &self.selected
+    }
+
     /// Selects the tiles for `view` over `terrain`; the result is valid until
     /// the next call.
     pub fn select(&mut self, view: &View<'_>, terrain: &dyn TileBounds) -> &[SelectedTile] {

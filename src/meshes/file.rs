@@ -232,20 +232,26 @@ impl MeshFile {
     /// The heap, bytes, the largest mesh of the file takes once read
     /// (its vertices and indices; [`MeshFile::read`] reserves exactly).
     pub fn largest_mesh_bytes(&self) -> u64 {
+        (0..self.nodes as usize).map(|index| self.entry_bytes(index)).max().unwrap_or(0)
+    }
+
+    /// The heap, bytes, node `id`'s mesh takes once read; 0 when the file
+    /// has none for it.
+    pub fn mesh_bytes(&self, layout: &NodeLayout, id: NodeId) -> u64 {
+        match layout.node_index(id) {
+            Some(index) if index < self.nodes => self.entry_bytes(index as usize),
+            _ => 0,
+        }
+    }
+
+    fn entry_bytes(&self, index: usize) -> u64 {
+        let at = self.table + index * ENTRY_LEN;
+        let entry = Entry::decode(&self.map[at..at + ENTRY_LEN]);
+        if entry.offset == ABSENT {
+            return 0;
+        }
         let vertex = std::mem::size_of::<MeshVertex>() as u64;
-        (0..self.nodes as usize)
-            .map(|index| {
-                let at = self.table + index * ENTRY_LEN;
-                let entry = Entry::decode(&self.map[at..at + ENTRY_LEN]);
-                let present = entry.offset != ABSENT;
-                if present {
-                    vertex * entry.vertices as u64 + 2 * entry.indices as u64
-                } else {
-                    0
-                }
-            })
-            .max()
-            .unwrap_or(0)
+        vertex * entry.vertices as u64 + 2 * entry.indices as u64
     }
 
     /// What the header says.

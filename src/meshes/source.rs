@@ -78,6 +78,13 @@ impl NodeSource for MeshedSource {
         side * side * std::mem::size_of::<f32>() as u64 + self.file.largest_mesh_bytes()
     }
 
+    /// The heights and the node's own mesh.
+    fn node_bytes_of(&self, id: NodeId) -> u64 {
+        let side = self.pyramid.layout().stored_side() as u64;
+        let heights = side * side * std::mem::size_of::<f32>() as u64;
+        heights + self.file.mesh_bytes(self.pyramid.layout(), id)
+    }
+
     fn exact_height(&self, x_m: f64, y_m: f64) -> Result<f32, NodeError> {
         NodeSource::exact_height(self.pyramid.as_ref(), x_m, y_m)
     }

@@ -13,7 +13,7 @@
 
 mod sizing;
 
-pub use sizing::{clipmap_view, plan_memory, MemoryPlan, MIN_BUDGET_BYTES};
+pub use sizing::{buffer_copies, clipmap_view, plan_memory, MemoryPlan, MIN_BUDGET_BYTES};
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -79,7 +79,7 @@ pub enum PipelineError {
     /// The memory budget is below what the display keeps aside.
     #[error(
         "memory budget {budget} bytes is too small: at least {least} bytes, and room for the \
-         loader and two atlas slots of {node_bytes} bytes (the largest node)"
+         loader's buffers of {node_bytes} bytes (the largest node)"
     )]
     MemoryBudget {
         /// The budget asked for, bytes.
@@ -119,6 +119,10 @@ pub struct FrameStats {
     pub resident_nodes: u32,
     /// Loads copied into the atlas this frame.
     pub nodes_loaded: u32,
+    /// Missing nodes the atlas's byte budget had no room for this frame.
+    pub nodes_over_budget: u32,
+    /// Bytes the atlas's resident nodes take after paging.
+    pub atlas_bytes: u64,
     /// Paging, milliseconds.
     pub clipmap_ms: f64,
     /// Upload, draw and the wait for the backend to finish, milliseconds.
@@ -130,9 +134,10 @@ pub struct FrameStats {
 }
 
 impl FrameStats {
-    /// Whether the frame's bound was loosened: selected with a tau above the requested.
+    /// Whether the frame's bound was loosened: selected with a tau above
+    /// the requested, or drawn in part from coarser data than selected.
     pub fn tau_loosened(&self) -> bool {
-        self.scene.tau_px > self.tau_requested_px
+        self.scene.bound_px > self.tau_requested_px
     }
 }
 
@@ -160,7 +165,7 @@ impl FramePipeline {
         let mut scene_config = config.scene;
         let mut loader = config.loader;
         let memory = match config.memory_budget_bytes {
-            Some(budget) => Some(plan(config, budget, source.node_bytes(), wanted)?),
+            Some(budget) => Some(plan(config, budget, source.node_bytes())?),
             None => None,
         };
         if let Some(plan) = memory {
@@ -170,7 +175,8 @@ impl FramePipeline {
             }
         }
         let clipmap_config = ClipmapConfig {
-            atlas_slots: memory.map_or(wanted, |plan| plan.atlas_slots),
+            atlas_slots: wanted,
+            atlas_bytes: memory.map(|plan| plan.atlas_bytes),
             budget: config.load_budget,
             loader,
         };
@@ -215,6 +221,8 @@ impl FramePipeline {
             calls,
             resident_nodes: self.clipmap.atlas().resident_count(),
             nodes_loaded: update.applied,
+            nodes_over_budget: update.over_budget,
+            atlas_bytes: self.clipmap.atlas().resident_bytes(),
             clipmap_ms: ms(start, paged),
             gl_ms: ms(tiled, done),
             frame_ms: ms(start, done),
@@ -304,13 +312,13 @@ fn plan(
     config: &PipelineConfig,
     budget: u64,
     node_bytes: u64,
-    wanted: u32,
 ) -> Result<MemoryPlan, PipelineError> {
     let queue = match config.loader {
         LoaderMode::Thread { queue } => queue.min(u32::MAX as usize) as u32,
         LoaderMode::Inline => 0,
     };
-    plan_memory(budget, node_bytes, wanted, queue, config.scene.buffer_bytes)
+    let copies = buffer_copies(config.scene.clusters);
+    plan_memory(budget, node_bytes, queue, copies, config.scene.buffer_bytes)
         .ok_or(PipelineError::MemoryBudget { budget, least: MIN_BUDGET_BYTES, node_bytes })
 }
 

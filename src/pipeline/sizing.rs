@@ -53,66 +53,108 @@ pub fn atlas_slots(view: &ViewConfig, levels: u8) -> u32 {
 }
 
 /// Bytes of Ridgeline's heap the memory budget keeps for everything but
-/// the node buffers and the staging copy (tile cache tables, draw list,
-/// selection lists: 2.4 MB measured on the default flight), with room.
-pub const RESERVE_BYTES: u64 = 3 << 20;
-/// Most of what is left after the reserve that the node buffers (atlas
-/// slots and the loader's buffers) may take.
-pub const NODE_SHARE: f64 = 0.3;
+/// the node buffers and the staging copies (tile cache tables, draw list,
+/// selection lists, the atlas's slot table): measured 2.4 MB on the
+/// default flight and 3.1 MB on the cruise flight, with room.
+pub const RESERVE_BYTES: u64 = 4 << 20;
+/// The share of what is left after the reserve and the loader's buffers
+/// that the atlas's nodes may take; the rest goes to the tile buffer and
+/// its copies. Measured on the default flight at 1280x720, tau 1: the view's
+/// nodes take 30 MB and its tiles 7.5 MB of buffer.
+pub const NODE_SHARE: f64 = 0.45;
+/// The most requests a budgeted loader queues: enough to keep its thread
+/// reading, few enough that its buffers (each up to the largest node) stay
+/// a small part of the budget.
+pub const MAX_LOADER_QUEUE: u32 = 8;
+/// The smallest tile buffer a budget gives (less only when the scene asks
+/// for less): the coarsest selection a low flight falls back to, blocks
+/// of node meshes up to 170 KB, needs about 3 MB of a buffer whose free
+/// room is in pieces (2.2 MB failed the default flight at its first frame).
+pub const MIN_BUFFER_BYTES: u64 = 4 << 20;
 /// The smallest budget a display is planned for, bytes: the reserve and
 /// a few megabytes for nodes and tiles.
 pub const MIN_BUDGET_BYTES: u64 = RESERVE_BYTES + (2 << 20);
 
-/// How a memory budget is shared: the node buffers (atlas slots and the
-/// loader's), and the GPU tile buffer with its staging copy (the same
-/// size, one on each side of the bus).
+/// How a memory budget is shared: the atlas's nodes (counted in bytes, each
+/// at its own size), the loader's buffers, and the tile buffer with its
+/// copies (the GPU buffer and its staging copy; with clusters, the cluster
+/// buffers and their staging copies as well).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct MemoryPlan {
-    /// The budget, bytes: Ridgeline's own heap and its GPU buffer.
+    /// The budget, bytes: Ridgeline's own heap and its GPU buffers.
     pub budget_bytes: u64,
-    /// Atlas slots (fewer than the view wants: coarser data, never holes).
-    pub atlas_slots: u32,
+    /// The most bytes the atlas's nodes may take (fewer nodes than the
+    /// view wants: coarser data, never holes).
+    pub atlas_bytes: u64,
     /// Requests the loader thread may queue (it keeps two buffers more).
     pub loader_queue: u32,
-    /// Bytes a node buffer is counted at ([`crate::node::NodeSource::node_bytes`]).
+    /// Bytes a loader buffer is counted at: the largest node
+    /// ([`crate::node::NodeSource::node_bytes`]).
     pub node_bytes: u64,
-    /// The GPU tile buffer and its staging copy, bytes each.
+    /// The tile buffer (and each of its copies' unit), bytes.
     pub buffer_bytes: u32,
 }
 
-/// Shares `budget_bytes` when the view wants `wanted_slots` atlas slots of
-/// `node_bytes` each and the loader up to `queue` requests: `RESERVE_BYTES`
-/// kept for the rest of the heap; the node buffers up to `NODE_SHARE` of
-/// what is left (a quarter of them, at most `queue`, for the loader, never
-/// more slots than wanted); half of the remainder each to the GPU buffer
-/// and its staging copy (never more than `max_buffer_bytes`). A smaller
-/// buffer makes the scene coarsen its tiles, a smaller atlas makes tiles
-/// fall back to coarser resident nodes: the display degrades, never leaves
-/// holes. `None` when the budget is below [`MIN_BUDGET_BYTES`] or leaves
-/// the atlas fewer than two slots.
+/// Copies of the tile buffer's size a display keeps: the GPU buffer and
+/// its staging copy; with clusters, the tile staging copy, the cluster
+/// vertex buffer and its staging copy, and the cluster index buffer and
+/// its staging copy at half the size each (the tile buffer itself is then
+/// never on the GPU).
+pub fn buffer_copies(clusters: bool) -> f64 {
+    if clusters {
+        4.0
+    } else {
+        2.0
+    }
+}
+
+/// Shares `budget_bytes` when the loader may queue up to `queue` requests
+/// of nodes of at most `node_bytes`: `RESERVE_BYTES` kept for the rest of
+/// the heap; the loader's buffers (an eighth of what `NODE_SHARE` of
+/// the rest holds in largest nodes, at most `queue` and
+/// [`MAX_LOADER_QUEUE`], two more); `NODE_SHARE` of
+/// what is left for the atlas's nodes; the remainder shared among the
+/// `copies` of the tile buffer (never more than `max_buffer_bytes` each).
+/// A smaller buffer makes the scene coarsen its tiles, a smaller atlas
+/// makes tiles fall back to coarser resident nodes: the display degrades,
+/// never leaves holes, and says so. The tile buffer gets at least
+/// [`MIN_BUFFER_BYTES`] before the atlas its share. `None` when the
+/// budget is below [`MIN_BUDGET_BYTES`], or leaves the loader no buffer or
+/// the tile buffer less than its floor.
 pub fn plan_memory(
     budget_bytes: u64,
     node_bytes: u64,
-    wanted_slots: u32,
     queue: u32,
+    copies: f64,
     max_buffer_bytes: u32,
 ) -> Option<MemoryPlan> {
-    let usable = budget_bytes.checked_sub(RESERVE_BYTES)?;
     if budget_bytes < MIN_BUDGET_BYTES {
         return None;
     }
-    let buffers = ((usable as f64 * NODE_SHARE) as u64 / node_bytes.max(1)) as u32;
-    let loader_queue = (buffers / 4).clamp(1, queue.max(1));
-    let atlas_slots = buffers.saturating_sub(loader_queue + 2).min(wanted_slots);
-    if atlas_slots < 2.min(wanted_slots) {
-        // Not even the root and one node more: no display to degrade to.
+    let usable = budget_bytes - RESERVE_BYTES;
+    let node_bytes = node_bytes.max(1);
+    let largest_nodes = (usable as f64 * NODE_SHARE) as u64 / node_bytes;
+    // A loader buffer may hold the largest node; a few keep the thread busy.
+    let loader_queue = ((largest_nodes / 8) as u32).min(queue.max(1)).min(MAX_LOADER_QUEUE);
+    if loader_queue == 0 {
         return None;
     }
-    let nodes = (atlas_slots + loader_queue + 2) as u64 * node_bytes;
-    let left = usable.saturating_sub(nodes);
-    let buffer_bytes = (left / 2).min(max_buffer_bytes as u64) as u32 & !3;
-    debug_assert!(nodes + 2 * buffer_bytes as u64 <= budget_bytes || atlas_slots == 0);
-    Some(MemoryPlan { budget_bytes, atlas_slots, loader_queue, node_bytes, buffer_bytes })
+    let left = usable.checked_sub((loader_queue as u64 + 2) * node_bytes)?;
+    // The buffer first gets its floor: without it no selection fits.
+    let floor = (MIN_BUFFER_BYTES.min(max_buffer_bytes as u64) as f64 * copies) as u64;
+    let atlas_bytes = ((left as f64 * NODE_SHARE) as u64).min(left.checked_sub(floor)?);
+    let buffers = ((left - atlas_bytes) as f64 / copies) as u64;
+    let buffer_bytes = buffers.min(max_buffer_bytes as u64) as u32 & !3;
+    Some(MemoryPlan { budget_bytes, atlas_bytes, loader_queue, node_bytes, buffer_bytes })
+}
+
+impl MemoryPlan {
+    /// What the plan gives out, bytes: it never exceeds the budget.
+    pub fn planned_bytes(&self, copies: f64) -> u64 {
+        let loader = (self.loader_queue as u64 + 2) * self.node_bytes;
+        let buffers = (copies * self.buffer_bytes as f64).ceil() as u64;
+        RESERVE_BYTES + loader + self.atlas_bytes + buffers
+    }
 }
 
 #[cfg(test)]
@@ -121,25 +163,31 @@ mod tests {
     use proptest::prelude::*;
 
     proptest! {
-        /// Node buffers, the GPU buffer and its staging copy fit the budget
-        /// less the reserve; too small a budget has no plan.
+        /// The reserve, the loader's buffers, the atlas and the tile
+        /// buffer's copies fit the budget; too small a budget has no plan.
         #[test]
         fn plans_fit_their_budget(
             budget in 0u64..(1 << 32),
             node_bytes in 1u64..(1 << 21),
-            wanted in 0u32..100_000,
             queue in 0u32..512,
+            clusters: bool,
         ) {
-            match plan_memory(budget, node_bytes, wanted, queue, 84 << 20) {
-                None => prop_assert!(
-                    budget < MIN_BUDGET_BYTES
-                        || (budget - RESERVE_BYTES) as f64 * NODE_SHARE < (8 * node_bytes) as f64
-                ),
+            let copies = buffer_copies(clusters);
+            match plan_memory(budget, node_bytes, queue, copies, 84 << 20) {
+                None => {
+                    let usable = budget.saturating_sub(RESERVE_BYTES) as f64;
+                    let floor = MIN_BUFFER_BYTES as f64 * copies;
+                    prop_assert!(
+                        budget < MIN_BUDGET_BYTES
+                            || usable * NODE_SHARE < (8 * node_bytes) as f64
+                            || usable < floor + (10 * node_bytes) as f64
+                    );
+                }
                 Some(plan) => {
-                    let nodes = (plan.atlas_slots + plan.loader_queue + 2) as u64 * node_bytes;
-                    let used = nodes + 2 * plan.buffer_bytes as u64;
-                    prop_assert!(plan.atlas_slots <= wanted);
-                    prop_assert!(used + RESERVE_BYTES <= budget || plan.atlas_slots == 0);
+                    prop_assert!(plan.planned_bytes(copies) <= budget);
+                    prop_assert!(plan.loader_queue >= 1 && plan.loader_queue <= queue.max(1));
+                    prop_assert!(plan.buffer_bytes <= 84 << 20);
+                    prop_assert!(plan.buffer_bytes as u64 >= MIN_BUFFER_BYTES - 4);
                 }
             }
         }

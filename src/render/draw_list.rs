@@ -365,6 +365,8 @@ impl DrawList {
             let mut tile = tile_uniforms(draw, &frame.posts, rings, &geometry);
             let node_tiles = (geometry.node_size / geometry.grid_size).max(1);
             tile.skirt_edges = skirt_edges(draw, &self.drawn, node_tiles);
+            let coarsest = coarsest_neighbour_source(draw, &self.drawn);
+            tile.skirt_depth = skirt_depth(draw, coarsest, geometry.delta_per_level);
             self.tiles.push(tile);
         }
         self.sort_front_to_back(geometry.grid_size);
@@ -404,7 +406,7 @@ fn tile_uniforms(
         post_step: step as f32,
         vertex_step: draw.vertex_step,
         morph,
-        skirt_depth: skirt_depth(draw, geometry.delta_per_level),
+        skirt_depth: skirt_depth(draw, draw.source_level, geometry.delta_per_level),
         skirt_edges: ALL_EDGES,
         byte_offset: draw.byte_offset,
         index_byte_offset: draw.index_byte_offset,
@@ -466,13 +468,52 @@ fn same_node(draw: &TileDraw, key: TileKey, node_tiles: u32) -> bool {
 }
 
 /// Skirts must reach below any surface a neighbour may show along the edge:
-/// a neighbour is at most one level apart, and fallback data may be coarser
-/// still, so the depth covers twice the error of the coarser of those levels,
-/// plus a metre for rounding.
-pub fn skirt_depth(draw: &TileDraw, delta_per_level: &[f64]) -> f32 {
-    let level = (draw.key.level as usize + 1).max(draw.source_level as usize);
+/// a neighbour is at most one level apart, and either side's data may come
+/// from a coarser level still (`coarsest`, the coarsest source level of the
+/// tile and its neighbours), so the depth covers twice the error of the
+/// coarsest of those levels, plus a metre for rounding. A small memory
+/// budget draws neighbours from sources levels apart: a depth from the
+/// tile's own source alone left pinholes at 16 MB.
+pub fn skirt_depth(draw: &TileDraw, coarsest: u8, delta_per_level: &[f64]) -> f32 {
+    let level = (draw.key.level as usize + 1).max(draw.source_level.max(coarsest) as usize);
     let delta = delta_per_level.get(level).or(delta_per_level.last()).copied().unwrap_or(0.0);
     (2.0 * delta + 1.0) as f32
+}
+
+/// The coarsest source level among `draw` and the tiles of `drawn` (sorted
+/// by key) along its edges: of its level, the level above, or the level
+/// below (the neighbours a tile can have).
+pub fn coarsest_neighbour_source(draw: &TileDraw, drawn: &[DrawnTile]) -> u8 {
+    let TileKey { level, x, y } = draw.key;
+    let (x, y) = (x as i64, y as i64);
+    let mut coarsest = draw.source_level;
+    let mut look = |level: i64, x: i64, y: i64| {
+        if level < 0
+            || level > u8::MAX as i64
+            || x < 0
+            || y < 0
+            || x > u32::MAX as i64
+            || y > u32::MAX as i64
+        {
+            return;
+        }
+        let key = TileKey::new(level as u8, x as u32, y as u32);
+        if let Ok(at) = drawn.binary_search_by_key(&key, |d| d.key) {
+            coarsest = coarsest.max(drawn[at].source_level);
+        }
+    };
+    let level = level as i64;
+    for (dx, dy) in [(0, -1), (1, 0), (0, 1), (-1, 0)] {
+        let (nx, ny) = (x + dx, y + dy);
+        look(level, nx, ny);
+        look(level + 1, nx.div_euclid(2), ny.div_euclid(2));
+        // The two finer tiles along the shared edge.
+        let (cx, cy) = (2 * nx + (dx < 0) as i64, 2 * ny + (dy < 0) as i64);
+        let (ax, ay) = if dx == 0 { (1, 0) } else { (0, 1) };
+        look(level - 1, cx, cy);
+        look(level - 1, cx + ax, cy + ay);
+    }
+    coarsest
 }
 
 #[cfg(test)]
@@ -583,5 +624,38 @@ mod tests {
             (x as f64 - exact[0]).abs() < 0.01 && (y as f64 - exact[1]).abs() < 0.01,
             "{x} {y} vs {exact:?}"
         );
+    }
+
+    fn drawn(level: u8, x: u32, y: u32, source_level: u8) -> DrawnTile {
+        DrawnTile { key: TileKey::new(level, x, y), source_level, node_mesh: true }
+    }
+
+    /// A tile's skirts reach as deep as the coarsest data on either side of
+    /// its edges: a neighbour of its level, the level above or the level
+    /// below (only the two finer tiles along the shared edge count).
+    #[test]
+    fn skirts_reach_below_the_coarsest_neighbour() {
+        let draw = TileDraw {
+            key: TileKey::new(2, 4, 4),
+            byte_offset: 0,
+            index_byte_offset: 0,
+            index_count: 0,
+            vertex_step: 4.0,
+            node_mesh: true,
+            source_level: 2,
+            coverage: crate::tiles::TileCoverage::Full,
+        };
+        let deltas = [0.0, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0];
+        let mut tiles = vec![drawn(2, 4, 4, 2), drawn(2, 5, 4, 3), drawn(1, 8, 10, 4)];
+        // Diagonal and far tiles are no neighbours.
+        tiles.extend([drawn(2, 5, 5, 6), drawn(1, 7, 7, 6), drawn(3, 3, 3, 6)]);
+        tiles.sort_unstable_by_key(|d| d.key);
+        // West of the tile, the finer tiles (1, 7, 8) and (1, 7, 9) touch it.
+        assert_eq!(coarsest_neighbour_source(&draw, &tiles), 4, "(1, 8, 10) is north of it");
+        assert_eq!(skirt_depth(&draw, 4, &deltas), 2.0 * 8.0 + 1.0);
+        tiles.push(drawn(1, 7, 9, 5));
+        tiles.sort_unstable_by_key(|d| d.key);
+        assert_eq!(coarsest_neighbour_source(&draw, &tiles), 5);
+        assert_eq!(skirt_depth(&draw, 2, &deltas), 2.0 * 4.0 + 1.0, "level 3 at least");
     }
 }

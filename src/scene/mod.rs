@@ -155,6 +155,12 @@ pub struct SceneStats {
     /// achieved (above the requested one when a budget or a full buffer
     /// loosened it).
     pub tau_px: f64,
+    /// The error bound the drawn tiles achieve, pixels: `tau_px`, or more
+    /// where tiles fell back to coarser resident data than their level
+    /// (nodes still paging in, or left out by the memory budget).
+    pub bound_px: f64,
+    /// Tiles drawn from a coarser node than their level's (best available).
+    pub fallback_tiles: usize,
     /// The valid life's split tests in the final selection (all zero without one).
     pub life: LifeStats,
     /// Selections redone to keep a triangle budget's band ([`TriangleBand`]).
@@ -213,7 +219,7 @@ impl Scene {
         let clusters = if config.clusters {
             Some(ClusterCache::new(ClusterConfig {
                 capacity_bytes: config.buffer_bytes,
-                index_capacity_bytes: config.buffer_bytes / 2,
+                index_capacity_bytes: (config.buffer_bytes / 2) & !3,
                 max_clusters: cache_config.max_tiles,
                 transfer_cap: config.transfer_cap,
                 frames_in_flight: config.frames_in_flight,
@@ -405,6 +411,7 @@ impl Scene {
         report.culled = self.selector.culled();
         report.horizon_culled = self.selector.horizon_culled();
         report.tau_px = lod.tau_px;
+        (report.fallback_tiles, report.bound_px) = self.fallback_bound(camera, lod.tau_px);
         report.life = self.selector.life_stats().unwrap_or_default();
         report.triangles = self.draw_list.triangles();
         self.band.learn(self.draw_list.tiles.iter().map(|t| (t.key.level, t.triangles())));
@@ -424,6 +431,36 @@ impl Scene {
 }
 
 impl Scene {
+    /// Tiles drawn from coarser data than their level's, and the bound the
+    /// frame achieves with them: each such tile's error is its source
+    /// node's delta seen from the tile's distance, or its parent's seen
+    /// from where the morph starts, so the frame's bound is the largest of
+    /// those and `tau_px`.
+    fn fallback_bound(&self, camera: &Camera, tau_px: f64) -> (usize, f64) {
+        let scale = camera.perspective_scale();
+        let top = self.deltas.len().saturating_sub(1);
+        let mut fallback = 0;
+        let mut bound = tau_px;
+        for tile in self.selector.selected() {
+            let level = tile.key.level;
+            let Some(source) = self.cache.source_level(tile.key) else { continue };
+            if source <= level {
+                continue;
+            }
+            fallback += 1;
+            // Inside its box the distance is 0: a metre keeps the bound finite.
+            let near = tile.distance.max(1.0);
+            let own = self.deltas[source as usize] * scale / near;
+            // Its vertices morph toward the source's parent from the morph
+            // start on, wherever in the tile they are.
+            let parent = self.deltas[(source as usize + 1).min(top)] * scale
+                / near.max(self.rings.morph(level).0);
+            let error = own.max(parent);
+            bound = bound.max(error);
+        }
+        (fallback, bound)
+    }
+
     /// The horizon tiles are culled below for `camera`: over the data's
     /// lowest height, when the curvature is drawn, horizon culling is on and
     /// the camera is over the data's rectangle (see [`crate::lod::horizon`]).

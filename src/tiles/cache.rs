@@ -392,6 +392,13 @@ impl TileCache {
         Some(resident.mesh.indices as u64 / 3)
     }
 
+    /// The level of the node `key`'s resident tile was made from: above
+    /// `key.level` when only coarser data was resident (best available).
+    pub fn source_level(&self, key: TileKey) -> Option<u8> {
+        let slot = *self.by_key.get(&key)?;
+        Some(self.slots.get(slot as usize)?.as_ref()?.source_level)
+    }
+
     /// Resident tiles (for statistics and tests).
     pub fn resident_count(&self) -> usize {
         self.by_key.len()
@@ -500,12 +507,39 @@ impl TileCache {
 
     /// Places the run, fills every queued tile's block, and keeps the dirty
     /// ranges for the upload.
+    /// Places and makes the queued blocks. When the buffer cannot take them
+    /// all, finer data for tiles that have data already waits: the
+    /// improvements are dropped and the new tiles placed alone, so a small
+    /// buffer still takes a coarser selection whose tiles are resident.
     fn generate(&mut self, nodes: &dyn ResidentNodes) -> Result<(), TileError> {
-        let requests = std::mem::take(&mut self.requests);
+        let mut outcome = self.place(nodes);
+        if outcome.is_err() && self.drop_improvements() {
+            outcome = self.place(nodes);
+        }
+        match outcome {
+            Ok(bytes_uploaded) => {
+                self.stats.generated = self.requests.len();
+                self.stats.transfers = self.dirty.len();
+                self.stats.bytes_uploaded = bytes_uploaded;
+                Ok(())
+            }
+            Err(error) => {
+                self.forget_new_jobs();
+                Err(TileError::BufferFull(error))
+            }
+        }
+    }
+
+    /// One placement of the queued requests as a run, making each block;
+    /// the bytes made.
+    fn place(&mut self, nodes: &dyn ResidentNodes) -> Result<u64, AllocError> {
+        if self.requests.is_empty() {
+            return Ok(0);
+        }
         let layout = *nodes.layout();
         let (slots, maker, dirty, jobs) =
             (&mut self.slots, &mut self.maker, &mut self.dirty, &self.jobs);
-        let outcome = self.allocator.allocate(&requests).map(|mut plan| {
+        self.allocator.allocate(&self.requests).map(|mut plan| {
             let mut bytes_uploaded = 0u64;
             plan.fill(|index, request, block| {
                 let resident = slots[request.generator.0 as usize]
@@ -522,21 +556,24 @@ impl TileCache {
             });
             dirty.extend(plan.dirty_ranges().iter().cloned());
             bytes_uploaded
-        });
-        let generated = requests.len();
-        self.requests = requests;
-        match outcome {
-            Ok(bytes_uploaded) => {
-                self.stats.generated = generated;
-                self.stats.transfers = self.dirty.len();
-                self.stats.bytes_uploaded = bytes_uploaded;
-                Ok(())
-            }
-            Err(error) => {
-                self.forget_new_jobs();
-                Err(TileError::BufferFull(error))
+        })
+    }
+
+    /// Keeps only the jobs of new tiles and their requests (the two lists
+    /// run in step); whether an improvement was dropped.
+    fn drop_improvements(&mut self) -> bool {
+        let before = self.jobs.len();
+        let mut kept = 0;
+        for k in 0..before {
+            if self.jobs[k].new {
+                self.jobs[kept] = self.jobs[k];
+                self.requests[kept] = self.requests[k];
+                kept += 1;
             }
         }
+        self.jobs.truncate(kept);
+        self.requests.truncate(kept);
+        kept < before
     }
 
     /// After a failed placement: tiles reserved this frame have no data, so

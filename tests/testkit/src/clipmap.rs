@@ -24,7 +24,7 @@ pub fn clipmap(
     budget: u32,
     loader: LoaderMode,
 ) -> Clipmap {
-    let config = ClipmapConfig { atlas_slots: slots, budget, loader };
+    let config = ClipmapConfig { atlas_bytes: None, atlas_slots: slots, budget, loader };
     Clipmap::new(earth.clone(), config).unwrap()
 }
 

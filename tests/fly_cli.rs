@@ -1,0 +1,95 @@
+//! `ridgeline fly` as a user runs it headless: the built-in cruise flight
+//! over the procedural earth writes a `stats.json` that names the flight,
+//! the default memory budget and what the run took of it, and every frame's
+//! bound; a budget the display cannot work in, and `--frame-ms`'s target,
+//! are handled by name.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use testkit::fresh_dir;
+
+fn fly(out: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_ridgeline"))
+        .args(["fly", "--backend", "egl", "--snapshots", "1", "--out"])
+        .arg(out)
+        .args(args)
+        .output()
+        .expect("run ridgeline")
+}
+
+fn stats(out: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(out.join("stats.json")).expect("stats.json written");
+    serde_json::from_str(&text).expect("stats.json is JSON")
+}
+
+fn stderr(run: &Output) -> String {
+    String::from_utf8_lossy(&run.stderr).into_owned()
+}
+
+#[test]
+fn cruise_over_the_procedural_earth_reports_its_flight_memory_and_bound() {
+    let out = fresh_dir("cli-fly-cruise");
+    let args =
+        ["--dataset", "procedural", "--flight", "cruise", "--frames", "4", "--size", "160x90"];
+    let run = fly(&out, &args);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let json = stats(&out);
+    assert_eq!(json["flight"], "cruise");
+    let memory = &json["memory"];
+    let budget = memory["budget_bytes"].as_u64().expect("the default budget is set");
+    assert_eq!(budget, 64 << 20, "{memory}");
+    let own = memory["own_bytes"].as_u64().unwrap();
+    assert!(own <= budget, "own {own} bytes exceed the default budget: {memory}");
+    assert!(memory["atlas_budget_bytes"].as_u64().unwrap() > 0, "{memory}");
+    let frames = json["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 4);
+    for frame in frames {
+        let bound = frame["bound_px"].as_f64().expect("bound_px per frame");
+        let tau = frame["tau_px"].as_f64().unwrap();
+        assert!(bound >= tau, "the bound is never below the achieved tau: {frame}");
+        let loosened = frame["tau_loosened"].as_bool().unwrap();
+        assert_eq!(loosened, bound > frame["tau_requested_px"].as_f64().unwrap(), "{frame}");
+        assert!(frame["nodes_over_budget"].is_u64() && frame["fallback_tiles"].is_u64());
+    }
+}
+
+#[test]
+fn without_a_budget_stats_json_says_so() {
+    let out = fresh_dir("cli-fly-no-budget");
+    let run = fly(&out, &["--frames", "2", "--memory-mb", "0", "--size", "160x90"]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let memory = &stats(&out)["memory"];
+    assert!(memory["budget_bytes"].is_null() && memory["atlas_budget_bytes"].is_null(), "{memory}");
+}
+
+#[test]
+fn budgets_the_display_cannot_work_in_are_refused_by_name() {
+    let out = fresh_dir("cli-fly-refused");
+    for (args, says) in [
+        (&["--memory-mb", "2"][..], "--memory-mb 2 must be between"),
+        (&["--memory-mb", "9", "--size", "1280x720"][..], "go to snapshots at 1280x720"),
+        (&["--frame-ms", "0"][..], "--frame-ms 0 must be"),
+        (&["--flight", "sideways"][..], "sideways"),
+    ] {
+        let run = fly(&out, args);
+        assert!(!run.status.success(), "{args:?} was accepted");
+        assert!(stderr(&run).contains(says), "{args:?}: {}", stderr(&run));
+    }
+}
+
+#[test]
+fn a_frame_time_target_is_recorded_and_every_frame_says_its_tau() {
+    let out = fresh_dir("cli-fly-frame-ms");
+    let run = fly(&out, &["--frames", "6", "--frame-ms", "1", "--size", "160x90"]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let json = stats(&out);
+    assert_eq!(json["frame_ms_target"], 1.0);
+    let frames = json["frames"].as_array().unwrap();
+    // 1 ms is out of reach on any machine: the controller raises tau and says so.
+    let last = frames.last().unwrap();
+    assert!(last["tau_px"].as_f64().unwrap() > 1.0, "tau never rose: {last}");
+    assert_eq!(last["tau_loosened"], true);
+    let summary = String::from_utf8_lossy(&run.stdout);
+    assert!(summary.contains("LOOSENED"), "{summary}");
+}
