@@ -138,7 +138,10 @@ impl Runner {
         let context = GlContext::new(&request)?;
         let summary = TerrainSummary::from_pyramid(pyramid.info());
         let pipeline = FramePipeline::new(&config.pipeline(), pyramid.clone(), summary)?;
-        let renderer = GlRenderer::new(context.gl(), config.scene.buffer_bytes)?;
+        let mut renderer = GlRenderer::new(context.gl(), config.scene.buffer_bytes)?;
+        if let Some(clusters) = pipeline.scene().clusters() {
+            renderer.prepare_clusters(clusters.config().index_capacity_bytes)?;
+        }
         let backend = Timed { renderer, issue_ms: 0.0 };
         Ok(Runner { context, pipeline, backend, sum: Row::default() })
     }

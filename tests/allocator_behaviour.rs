@@ -168,3 +168,36 @@ fn releasing_merges_free_space_on_both_sides() {
     assert_eq!((stats.free_gaps, stats.largest_gap, stats.workspace_end), (1, 48, 64));
     assert!(!alloc.release(GeneratorId(1)).unwrap(), "nothing left to release");
 }
+
+/// Windows (what the cluster cache keeps its vertex blocks in): a reserved
+/// fence between windows, and each window's run placed inside it.
+#[test]
+fn runs_placed_within_a_window_stay_inside_it() {
+    let mut alloc = allocator(256, 8);
+    // Two windows of 120 bytes, fenced by bytes 120..128.
+    alloc.reserve(GeneratorId(7), 120..128).unwrap();
+    assert_eq!(
+        alloc.reserve(GeneratorId(6), 124..132),
+        Err(AllocError::NotFree { generator: 6, start: 124, end: 132 }),
+        "part of it is taken"
+    );
+    assert!(alloc.reserve(GeneratorId(7), 200..204).is_err(), "the generator owns a block");
+    assert_eq!(alloc.largest_gap_in(0..120), 120);
+    assert_eq!(alloc.largest_gap_in(128..256), 128);
+    let (first, second) = ([request(0, 0, 100)], [request(1, 0, 40), request(2, 0, 20)]);
+    let plan = alloc.allocate_within(&first, 0..120).unwrap();
+    assert_eq!(plan.range(0), 0..100);
+    // 40 bytes do not fit in the first window's last 20: the call fails,
+    // and a call for the second window places them at its start.
+    let in_first = alloc.allocate_within(&second[..1], 0..120);
+    assert!(matches!(in_first, Err(AllocError::OutOfSpace { .. })), "{in_first:?}");
+    let plan = alloc.allocate_within(&second, 128..256).unwrap();
+    assert_eq!((plan.range(0), plan.range(1)), (128..168, 168..188));
+    assert_eq!(alloc.largest_gap_in(0..120), 20);
+    assert_eq!(alloc.largest_gap_in(128..256), 68);
+    // Released, the first window's block merges with the gap after it
+    // but not across the fence.
+    alloc.release(GeneratorId(0)).unwrap();
+    assert_eq!(alloc.largest_gap_in(0..120), 120);
+    alloc.check_invariants().unwrap();
+}

@@ -65,15 +65,22 @@ fn the_counts_agree_on_es2_and_without_the_sky() {
 }
 
 /// Clusters (Judnich & Ling): the pass draws runs of a cluster's members
-/// and sets attribute pointers only where the base changes; the model
-/// must count the same, on ES 3 and on ES 2.0 (no vertex arrays).
+/// and changes attribute base (a window's vertex array, or three pointers
+/// without vertex arrays) only where the base changes; the model must
+/// count the same, on ES 3, on ES 2.0 and on ES 2.0 without vertex arrays.
 #[test]
 fn the_counts_agree_with_clusters() {
-    for version in [GlesVersion::Es3, GlesVersion::Es2] {
+    for (version, vertex_arrays) in
+        [(GlesVersion::Es3, true), (GlesVersion::Es2, true), (GlesVersion::Es2, false)]
+    {
         let mut clustered = config(GlBackend::Egl, version);
         clustered.scene.clusters = true;
+        clustered.vertex_arrays = vertex_arrays;
         let (total, sliced) = fly_both(&clustered);
-        println!("clusters, {version:?}, {FRAMES} frames ({sliced} sliced): {total:?}");
+        println!(
+            "clusters, {version:?}, vertex arrays {vertex_arrays}, {FRAMES} frames ({sliced} \
+             sliced): {total:?}"
+        );
         assert!(sliced > 0, "the flight includes frames drawn in two depth slices");
         assert!(
             total.attribute_pointer_changes <= total.draw_calls,

@@ -102,4 +102,15 @@ pub enum AllocError {
         /// Blocks the queue holds.
         max: usize,
     },
+    /// A reservation asked for bytes that are not all free, or a generator
+    /// that already owns a block.
+    #[error("cannot reserve bytes {start}..{end} for generator {generator}: not free")]
+    NotFree {
+        /// The generator that asked.
+        generator: u32,
+        /// First byte asked for.
+        start: u32,
+        /// One past the last byte asked for.
+        end: u32,
+    },
 }

@@ -122,9 +122,92 @@ impl FreeIndex {
         self.spine = spine;
     }
 
-    /// The free block at the lowest address holding at least `len` bytes. O(log F).
-    pub fn first_fit(&self, len: u32) -> Option<Slot> {
+    /// The free block at the lowest address at or above `start` holding at
+    /// least `len` bytes. O(log F): one walk down the path to `start`, and
+    /// one plain first fit in the subtree where the answer lies.
+    pub fn first_fit_from(&self, start: u32, len: u32) -> Option<Slot> {
         let mut slot = self.root;
+        // Every candidate met lies below the ones met before it (the walk
+        // only turns left at nodes above `start`): the last one wins. A
+        // candidate is a node that fits, or a right subtree wholly at or
+        // above `start` that holds a fit (`whole`).
+        let mut best: Option<(Slot, bool)> = None;
+        while slot != NIL {
+            let node = self.node(slot);
+            if node.offset < start {
+                slot = node.right;
+                continue;
+            }
+            if self.subtree_max(node.right) >= len {
+                best = Some((node.right, true));
+            }
+            if node.size >= len {
+                best = Some((slot, false));
+            }
+            slot = node.left;
+        }
+        let (slot, whole) = best?;
+        if whole {
+            self.first_fit_under(slot, len)
+        } else {
+            Some(slot)
+        }
+    }
+
+    /// The largest free block starting in `range`, 0 when there is none. O(log F).
+    pub fn largest_in(&self, range: std::ops::Range<u32>) -> u32 {
+        let mut largest = 0;
+        // Walk to the node where the paths to both ends split, then take the
+        // subtrees wholly inside the range on each path.
+        let mut slot = self.root;
+        while slot != NIL {
+            let node = self.node(slot);
+            if node.offset < range.start {
+                slot = node.right;
+            } else if node.offset >= range.end {
+                slot = node.left;
+            } else {
+                largest = node.size;
+                largest = largest.max(self.largest_from(node.left, range.start));
+                largest = largest.max(self.largest_below(node.right, range.end));
+                break;
+            }
+        }
+        largest
+    }
+
+    /// The largest free block of subtree `slot` at or above `start`.
+    fn largest_from(&self, mut slot: Slot, start: u32) -> u32 {
+        let mut largest = 0;
+        while slot != NIL {
+            let node = self.node(slot);
+            if node.offset >= start {
+                largest = largest.max(node.size).max(self.subtree_max(node.right));
+                slot = node.left;
+            } else {
+                slot = node.right;
+            }
+        }
+        largest
+    }
+
+    /// The largest free block of subtree `slot` below `end`.
+    fn largest_below(&self, mut slot: Slot, end: u32) -> u32 {
+        let mut largest = 0;
+        while slot != NIL {
+            let node = self.node(slot);
+            if node.offset < end {
+                largest = largest.max(node.size).max(self.subtree_max(node.left));
+                slot = node.right;
+            } else {
+                slot = node.left;
+            }
+        }
+        largest
+    }
+
+    /// The lowest free block of subtree `slot` holding at least `len` bytes.
+    fn first_fit_under(&self, mut slot: Slot, len: u32) -> Option<Slot> {
         if self.subtree_max(slot) < len {
             return None;
         }
@@ -315,5 +398,38 @@ impl FreeIndex {
             return Err(format!("free index holds {count} nodes, counts {}", self.len));
         }
         problem.map_or(Ok(()), Err)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Free blocks of 1..=40 bytes, 8 apart and more, at pseudo-random
+    /// places: the range queries against a scan of the same blocks.
+    #[test]
+    fn range_queries_match_a_scan() {
+        let mut index = FreeIndex::new(64);
+        let mut blocks = Vec::new();
+        let mut offset = 0u32;
+        for slot in 0..64u32 {
+            let size = 1 + (slot * 37 + 11) % 40;
+            offset += 8 + (slot * 53) % 29;
+            index.insert(slot, offset, size);
+            blocks.push((slot, offset, size));
+            offset += size;
+        }
+        index.check().expect("a valid treap");
+        for start in (0..offset + 10).step_by(7) {
+            for len in [1, 5, 20, 39, 40, 41] {
+                let scan = blocks.iter().find(|b| b.1 >= start && b.2 >= len).map(|b| b.0);
+                assert_eq!(index.first_fit_from(start, len), scan, "from {start}, {len} bytes");
+            }
+            for end in (start..offset + 10).step_by(13) {
+                let inside = blocks.iter().filter(|b| (start..end).contains(&b.1));
+                let scan = inside.map(|b| b.2).max().unwrap_or(0);
+                assert_eq!(index.largest_in(start..end), scan, "in {start}..{end}");
+            }
+        }
     }
 }

@@ -259,6 +259,13 @@ impl ContiguousAllocator {
         &self.scratch.pieces
     }
 
+    /// The largest free gap starting in `range`, bytes: what one run piece
+    /// placed there by [`Self::allocate_within`] may take (before the
+    /// call's own old blocks are released).
+    pub fn largest_gap_in(&self, range: Range<u32>) -> u32 {
+        self.free.largest_in(range)
+    }
+
     /// How the address space is used now.
     pub fn stats(&self) -> AllocatorStats {
         let tail = self.blocks.get(self.blocks.tail());

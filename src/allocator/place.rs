@@ -3,7 +3,7 @@
 //! undo everything and report why not.
 
 use super::block_list::{BlockState, Slot, NIL};
-use super::{AllocError, ContiguousAllocator, FramePlan, Request};
+use super::{AllocError, ContiguousAllocator, FramePlan, GeneratorId, Request};
 use std::ops::Range;
 
 /// Per-call tables, sized for `max_generators` requests at construction.
@@ -40,10 +40,23 @@ impl ContiguousAllocator {
         &'a mut self,
         requests: &'a [Request],
     ) -> Result<FramePlan<'a>, AllocError> {
+        self.allocate_within(requests, 0..self.config.capacity)
+    }
+
+    /// [`Self::allocate`] with every run piece placed in a free block that
+    /// starts inside `within`, wholly inside it: the lowest such block that
+    /// holds the piece. A caller that keeps blocks inside fixed windows
+    /// reserves a fence between them ([`Self::reserve`]), so no free block
+    /// reaches across, and names one window here.
+    pub fn allocate_within<'a>(
+        &'a mut self,
+        requests: &'a [Request],
+        within: Range<u32>,
+    ) -> Result<FramePlan<'a>, AllocError> {
         self.validate(requests)?;
         self.release_old(requests);
         self.sort_by_format(requests);
-        if let Err(piece) = self.place_run(requests) {
+        if let Err(piece) = self.place_run(requests, within) {
             self.free_placed();
             // What a retry would see: this call's old blocks released, nothing placed.
             let largest_gap = self.free.largest();
@@ -149,13 +162,18 @@ impl ContiguousAllocator {
 
     /// Places the sorted requests piece by piece, each at the lowest fit.
     /// Fails with the byte length of the first piece that finds no gap.
-    fn place_run(&mut self, requests: &[Request]) -> Result<(), u64> {
+    fn place_run(&mut self, requests: &[Request], within: Range<u32>) -> Result<(), u64> {
         self.scratch.pieces.clear();
         let cap = self.config.transfer_cap.unwrap_or(u32::MAX) as u64;
         let mut start = 0;
         while start < self.scratch.order.len() {
             let (end, bytes) = self.next_piece(start, cap);
-            let gap = u32::try_from(bytes).ok().and_then(|len| self.free.first_fit(len));
+            let gap = u32::try_from(bytes).ok().and_then(|len| {
+                let gap = self.free.first_fit_from(within.start, len)?;
+                let ends_inside = self.blocks.get(gap).offset as u64 + bytes <= within.end as u64;
+                // Any other fit starts higher, so ends higher still.
+                ends_inside.then_some(gap)
+            });
             let Some(gap) = gap else { return Err(bytes) };
             self.place_piece(gap, start..end, requests);
             start = end;
@@ -228,6 +246,31 @@ impl ContiguousAllocator {
             self.live_blocks += 1;
             self.live_bytes += size as u64;
         }
+    }
+
+    /// Gives `generator`, which owns no block, the bytes `range` for good
+    /// (until it releases them): a fence, say, that no placed block may
+    /// cross. Fails unless the whole range is free.
+    pub fn reserve(&mut self, generator: GeneratorId, range: Range<u32>) -> Result<(), AllocError> {
+        self.check_generator(generator)?;
+        let not_free =
+            AllocError::NotFree { generator: generator.0, start: range.start, end: range.end };
+        let aligned = range.start % self.config.alignment == 0
+            && range.len() as u32 % self.config.alignment == 0;
+        if range.is_empty() || !aligned || self.owner[generator.0 as usize] != NIL {
+            return Err(not_free);
+        }
+        let free = self.free.at_or_below(range.start).map(|gap| *self.blocks.get(gap));
+        if free.is_none_or(|gap| gap.end() < range.end) {
+            return Err(not_free);
+        }
+        let size = range.end - range.start;
+        let slot = self.carve_exact(range.start, size, generator.0);
+        self.owner[generator.0 as usize] = slot;
+        self.live_blocks += 1;
+        self.live_bytes += size as u64;
+        self.debug_check();
+        Ok(())
     }
 
     /// Makes `[offset, offset + size)`, which lies inside one free block, a live

@@ -297,6 +297,8 @@ fn write_stats(
                 "clusters": s.scene.clusters,
                 "clusters_made": s.scene.clusters_made,
                 "cluster_bytes_uploaded": s.scene.cluster_bytes_uploaded,
+                "cluster_windows": s.scene.cluster_windows,
+                "cluster_windows_least": s.scene.cluster_windows_least,
                 "calls": s.calls,
                 "bytes_uploaded": s.scene.bytes_uploaded,
                 "transfers": s.scene.transfers,
@@ -400,9 +402,10 @@ fn print_summary(rows: &[Row], memory: &MemoryReport) -> Result<()> {
     )?;
     writeln!(
         out,
-        "  GL calls          mean {:.0} a frame ({:.0} attribute pointer changes, {:.0} uniform writes)",
+        "  GL calls          mean {:.0} a frame ({:.0} attribute pointer changes, {:.0} vertex array binds, {:.0} uniform writes)",
         mean(&|s| s.calls.calls() as f64),
         mean(&|s| s.calls.attribute_pointer_changes as f64),
+        mean(&|s| s.calls.vertex_array_binds as f64),
         mean(&|s| s.calls.uniform_writes as f64)
     )?;
     writeln!(

@@ -6,18 +6,24 @@
 //! dirty range per run piece is uploaded.
 //!
 //! A cluster has two blocks, in two allocators: its vertices in the vertex
-//! buffer, its indices in the index buffer. Vertices alone pack densely, so
-//! more clusters lie within 2^16 vertices of a shared attribute base; a
-//! new cluster takes the highest base already in use that reaches all of
-//! its vertices, else its own first vertex.
+//! buffer, its indices in the index buffer. The vertex buffer is cut into
+//! fixed windows of 2^16 vertices ([`crate::render::cluster::window`]),
+//! with a one-vertex fence reserved between neighbours so no block crosses
+//! one; a cluster's attribute base is its window's start. Each new or
+//! changed cluster picks a window: the fullest window in use that still
+//! has room for it (best fit; all resident clusters are drawn, so windows
+//! in use are the ones the frame draws), else the lowest with room. Each
+//! window's new blocks are then placed as one run inside it, so a frame
+//! uploads one transfer per window that received blocks (per run piece
+//! with a transfer cap), where one run for all would be one transfer.
 
-use super::{ClusterKey, Formation, Placement, MAX_CLUSTER_VERTICES};
+use super::{ClusterKey, Formation, Placement};
 use crate::allocator::{
     AllocError, AllocatorConfig, ConfigError, ContiguousAllocator, GeneratorId, Request,
     VertexFormat,
 };
 use crate::lod::TileKey;
-use crate::render::cluster::MAX_MEMBERS;
+use crate::render::cluster::{window, window_count, window_of, MAX_MEMBERS, WINDOW_VERTICES};
 use crate::render::cluster_draws::part_bit;
 use crate::render::{Cluster, ClusterOrder, DrawList, Member, Slice, TileUniforms};
 use crate::tiles::block::{INDEX_BYTES, VERTEX_BYTES};
@@ -57,6 +63,12 @@ pub enum ClusterError {
     /// The cluster buffer cannot take this frame's new clusters.
     #[error("cluster buffer full: {0}")]
     BufferFull(AllocError),
+    /// No window of the cluster vertex buffer has room for a cluster.
+    #[error("no window of the cluster buffer has room for a cluster of {vertices} vertices")]
+    NoWindow {
+        /// The cluster's vertices.
+        vertices: u32,
+    },
 }
 
 /// What one frame of the cluster cache did.
@@ -72,8 +84,11 @@ pub struct ClusterFrameStats {
     pub transfers: usize,
     /// Bytes held by clusters' blocks, vertices and indices.
     pub used_bytes: u64,
-    /// Distinct attribute bases of the frame's clusters.
+    /// Distinct attribute bases (windows) of the frame's clusters.
     pub bases: usize,
+    /// The fewest windows the frame's cluster vertices could fill: their
+    /// bytes over a window's, rounded up.
+    pub least_bases: usize,
 }
 
 /// Which tile block a member was made from: a remade tile has new bytes.
@@ -102,8 +117,19 @@ impl MemberSource {
     }
 }
 
-/// A cluster not yet given a base.
+/// A cluster not yet placed in a window.
 const NO_BASE: u32 = u32::MAX;
+
+/// How one window is used.
+#[derive(Clone, Copy, Debug, Default)]
+struct WindowUse {
+    /// Resident clusters placed in it.
+    clusters: u32,
+    /// Queued clusters that chose it this frame.
+    chosen: u32,
+    /// Bytes of its largest free gap not yet promised this frame.
+    room: u32,
+}
 
 #[derive(Clone, Copy, Debug)]
 struct Resident {
@@ -121,6 +147,10 @@ struct Resident {
 struct Job {
     slot: u32,
     placements: (u32, u32),
+    /// Bytes of its vertex block and of its index block.
+    sizes: (u32, u32),
+    /// The window it goes to.
+    window: u32,
     /// Where its vertex block was placed, bytes.
     vertex_start: u32,
 }
@@ -132,9 +162,9 @@ pub struct ClusterCache {
     allocator: ContiguousAllocator,
     /// Every cluster's indices.
     index_allocator: ContiguousAllocator,
-    /// Attribute bases in use, with how many resident clusters use each,
-    /// sorted by base (vertices from byte 0).
-    bases_in_use: Vec<(u32, u32)>,
+    /// Per window: resident clusters in it, and its room this frame
+    /// (bytes of its largest free gap not yet promised to a new cluster).
+    windows: Vec<WindowUse>,
     slots: Vec<Option<Resident>>,
     spare: Vec<u32>,
     by_key: HashMap<ClusterKey, u32>,
@@ -154,21 +184,24 @@ impl ClusterCache {
     /// An empty cache.
     pub fn new(config: ClusterConfig) -> Result<Self, ClusterError> {
         let max = config.max_clusters as usize;
-        let allocator_config = |capacity| AllocatorConfig {
+        let allocator_config = |capacity, fences| AllocatorConfig {
             capacity,
-            max_generators: config.max_clusters,
+            max_generators: config.max_clusters + fences,
             alignment: 4,
             transfer_cap: config.transfer_cap,
             frames_in_flight: config.frames_in_flight,
         };
-        let allocator = ContiguousAllocator::new(allocator_config(config.capacity_bytes))?;
+        let windows = window_count(config.capacity_bytes);
+        let mut allocator =
+            ContiguousAllocator::new(allocator_config(config.capacity_bytes, windows))?;
+        fence_windows(&mut allocator, config.max_clusters)?;
         let index_allocator =
-            ContiguousAllocator::new(allocator_config(config.index_capacity_bytes))?;
+            ContiguousAllocator::new(allocator_config(config.index_capacity_bytes, 0))?;
         Ok(ClusterCache {
             config,
             allocator,
             index_allocator,
-            bases_in_use: Vec::with_capacity(max),
+            windows: vec![WindowUse::default(); window_count(config.capacity_bytes) as usize],
             slots: vec![None; max],
             spare: (0..config.max_clusters).rev().collect(),
             by_key: HashMap::with_capacity(max),
@@ -301,15 +334,12 @@ impl ClusterCache {
             let (vertices, indices) = members.iter().fold((0, 0), |(v, i), p| {
                 (v + p.vertices, i + list.tiles[p.tile as usize].index_count)
             });
-            let generator = GeneratorId(slot);
-            let format = VertexFormat(0);
-            self.requests.push(Request { generator, format, size: vertices * VERTEX_BYTES });
-            let size = (indices * INDEX_BYTES).next_multiple_of(4);
-            self.index_requests.push(Request { generator, format, size });
+            let sizes = (vertices * VERTEX_BYTES, (indices * INDEX_BYTES).next_multiple_of(4));
             if let Some(old) = self.slots[slot as usize] {
-                self.release_base(old.base);
+                self.leave_window(old.base);
             }
-            self.jobs.push(Job { slot, placements: (start as u32, end as u32), vertex_start: 0 });
+            let placements = (start as u32, end as u32);
+            self.jobs.push(Job { slot, placements, sizes, window: 0, vertex_start: 0 });
             let mut resident = Resident {
                 key,
                 members: [MemberSource::default(); MAX_MEMBERS],
@@ -324,7 +354,7 @@ impl ClusterCache {
             self.slots[slot as usize] = Some(resident);
             start = end;
         }
-        if !self.requests.is_empty() {
+        if !self.jobs.is_empty() {
             self.make(placements, list, tile_staging)?;
         }
         self.list(placements, list);
@@ -346,7 +376,7 @@ impl ClusterCache {
         if let Some(resident) = self.slots[slot as usize].take() {
             self.by_key.remove(&resident.key);
             if resident.base != NO_BASE {
-                self.release_base(resident.base);
+                self.leave_window(resident.base);
             }
             self.allocator.release(GeneratorId(slot)).expect("slot ids are in range");
             self.index_allocator.release(GeneratorId(slot)).expect("slot ids are in range");
@@ -354,14 +384,42 @@ impl ClusterCache {
         }
     }
 
-    /// One cluster fewer uses attribute base `base` (bytes).
-    fn release_base(&mut self, base: u32) {
-        if let Ok(at) = self.bases_in_use.binary_search_by_key(&base, |b| b.0) {
-            self.bases_in_use[at].1 -= 1;
-            if self.bases_in_use[at].1 == 0 {
-                self.bases_in_use.remove(at);
-            }
+    /// One cluster fewer is placed in the window starting at `base` (bytes).
+    fn leave_window(&mut self, base: u32) {
+        self.windows[window_of(base) as usize].clusters -= 1;
+    }
+
+    /// Picks each queued cluster's window (see the module documentation),
+    /// then orders the queue by window, so each window's requests are one
+    /// slice, and lists the requests in that order.
+    fn choose_windows(&mut self) -> Result<(), ClusterError> {
+        let capacity = self.config.capacity_bytes;
+        for (k, w) in self.windows.iter_mut().enumerate() {
+            let range = window(k as u32, capacity).expect("windows of the buffer");
+            w.room = self.allocator.largest_gap_in(range);
+            w.chosen = 0;
         }
+        for job in &mut self.jobs {
+            let size = job.sizes.0;
+            let fits = |w: &WindowUse| w.room >= size;
+            let in_use = |w: &WindowUse| w.clusters + w.chosen > 0;
+            let in_use = self.windows.iter().enumerate().filter(|(_, w)| in_use(w) && fits(w));
+            let best = in_use.min_by_key(|(_, w)| w.room).map(|(k, _)| k);
+            let Some(k) = best.or_else(|| self.windows.iter().position(fits)) else {
+                return Err(ClusterError::NoWindow { vertices: size / VERTEX_BYTES });
+            };
+            job.window = k as u32;
+            self.windows[k].room -= size;
+            self.windows[k].chosen += 1;
+        }
+        self.jobs.sort_unstable_by_key(|job| (job.window, job.slot));
+        let format = VertexFormat(0);
+        for job in &self.jobs {
+            let generator = GeneratorId(job.slot);
+            self.requests.push(Request { generator, format, size: job.sizes.0 });
+            self.index_requests.push(Request { generator, format, size: job.sizes.1 });
+        }
+        Ok(())
     }
 
     /// Places the runs and fills every queued cluster's blocks.
@@ -371,12 +429,15 @@ impl ClusterCache {
         list: &DrawList,
         tile_staging: &[u8],
     ) -> Result<(), ClusterError> {
-        if let Err(error) = self.place_and_fill(placements, list, tile_staging) {
+        let outcome = self.choose_windows().and_then(|()| {
+            self.place_and_fill(placements, list, tile_staging).map_err(ClusterError::BufferFull)
+        });
+        if let Err(error) = outcome {
             // Forget the clusters queued, so the next frame makes them again.
             for k in 0..self.jobs.len() {
                 self.forget(self.jobs[k].slot);
             }
-            return Err(ClusterError::BufferFull(error));
+            return Err(error);
         }
         self.stats.made = self.jobs.len();
         self.stats.transfers = self.dirty.len() + self.index_dirty.len();
@@ -389,10 +450,11 @@ impl ClusterCache {
         list: &DrawList,
         tile_staging: &[u8],
     ) -> Result<(), AllocError> {
+        let capacity = self.config.capacity_bytes;
         let ClusterCache {
             allocator,
             index_allocator,
-            bases_in_use,
+            windows,
             slots,
             jobs,
             requests,
@@ -402,27 +464,36 @@ impl ClusterCache {
             stats,
             ..
         } = self;
-        let mut vertex_plan = allocator.allocate(requests)?;
-        for (k, job) in jobs.iter_mut().enumerate() {
-            let range = vertex_plan.range(k);
-            debug_assert_eq!(range.start % VERTEX_BYTES, 0, "blocks are whole vertices");
-            job.vertex_start = range.start;
-            let resident = slots[job.slot as usize].as_mut().expect("queued");
-            resident.base = take_base(bases_in_use, range);
+        let members_of =
+            |job: &Job| &placements[job.placements.0 as usize..job.placements.1 as usize];
+        let mut bytes = 0u64;
+        // One run per window that receives blocks.
+        let mut start = 0;
+        while start < jobs.len() {
+            let k = jobs[start].window;
+            let end = start + jobs[start..].iter().take_while(|j| j.window == k).count();
+            let range = window(k, capacity).expect("a window of the buffer");
+            let base = range.start;
+            let mut plan = allocator.allocate_within(&requests[start..end], range)?;
+            for (i, job) in jobs[start..end].iter_mut().enumerate() {
+                let block = plan.range(i);
+                debug_assert_eq!((block.start - base) % VERTEX_BYTES, 0, "whole vertices");
+                job.vertex_start = block.start;
+                slots[job.slot as usize].as_mut().expect("queued").base = base;
+                windows[k as usize].clusters += 1;
+            }
+            plan.fill(|i, _, block| {
+                fill_vertices(block, members_of(&jobs[start + i]), list, tile_staging);
+                bytes += block.len() as u64;
+            });
+            dirty.extend(plan.dirty_ranges().iter().cloned());
+            start = end;
         }
         let mut index_plan = index_allocator.allocate(index_requests)?;
         for (k, job) in jobs.iter().enumerate() {
             let resident = slots[job.slot as usize].as_mut().expect("queued");
             resident.index_byte_offset = index_plan.range(k).start;
         }
-        let members_of =
-            |job: &Job| &placements[job.placements.0 as usize..job.placements.1 as usize];
-        let mut bytes = 0u64;
-        vertex_plan.fill(|k, _, block| {
-            fill_vertices(block, members_of(&jobs[k]), list, tile_staging);
-            bytes += block.len() as u64;
-        });
-        dirty.extend(vertex_plan.dirty_ranges().iter().cloned());
         index_plan.fill(|k, _, block| {
             let job = &jobs[k];
             let base = slots[job.slot as usize].expect("queued").base;
@@ -498,6 +569,8 @@ impl ClusterCache {
             }
         }
         self.stats.bases = self.bases.len();
+        let vertices: u64 = placements.iter().map(|p| p.vertices as u64).sum();
+        self.stats.least_bases = vertices.div_ceil(WINDOW_VERTICES as u64) as usize;
         let bases = &self.bases;
         let group = |c: &Cluster| {
             let at = bases.binary_search_by_key(&c.base, |b| b.0).expect("every base listed");
@@ -512,6 +585,25 @@ impl ClusterCache {
         self.stats.clusters = list.clusters.len();
         self.stats.used_bytes = used;
     }
+}
+
+/// Reserves the fence after each window of `allocator` (generators from
+/// `first_fence` on), so no block crosses from one window into the next.
+fn fence_windows(
+    allocator: &mut ContiguousAllocator,
+    first_fence: u32,
+) -> Result<(), ClusterError> {
+    let capacity = allocator.config().capacity;
+    for k in 0..window_count(capacity) {
+        let inside = window(k, capacity).expect("counted");
+        let fence =
+            inside.end..(inside.start + crate::render::cluster::WINDOW_STRIDE).min(capacity);
+        if !fence.is_empty() {
+            let generator = GeneratorId(first_fence + k);
+            allocator.reserve(generator, fence).map_err(ClusterError::BufferFull)?;
+        }
+    }
+    Ok(())
 }
 
 /// Whether `tile`'s block was written this frame (remade in place).
@@ -571,40 +663,41 @@ fn fill_indices(
     block[at..].fill(0);
 }
 
-/// The attribute base (bytes) for a cluster whose vertices are bytes
-/// `range` of the vertex buffer: the highest base in `bases` (sorted,
-/// with their users) that reaches them all with 16-bit indices, else
-/// its own first vertex (so clusters placed after it share it as far as
-/// 16-bit indices reach); counted as one more user. A most-aligned choice
-/// (the highest power of two in reach) took 22 bases for the default
-/// flight's first frame at 1280x720 where this takes 13 (11.1 windows of
-/// 2^16 vertices drawn).
-fn take_base(bases: &mut Vec<(u32, u32)>, range: Range<u32>) -> u32 {
-    let end = range.end / VERTEX_BYTES;
-    let at = bases.partition_point(|b| b.0 <= range.start);
-    let base = match bases[..at].last() {
-        Some(&(base, _)) if end - base / VERTEX_BYTES <= MAX_CLUSTER_VERTICES => base,
-        _ => range.start,
-    };
-    match bases.binary_search_by_key(&base, |b| b.0) {
-        Ok(k) => bases[k].1 += 1,
-        Err(k) => bases.insert(k, (base, 1)),
-    }
-    base
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::cluster::WINDOW_STRIDE;
 
     #[test]
-    fn clusters_join_the_highest_base_that_reaches_them() {
-        let v = VERTEX_BYTES;
-        let mut bases = Vec::new();
-        assert_eq!(take_base(&mut bases, 0..30_000 * v), 0);
-        assert_eq!(take_base(&mut bases, 30_000 * v..60_000 * v), 0, "within 2^16 of 0");
-        assert_eq!(take_base(&mut bases, 60_000 * v..70_000 * v), 60_000 * v, "out of reach");
-        assert_eq!(take_base(&mut bases, 70_000 * v..80_000 * v), 60_000 * v);
-        assert_eq!(bases, [(0, 2), (60_000 * v, 2)]);
+    fn clusters_go_to_the_fullest_window_in_use_with_room() {
+        let config = ClusterConfig {
+            capacity_bytes: 3 * WINDOW_STRIDE,
+            index_capacity_bytes: 1 << 16,
+            max_clusters: 8,
+            transfer_cap: None,
+            frames_in_flight: 0,
+        };
+        let mut cache = ClusterCache::new(config).expect("a cache");
+        assert_eq!(cache.allocator.stats().live_blocks, 3, "a fence after each window");
+        let job = |slot, vertices: u32| Job {
+            slot,
+            placements: (0, 0),
+            sizes: (vertices * VERTEX_BYTES, 4),
+            window: 0,
+            vertex_start: 0,
+        };
+        cache.jobs.extend([job(0, 40_000), job(1, 30_000), job(2, 20_000), job(3, 5_000)]);
+        cache.choose_windows().expect("room");
+        // 40 000 vertices open window 0; 30 000 do not fit its 25 536 left
+        // and open window 1; 20 000 fit both, best in window 0, and so do
+        // 5 000 (5 536 left there against 35 536).
+        let chosen: Vec<(u32, u32)> = cache.jobs.iter().map(|j| (j.slot, j.window)).collect();
+        assert_eq!(chosen, [(0, 0), (2, 0), (3, 0), (1, 1)], "ordered by window");
+        let generators: Vec<u32> = cache.requests.iter().map(|r| r.generator.0).collect();
+        assert_eq!(generators, [0, 2, 3, 1], "requests in the jobs' order");
+        cache.jobs.push(job(4, 60_000));
+        cache.jobs.push(job(5, 60_000));
+        let full = cache.choose_windows();
+        assert!(matches!(full, Err(ClusterError::NoWindow { vertices: 60_000 })), "{full:?}");
     }
 }

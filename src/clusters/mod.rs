@@ -25,11 +25,14 @@
 //! vertices from where the attribute pointers point, and are 16-bit. The
 //! vertex blocks live in an allocator of their own (the indices in
 //! another), each a whole number of 20-byte vertices, so every block starts
-//! on a vertex of one lattice from byte 0 and vertex data pack densely. A
-//! cluster's indices are numbered from an *attribute base*: the highest
-//! base already in use that reaches all of its vertices with 16-bit
-//! indices, else its own first vertex. Clusters sharing a base share their
-//! attribute pointers: the pass sets the three only when the base changes.
+//! on a vertex of one lattice from byte 0 and vertex data pack densely. The
+//! vertex buffer is cut into fixed *windows* of 2^16 vertices
+//! ([`crate::render::cluster::window`]), fenced from each other; each
+//! cluster's vertex block lies in one, and its indices are numbered from
+//! the window's start, its *attribute base*. Clusters sharing a window
+//! share their attribute pointers (or the window's vertex array): the pass
+//! changes them only when the base changes, and the frame's clusters are
+//! packed into few windows (best fit among the windows in use).
 
 mod cache;
 pub mod mirror;

@@ -45,6 +45,9 @@ pub struct DisplayConfig {
     pub memory_budget_bytes: Option<u64>,
     /// A frame budget (triangles or milliseconds) that may raise tau.
     pub budget: Option<crate::lod::budget::BudgetConfig>,
+    /// Use vertex array objects where the driver has them (see
+    /// [`ContextRequest::vertex_arrays`]).
+    pub vertex_arrays: bool,
 }
 
 impl DisplayConfig {
@@ -61,6 +64,7 @@ impl DisplayConfig {
             sentinel: None,
             memory_budget_bytes: None,
             budget: None,
+            vertex_arrays: true,
         }
     }
 
@@ -120,11 +124,15 @@ impl DisplayParts {
     ) -> Result<DisplayParts, DisplayError> {
         let mut request = ContextRequest::new(config.backend, config.version, config.size);
         request.title = "Ridgeline".to_owned();
+        request.vertex_arrays = config.vertex_arrays;
         let context = GlContext::new(&request)?;
         let pipeline = FramePipeline::new(&config.pipeline(), source, summary)?;
         // The buffer the pipeline's staging copy mirrors (a memory budget may have shrunk it).
         let buffer_bytes = pipeline.scene().config().buffer_bytes;
         let mut renderer = GlRenderer::new(context.gl(), buffer_bytes)?;
+        if let Some(clusters) = pipeline.scene().clusters() {
+            renderer.prepare_clusters(clusters.config().index_capacity_bytes)?;
+        }
         renderer.set_sentinel(config.sentinel);
         Ok(DisplayParts { renderer, context, pipeline })
     }

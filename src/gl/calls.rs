@@ -20,15 +20,25 @@ use crate::render::CallStats;
 #[derive(Clone, Copy)]
 pub(crate) struct Calls<'a> {
     gl: &'a Gl,
+    counted: bool,
 }
 
 impl<'a> Calls<'a> {
     pub fn new(gl: &'a Gl) -> Self {
-        Calls { gl }
+        Calls { gl, counted: true }
+    }
+
+    /// The same calls, not counted: for state recorded into an object as
+    /// it is made, before any frame (a window's vertex array), as making
+    /// buffers and programs is not counted either.
+    pub fn making_objects(gl: &'a Gl) -> Self {
+        Calls { gl, counted: false }
     }
 
     fn tally(&self, f: impl FnOnce(&mut CallStats)) {
-        self.gl.tally(f);
+        if self.counted {
+            self.gl.tally(f);
+        }
     }
 
     fn state(&self) {

@@ -71,12 +71,22 @@ pub struct ContextRequest {
     pub size: UVec2,
     /// Window title (ignored when headless).
     pub title: String,
+    /// Use vertex array objects where the driver offers them; `false`
+    /// takes the path of bare ES 2.0 boards (no OES_vertex_array_object)
+    /// on any driver.
+    pub vertex_arrays: bool,
 }
 
 impl ContextRequest {
     /// A request titled `Ridgeline`.
     pub fn new(backend: GlBackend, version: GlesVersion, size: UVec2) -> ContextRequest {
-        ContextRequest { backend, version, size, title: "Ridgeline".to_owned() }
+        ContextRequest {
+            backend,
+            version,
+            size,
+            title: "Ridgeline".to_owned(),
+            vertex_arrays: true,
+        }
     }
 }
 
@@ -174,7 +184,8 @@ impl GlContext {
         platform: Platform,
         request: &ContextRequest,
     ) -> Result<GlContext, GlError> {
-        let caps = Capabilities::detect(&glow, request.version);
+        let mut caps = Capabilities::detect(&glow, request.version);
+        caps.vertex_array_objects &= request.vertex_arrays;
         let [version, renderer, vendor, shading_language_version] = read_strings(&glow);
         let (backend, platform_name) = match &platform {
             Platform::Egl(egl) => (OpenedBackend::Egl, egl.platform.clone()),

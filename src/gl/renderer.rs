@@ -53,6 +53,14 @@ impl GlRenderer {
         })
     }
 
+    /// Readies the terrain pass to draw clusters, whose index blocks take
+    /// `index_bytes` (the cluster cache's index capacity): an index buffer
+    /// and, with vertex array objects, one per window of the tile buffer,
+    /// its pointers set here once (calls made before any frame, not counted).
+    pub fn prepare_clusters(&mut self, index_bytes: u32) -> Result<(), GlError> {
+        self.terrain.prepare_clusters(index_bytes)
+    }
+
     /// With `Some(colour)` the sky is not drawn and the target is cleared to
     /// `colour`: any pixel still that colour below the horizon is a hole.
     pub fn set_sentinel(&mut self, colour: Option<[f32; 4]>) {

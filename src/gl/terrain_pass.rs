@@ -8,6 +8,15 @@
 //! Two fragment programs share the vertex shader: the display's colours, and
 //! camera-relative positions for the accuracy tool ([`TerrainOutput`]), so
 //! what the accuracy tool measures is the geometry the display draws.
+//!
+//! With clusters ([`TerrainPass::prepare_clusters`]) the buffer holds the
+//! clusters' vertex blocks, in fixed windows of 2^16 vertices, and a second
+//! buffer their indices. Where the context has vertex array objects, each
+//! window has one, made with the pass: the index buffer bound and the
+//! three attribute pointers set at the window's start, once for the
+//! buffer's life. A frame then changes attribute base with one vertex
+//! array bind and sets no pointer; without them (bare ES 2.0) it sets the
+//! three pointers at each change of window.
 
 use std::rc::Rc;
 
@@ -16,7 +25,7 @@ use super::error::GlError;
 use super::handle::Gl;
 use super::objects::{Buffer, BufferTarget, BufferUsage, Program, VertexArray};
 use crate::gl_check;
-use crate::render::cluster::{MAX_MEMBERS, MEMBER_FLOATS};
+use crate::render::cluster::{window, window_count, window_of, MAX_MEMBERS, MEMBER_FLOATS};
 use crate::render::{
     check_uploads, palette, Cluster, DrawList, FrameUniforms, RenderError, Slice, TileUniforms,
 };
@@ -95,9 +104,16 @@ pub struct TerrainPass {
     /// The tiles' blocks, at the allocator's offsets (with clusters: the
     /// clusters' vertex blocks).
     blocks: Buffer,
-    /// With clusters: their index blocks, made at the first clustered upload.
-    indices: Option<Buffer>,
+    /// With clusters: their index blocks and the windows' vertex arrays.
+    clusters: Option<ClusterArrays>,
     vertex_array: Option<VertexArray>,
+}
+
+/// The cluster index buffer and, where the context has vertex array
+/// objects, one per window of the vertex buffer (empty where it has none).
+struct ClusterArrays {
+    indices: Buffer,
+    windows: Vec<VertexArray>,
 }
 
 impl TerrainPass {
@@ -121,7 +137,47 @@ impl TerrainPass {
             Buffer::new(gl, BufferTarget::Vertices, buffer_bytes as usize, BufferUsage::Dynamic)?;
         let vertex_array =
             if gl.caps().vertex_array_objects { Some(VertexArray::new(gl)?) } else { None };
-        Ok(TerrainPass { gl: Rc::clone(gl), colour, position, blocks, indices: None, vertex_array })
+        Ok(TerrainPass {
+            gl: Rc::clone(gl),
+            colour,
+            position,
+            blocks,
+            clusters: None,
+            vertex_array,
+        })
+    }
+
+    /// Readies the pass to draw clusters: an index buffer of `index_bytes`
+    /// and, with vertex array objects, one per window of the tile buffer,
+    /// each recording the index buffer and the three attribute pointers at
+    /// its window's start. Those calls are made here, before any frame, and
+    /// not counted: they are part of making the objects.
+    #[allow(unsafe_code)]
+    pub fn prepare_clusters(&mut self, index_bytes: u32) -> Result<(), GlError> {
+        let size = index_bytes as usize;
+        let indices = Buffer::new(&self.gl, BufferTarget::Indices, size, BufferUsage::Dynamic)?;
+        let mut windows = Vec::new();
+        if self.vertex_array.is_some() {
+            let capacity = self.blocks.size() as u32;
+            let calls = Calls::making_objects(&self.gl);
+            for k in 0..window_count(capacity) {
+                let base = window(k, capacity).expect("counted").start;
+                let vertex_array = VertexArray::new(&self.gl)?;
+                // SAFETY: live objects of this context; the pointers stay
+                // inside the buffer (a window starts inside it).
+                unsafe {
+                    calls.bind_vertex_array(Some(&vertex_array));
+                    calls.bind_buffer_to(&indices, BufferTarget::Indices);
+                    calls.bind_buffer(&self.blocks);
+                    enable_attributes(calls, true);
+                    attribute_pointers(calls, base as i32);
+                    calls.bind_vertex_array(None);
+                }
+                windows.push(vertex_array);
+            }
+        }
+        self.clusters = Some(ClusterArrays { indices, windows });
+        gl_check!(self.gl)
     }
 
     /// Copies the dirty ranges of the staging copy into the tile buffer at
@@ -140,19 +196,14 @@ impl TerrainPass {
     }
 
     /// Copies the dirty ranges of the cluster index staging copy into the
-    /// index buffer (made the size of `staging` on first use), as
-    /// [`Self::upload`] does for the vertex buffer.
+    /// index buffer ([`Self::prepare_clusters`]), as [`Self::upload`] does
+    /// for the vertex buffer.
     pub fn upload_indices(
         &mut self,
         staging: &[u8],
         ranges: &[std::ops::Range<u32>],
     ) -> Result<(), GlError> {
-        if self.indices.is_none() {
-            let size = staging.len();
-            let buffer = Buffer::new(&self.gl, BufferTarget::Indices, size, BufferUsage::Dynamic)?;
-            self.indices = Some(buffer);
-        }
-        let buffer = self.indices.as_ref().expect("made above");
+        let buffer = &self.prepared()?.indices;
         check_uploads(staging, buffer.size() as u32, ranges)?;
         for range in ranges {
             self.sub_data(buffer, range.start, &staging[range.start as usize..range.end as usize]);
@@ -175,6 +226,13 @@ impl TerrainPass {
         }
         self.sub_data(&self.blocks, offset, bytes);
         gl_check!(self.gl)
+    }
+
+    /// The cluster buffers, or why there are none.
+    fn prepared(&self) -> Result<&ClusterArrays, GlError> {
+        self.clusters.as_ref().ok_or_else(|| {
+            GlError::InvalidRequest("clusters drawn by a pass not prepared for them".to_owned())
+        })
     }
 
     /// `bytes` into `buffer` at `offset`, which the caller checked.
@@ -209,6 +267,9 @@ impl TerrainPass {
         blocks: TileBlocks<'_>,
     ) -> Result<(), GlError> {
         let Some(frame) = list.uniforms else { return Ok(()) };
+        let clusters = if list.clustered() { Some(self.prepared()?) } else { None };
+        // Per window vertex arrays, where the context has them.
+        let windows = clusters.map(|c| c.windows.as_slice()).filter(|w| !w.is_empty());
         let calls = Calls::new(&self.gl);
         let programs = match output {
             TerrainOutput::Colour => &self.colour,
@@ -232,27 +293,28 @@ impl TerrainPass {
             calls.disable(glow::SCISSOR_TEST);
             calls.use_program(&program.program);
             set_frame_uniforms(calls, &program.at, &frame);
-            if let Some(vertex_array) = &self.vertex_array {
-                calls.bind_vertex_array(Some(vertex_array));
+            if windows.is_none() {
+                if let Some(vertex_array) = &self.vertex_array {
+                    calls.bind_vertex_array(Some(vertex_array));
+                }
+                // The index binding is the vertex array's state where there
+                // is one, the context's where there is none (ES 2.0): bound
+                // here, every frame, either way.
+                let indices = clusters.map_or(&self.blocks, |c| &c.indices);
+                calls.bind_buffer_to(indices, BufferTarget::Indices);
             }
-            // The index binding is the vertex array's state where there is
-            // one, the context's where there is none (ES 2.0): bound here,
-            // every frame, either way.
-            let indices = match (&self.indices, list.clustered()) {
-                (Some(indices), true) => indices,
-                _ => &self.blocks,
-            };
-            calls.bind_buffer_to(indices, BufferTarget::Indices);
+            // The windows' vertex arrays hold their own bindings; this one
+            // is the context's, left bound for an embedding caller.
             calls.bind_buffer(&self.blocks);
-            calls.enable_attribute(GRID);
-            calls.enable_attribute(HEIGHT);
-            calls.enable_attribute(NORMAL);
+            if windows.is_none() {
+                enable_attributes(calls, true);
+            }
             // Far slice first; then a clear depth for the near slice.
             let mut on_plain = true;
             // The attribute base last set (clusters share theirs).
-            let mut base = None;
+            let mut bound = Bound { base: None, windows };
             if let Some(far) = frame.slices.far {
-                let b = &mut base;
+                let b = &mut bound;
                 on_plain = self.draw_slice(calls, programs, list, far, Slice::Far, blocks, b);
                 calls.clear(glow::DEPTH_BUFFER_BIT);
             }
@@ -261,10 +323,10 @@ impl TerrainPass {
                 set_frame_uniforms(calls, &program.at, &frame);
             }
             let near = frame.slices.near;
-            self.draw_slice(calls, programs, list, near, Slice::Near, blocks, &mut base);
-            calls.disable_attribute(GRID);
-            calls.disable_attribute(HEIGHT);
-            calls.disable_attribute(NORMAL);
+            self.draw_slice(calls, programs, list, near, Slice::Near, blocks, &mut bound);
+            if windows.is_none() {
+                enable_attributes(calls, false);
+            }
             // Unbound, so a caller's buffer binds cannot change it.
             if self.vertex_array.is_some() {
                 calls.bind_vertex_array(None);
@@ -286,7 +348,7 @@ impl TerrainPass {
         view_projection: glam::Mat4,
         slice: Slice,
         blocks: TileBlocks<'_>,
-        base: &mut Option<u32>,
+        base: &mut Bound<'_>,
     ) -> bool {
         let frame = list.uniforms.expect("drawn lists have uniforms");
         let [plain, voids] = programs;
@@ -316,11 +378,11 @@ impl TerrainPass {
         slice: Slice,
         voids: bool,
         blocks: TileBlocks<'_>,
-        base: &mut Option<u32>,
+        bound: &mut Bound<'_>,
     ) {
         if list.clustered() {
-            for cluster in list.clusters_with(slice, voids, *base) {
-                draw_cluster(calls, at, list, cluster, slice, base);
+            for cluster in list.clusters_with(slice, voids, bound.base) {
+                draw_cluster(calls, at, list, cluster, slice, bound);
             }
         } else {
             self.draw_tiles(calls, at, list.tiles_with(slice, voids), blocks);
@@ -370,6 +432,27 @@ impl TerrainPass {
     }
 }
 
+/// The attribute base last set in a pass, and how a change is made.
+struct Bound<'a> {
+    /// The base the attributes point at, if any yet.
+    base: Option<u32>,
+    /// The windows' vertex arrays (a change binds one), or `None` (a change
+    /// sets the three pointers).
+    windows: Option<&'a [VertexArray]>,
+}
+
+/// Enables (`on`) or disables the three attribute arrays.
+#[allow(unsafe_code)]
+unsafe fn enable_attributes(calls: Calls<'_>, on: bool) {
+    for attribute in [GRID, HEIGHT, NORMAL] {
+        if on {
+            calls.enable_attribute(attribute);
+        } else {
+            calls.disable_attribute(attribute);
+        }
+    }
+}
+
 /// Points the three attributes at vertices from byte `vertices` of the
 /// bound buffer.
 #[allow(unsafe_code)]
@@ -383,8 +466,9 @@ unsafe fn attribute_pointers(calls: Calls<'_>, vertices: i32) {
 }
 
 /// Draws `cluster`'s members in `slice`: its members' uniforms in one
-/// write, the attribute pointers when its base is not `base` (the last
-/// set), one glDrawElements per run of members in the slice.
+/// write, its window's vertex array (or the attribute pointers) when its
+/// base is not the one `bound` last set, one glDrawElements per run of
+/// members in the slice.
 #[allow(unsafe_code)]
 fn draw_cluster(
     calls: Calls<'_>,
@@ -392,18 +476,23 @@ fn draw_cluster(
     list: &DrawList,
     cluster: &Cluster,
     slice: Slice,
-    base: &mut Option<u32>,
+    bound: &mut Bound<'_>,
 ) {
     let mut uniforms = [0.0; MAX_MEMBERS * MEMBER_FLOATS];
     let used = list.cluster_uniforms(cluster, &mut uniforms);
-    // SAFETY: the bound buffer holds the cluster's block: its vertices
-    // from `cluster.base` on (every index numbers a vertex of the block
+    // SAFETY: the buffer the pointers (or the window's vertex array) use
+    // holds the cluster's block: its vertices from `cluster.base` on (every index numbers a vertex of the block
     // from there, below 2^16), its indices at the runs' offsets.
     unsafe {
         calls.uniform_4v(at.members.as_ref(), &uniforms[..used]);
-        if *base != Some(cluster.base) {
-            *base = Some(cluster.base);
-            attribute_pointers(calls, cluster.base as i32);
+        if bound.base != Some(cluster.base) {
+            bound.base = Some(cluster.base);
+            match bound.windows {
+                Some(windows) => {
+                    calls.bind_vertex_array(Some(&windows[window_of(cluster.base) as usize]))
+                }
+                None => attribute_pointers(calls, cluster.base as i32),
+            }
         }
         for run in list.runs(cluster, slice) {
             calls.draw_triangles(run.index_count as i32, run.index_byte_offset as i32);

@@ -151,18 +151,27 @@ pub fn sky(model: &CostModel) -> CallStats {
 /// Per tile: one uniform array write (two vectors), three pointers at the
 /// tile's block and a glDrawElements of its own indices. Per cluster
 /// ([`DrawList::clustered`]): one uniform array write (its members'
-/// vectors), three pointers only when its attribute base differs from the
-/// last one set in the pass, and a glDrawElements per run of members in the
-/// slice ([`DrawList::runs`]).
+/// vectors), a change of attribute base only when its base differs from
+/// the last one set in the pass, and a glDrawElements per run of members in
+/// the slice ([`DrawList::runs`]).
+///
+/// Clusters with vertex arrays: each window of the vertex buffer has its
+/// own, its pointers and index buffer set when the pass was made (not in
+/// any frame). The pass binds none of its own, no index buffer and no
+/// attribute array: only the tile buffer (as vertex buffer, for the
+/// embedding caller), a window's vertex array per change of base, and the
+/// unbind at the end. Without vertex arrays a change of base is three
+/// pointers.
 pub fn terrain(model: &CostModel, list: &DrawList) -> CallStats {
     let Some(frame) = list.uniforms else { return CallStats::default() };
+    let windows = model.vertex_arrays && list.clustered();
     let mut stats = CallStats {
         state_changes: 9,
         program_binds: 1,
         uniform_writes: 5,
-        vertex_array_binds: 2 * model.vertex_arrays as u64,
-        buffer_binds: 2,
-        attribute_array_toggles: 6,
+        vertex_array_binds: if windows { 1 } else { 2 * model.vertex_arrays as u64 },
+        buffer_binds: if windows { 1 } else { 2 },
+        attribute_array_toggles: if windows { 0 } else { 6 },
         ..CallStats::default()
     };
     let slices: &[Slice] =
@@ -198,7 +207,11 @@ pub fn terrain(model: &CostModel, list: &DrawList) -> CallStats {
                 stats.uniform_writes += 1;
                 if base != Some(cluster.base) {
                     base = Some(cluster.base);
-                    stats.attribute_pointer_changes += 3;
+                    if windows {
+                        stats.vertex_array_binds += 1;
+                    } else {
+                        stats.attribute_pointer_changes += 3;
+                    }
                 }
                 for run in list.runs(cluster, slice) {
                     stats.draw_calls += 1;

@@ -171,6 +171,11 @@ pub struct SceneStats {
     pub clusters_made: usize,
     /// Bytes of cluster blocks uploaded (the GPU's uploads when clustered).
     pub cluster_bytes_uploaded: u64,
+    /// Windows of the cluster vertex buffer the frame's clusters lie in:
+    /// their distinct attribute bases.
+    pub cluster_windows: usize,
+    /// The fewest windows the frame's cluster vertices could fill.
+    pub cluster_windows_least: usize,
     /// CPU time of each stage.
     pub cpu_ms: StageTimes,
 }
@@ -425,6 +430,8 @@ impl Scene {
             report.clusters = stats.clusters;
             report.clusters_made = stats.made;
             report.cluster_bytes_uploaded = stats.bytes_uploaded;
+            report.cluster_windows = stats.bases;
+            report.cluster_windows_least = stats.least_bases;
         }
         Ok(report)
     }
