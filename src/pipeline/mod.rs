@@ -13,7 +13,10 @@
 
 mod sizing;
 
-pub use sizing::{buffer_copies, clipmap_view, plan_memory, MemoryPlan, MIN_BUDGET_BYTES};
+pub use sizing::{
+    buffer_copies, clipmap_view, plan_memory, MemoryPlan, MAX_LOADER_QUEUE, MIN_BUDGET_BYTES,
+    MIN_BUFFER_BYTES,
+};
 
 use std::sync::Arc;
 use std::time::Instant;
