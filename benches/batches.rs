@@ -1,6 +1,8 @@
 //! Cluster batches against one draw per tile (Judnich & Ling, Table 1 and
 //! Table II, on our data): the default flight at 1280x720 on headless EGL,
-//! at one tau (1 px, `-- --tau PX` to change), drawn as
+//! at one tau (1 px, `-- --tau PX` to change), over the node meshes `fly`
+//! draws (`-- --regular-grid` for regular grids of each level's posts),
+//! drawn as
 //! - CLOD-16, -32, -64: one draw call per tile of 16, 32 or 64 cells;
 //! - SCSLOD-16, -32: clusters of up to 16 such tiles, one draw call each
 //!   (and SCSLOD-64 for completeness: 16 tiles of 64 cells exceed 16-bit
@@ -10,7 +12,8 @@
 //! other view): the view is settled and drawn once (uploads), then drawn
 //! again from the same camera three times (two with `--quick`), nothing to upload,
 //! and the median kept: draw calls ("batches"), triangles, attribute
-//! pointer changes, the CPU time the renderer spends issuing the frame's
+//! pointer changes and vertex array binds (a cluster's attribute window
+//! changing), the CPU time the renderer spends issuing the frame's
 //! GL calls (clear, sky, terrain; no glFinish), the frame time to
 //! glFinish, and triangles per second over the frame time. Ratios are
 //! taken against CLOD-32 of the same run.
@@ -35,6 +38,8 @@ use ridgeline::dataset;
 use ridgeline::display::DisplayConfig;
 use ridgeline::flight::default_flight;
 use ridgeline::gl::{ContextRequest, GlBackend, GlContext, GlRenderer};
+use ridgeline::meshes::{MeshOptions, MeshedSource};
+use ridgeline::node::NodeSource;
 use ridgeline::pipeline::FramePipeline;
 use ridgeline::pyramid::{Pyramid, Silent};
 use ridgeline::render::{CallStats, ClusterOrder, FrameOutput, RenderBackend};
@@ -46,6 +51,27 @@ const SIZE: UVec2 = UVec2::new(1280, 720);
 const FOV_X_DEG: f64 = 60.0;
 /// Each technique's buffer: CLOD-16's 2000 tiles at tau 1 take 20 MB.
 const BUFFER_BYTES: u32 = 48 << 20;
+
+/// The built-in terrain, with its node meshes unless regular grids are drawn.
+struct Terrain {
+    pyramid: Arc<Pyramid>,
+    meshed: Option<Arc<MeshedSource>>,
+}
+
+impl Terrain {
+    /// The node source a pipeline pages from, and its summary (the meshes'
+    /// deltas when meshes are drawn).
+    fn source(&self) -> (Arc<dyn NodeSource>, TerrainSummary) {
+        let mut summary = TerrainSummary::from_pyramid(self.pyramid.info());
+        match &self.meshed {
+            Some(meshed) => {
+                summary.delta_per_level = meshed.delta_per_level();
+                (meshed.clone(), summary)
+            }
+            None => (self.pyramid.clone(), summary),
+        }
+    }
+}
 
 /// The GL renderer, timing how long issuing each frame's calls takes.
 struct Timed {
@@ -96,6 +122,7 @@ struct Row {
     batches: f64,
     triangles: f64,
     pointer_changes: f64,
+    vertex_array_binds: f64,
     uniform_writes: f64,
     issue_ms: f64,
     frame_ms: f64,
@@ -121,7 +148,7 @@ struct Runner {
 
 impl Runner {
     fn open(
-        pyramid: &Arc<Pyramid>,
+        terrain: &Terrain,
         technique: Technique,
         target: UVec2,
         tau: f64,
@@ -136,8 +163,8 @@ impl Runner {
         config.scene.cluster_order = technique.order;
         let request = ContextRequest::new(GlBackend::Egl, config.version, target);
         let context = GlContext::new(&request)?;
-        let summary = TerrainSummary::from_pyramid(pyramid.info());
-        let pipeline = FramePipeline::new(&config.pipeline(), pyramid.clone(), summary)?;
+        let (source, summary) = terrain.source();
+        let pipeline = FramePipeline::new(&config.pipeline(), source, summary)?;
         let mut renderer = GlRenderer::new(context.gl(), config.scene.buffer_bytes)?;
         if let Some(clusters) = pipeline.scene().clusters() {
             renderer.prepare_clusters(clusters.config().index_capacity_bytes)?;
@@ -168,6 +195,7 @@ impl Runner {
         sum.batches += (stats.calls.draw_calls - 1) as f64;
         sum.triangles += triangles;
         sum.pointer_changes += (stats.calls.attribute_pointer_changes - 1) as f64;
+        sum.vertex_array_binds += stats.calls.vertex_array_binds as f64;
         sum.uniform_writes += stats.calls.uniform_writes as f64;
         sum.issue_ms += issue_ms;
         sum.frame_ms += frame_ms;
@@ -183,6 +211,7 @@ impl Runner {
             batches: sum.batches / n,
             triangles: sum.triangles / n,
             pointer_changes: sum.pointer_changes / n,
+            vertex_array_binds: sum.vertex_array_binds / n,
             uniform_writes: sum.uniform_writes / n,
             issue_ms: sum.issue_ms / n,
             frame_ms: sum.frame_ms / n,
@@ -197,7 +226,7 @@ impl Runner {
 /// Every technique over the same views, interleaved view by view (the
 /// order reversed every other view), so load on the machine hits all alike.
 fn run_all(
-    pyramid: &Arc<Pyramid>,
+    terrain: &Terrain,
     techniques: &[Technique],
     target: UVec2,
     tau: f64,
@@ -206,9 +235,9 @@ fn run_all(
 ) -> Result<Vec<Row>, Box<dyn std::error::Error>> {
     let mut runners = techniques
         .iter()
-        .map(|&t| Runner::open(pyramid, t, target, tau))
+        .map(|&t| Runner::open(terrain, t, target, tau))
         .collect::<Result<Vec<_>, _>>()?;
-    let path = default_flight(pyramid);
+    let path = default_flight(&terrain.pyramid);
     for (k, t) in path.frame_times(views as u32).enumerate() {
         let camera = path.sample(t).camera(FOV_X_DEG, [SIZE.x, SIZE.y]);
         let count = runners.len();
@@ -237,6 +266,7 @@ fn table(title: &str, techniques: &[Technique], rows: &[Row]) {
                 format!("{:.0}", r.triangles),
                 format!("{:.0}", r.pointer_changes),
                 format!("{:.2}", r.pointer_changes / r.batches),
+                format!("{:.1}", r.vertex_array_binds),
                 format!("{:.2}", r.issue_ms),
                 format!("{:.1}", r.frame_ms),
                 format!("{:.1}", r.triangles_per_s / 1e6),
@@ -256,6 +286,7 @@ fn table(title: &str, techniques: &[Technique], rows: &[Row]) {
             "triangles",
             "ptr changes",
             "ptr/batch",
+            "VAO binds",
             "issue ms",
             "frame ms",
             "Mtri/s",
@@ -277,6 +308,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .unwrap_or(1.0);
     let (views, repeats) = if args.quick { (3, 2) } else { (24, 3) };
     let pyramid = Arc::new(dataset::open(None, Path::new("cache"), &Silent)?);
+    let regular_grid = std::env::args().any(|a| a == "--regular-grid");
+    let meshed = match regular_grid {
+        true => None,
+        false => Some(Arc::new(MeshedSource::open_or_build(
+            pyramid.clone(),
+            MeshOptions::for_tau(tau),
+            &Silent,
+        )?)),
+    };
+    let terrain = Terrain { pyramid, meshed };
+    let tiles = if regular_grid { "regular grids" } else { "node meshes" };
     let by_base = ClusterOrder::ByBase;
     let mut techniques: Vec<Technique> =
         [(16, false), (32, false), (64, false), (16, true), (32, true), (64, true)]
@@ -287,10 +329,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut report = serde_json::Map::new();
     let mut panels = Vec::new();
     for (label, target) in [("1280x720", SIZE), ("2x2", UVec2::new(2, 2))] {
-        let rows = run_all(&pyramid, &techniques, target, tau, views, repeats)?;
+        let rows = run_all(&terrain, &techniques, target, tau, views, repeats)?;
         table(
             &format!(
-                "tau {tau} px, tiles chosen for 1280x720, drawn into {label}: means over {views} views of the default flight, ratios against CLOD-32"
+                "{tiles}, tau {tau} px, tiles chosen for 1280x720, drawn into {label}: means over {views} views of the default flight, ratios against CLOD-32"
             ),
             &techniques,
             &rows,
@@ -367,6 +409,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ],
     );
     report.insert("tau_px".to_owned(), json!(tau));
+    report.insert("tiles".to_owned(), json!(tiles));
     report.insert("views".to_owned(), json!(views));
     let json_path = write_json("batches", &serde_json::Value::Object(report));
     let svg_path = write_svg("batches", &panels);
