@@ -2,16 +2,22 @@
 //! built-in terrain at 1280x720, headless EGL, requested tau 1 px, for a
 //! sweep of triangle budgets over node meshes (`fly`'s default: 330k
 //! triangles at tau 1, about 216k at the tau ceiling) and over regular
-//! grids (`--regular-grid`: 1.37M to 280k). Every point records, in one run:
+//! grids (`--regular-grid`: 1.37M to 280k), and the cruise flight over the
+//! procedural earth (regular grids, 570k at tau 1). As `fly` runs: nodes
+//! page in on the loader thread, within the default 64 MB memory budget.
+//! Every point records, in one run:
 //! - over a flight of evenly spaced frames along the whole approach (150,
 //!   or 40 with `--quick`), from frame 30 on: triangles a frame (mean and
 //!   the largest miss of the budget), frame ms p50 and p99 and their ratio,
 //!   (40 frames with `--quick`: 10 measured, so p99 is their maximum),
-//!   the achieved tau (mean and largest), the share of split tests made
-//!   (valid life);
+//!   the GL share of the frame (p50, p99: upload, draw and glFinish) and
+//!   the CPU share's p99, the achieved tau (mean and largest), the share
+//!   of split tests made (valid life), and Ridgeline's own memory (heap
+//!   peak, counted, plus the GPU buffer);
 //! - at views along the approach (8, or 1 with `--quick`), each after the
 //!   controller settled there: the measured per-pixel error of `ridgeline
-//!   accuracy` (p50, p99.9) against full resolution.
+//!   accuracy` (p50, p99.9) against full resolution (the truth mesh on the
+//!   approach, each pixel's ray on the CPU at cruise).
 //!
 //! Frame-time ratios are within one point's flight, so machine noise hits
 //! both percentiles alike. Prints the table beside Wu's Table 1, writes
@@ -23,18 +29,19 @@ use std::path::Path;
 use std::sync::Arc;
 
 use glam::UVec2;
+use ridgeline::accuracy::RayGround;
 use ridgeline::camera::Camera;
-use ridgeline::clipmap::LoaderMode;
 use ridgeline::dataset;
-use ridgeline::display::measure::measure_flight;
+use ridgeline::display::measure::{measure_flight_with, Truth};
 use ridgeline::display::{DisplayConfig, DisplayParts};
-use ridgeline::flight::{default_flight, FlightPath};
+use ridgeline::flight::{builtin_cruise, default_flight, FlightPath};
 use ridgeline::gl::{GlBackend, TruthMesh, TruthPass, TruthRegion};
 use ridgeline::lod::budget::{BudgetConfig, BudgetTarget};
 use ridgeline::lod::LodConfig;
 use ridgeline::meshes::{MeshOptions, MeshedSource};
 use ridgeline::node::NodeSource;
 use ridgeline::pipeline::FrameStats;
+use ridgeline::procedural::{EarthParams, ProceduralEarth};
 use ridgeline::pyramid::{Pyramid, Silent};
 use ridgeline::scene::TerrainSummary;
 use serde_json::json;
@@ -44,6 +51,11 @@ const SIZE: UVec2 = UVec2::new(1280, 720);
 const FOV_X_DEG: f64 = 60.0;
 /// Frames the controller has before the flight is measured.
 const SETTLE: usize = 30;
+/// `fly`'s default memory budget (no snapshots here).
+const MEMORY_BYTES: u64 = 64 << 20;
+/// Side of the square the cruise flies over in the procedural earth's
+/// middle, metres (`fly --dataset procedural --flight cruise`).
+const CRUISE_AREA_M: f64 = 100_000.0;
 
 /// Wu et al.'s Table 1, their own rows: triangles a frame, frames a second,
 /// average error (pixels), on a PIII 450 with a TNT2 at 600x600.
@@ -57,6 +69,8 @@ const WU_TABLE_1: [(u64, f64, f64); 5] = [
 
 #[derive(Clone, Copy, serde::Serialize)]
 struct Row {
+    /// The flight: `approach` or `cruise`.
+    flight: &'static str,
     /// Node meshes or regular grids.
     tiles: &'static str,
     /// Triangles a frame budgeted; `None`: tau 1 unconstrained.
@@ -66,6 +80,12 @@ struct Row {
     worst_miss: f64,
     frame_ms_p50: f64,
     frame_ms_p99: f64,
+    gl_ms_p50: f64,
+    gl_ms_p99: f64,
+    /// The frame less its GL share (paging, selection, tiles), p99.
+    cpu_ms_p99: f64,
+    /// Ridgeline's heap peak over the flight plus its GPU buffer, bytes.
+    own_bytes: u64,
     tau_mean: f64,
     tau_max: f64,
     split_tests_made: f64,
@@ -75,119 +95,228 @@ struct Row {
     error_mean_px: f64,
 }
 
+/// One point of the sweep: what is flown over what, and the budget.
+#[derive(Clone, Copy)]
+enum Kind {
+    /// The approach over the built-in terrain's node meshes.
+    Meshes,
+    /// The approach over regular grids of its posts.
+    Grids,
+    /// The cruise over the procedural earth.
+    Cruise,
+}
+
 fn main() {
     let args = BenchArgs::parse();
-    let (frames, view_count, points): (u32, u32, Vec<(bool, Option<u64>)>) = if args.quick {
-        (40, 1, vec![(true, None), (true, Some(260_000)), (false, Some(400_000))])
+    let (frames, view_count, points): (u32, u32, Vec<(Kind, Option<u64>)>) = if args.quick {
+        let points = vec![
+            (Kind::Meshes, None),
+            (Kind::Meshes, Some(260_000)),
+            (Kind::Grids, Some(400_000)),
+            (Kind::Cruise, Some(450_000)),
+        ];
+        (40, 1, points)
     } else {
-        let meshes = [None, Some(300_000), Some(270_000), Some(240_000)].map(|b| (true, b));
+        let meshes = [None, Some(300_000), Some(270_000), Some(240_000)].map(|b| (Kind::Meshes, b));
         let grids = [None, Some(1_000_000), Some(700_000), Some(400_000), Some(300_000)];
-        (150, 8, meshes.into_iter().chain(grids.map(|b| (false, b))).collect())
+        let cruise = [None, Some(500_000), Some(450_000)].map(|b| (Kind::Cruise, b));
+        let grids = grids.map(|b| (Kind::Grids, b));
+        (150, 8, meshes.into_iter().chain(grids).chain(cruise).collect())
     };
     let pyramid =
         Arc::new(dataset::open(None, Path::new("cache"), &Silent).expect("the built-in terrain"));
-    let path = default_flight(&pyramid);
-    let views: Vec<(f64, Camera)> = path
-        .frame_times(view_count)
-        .map(|t| (t, path.sample(t).camera(FOV_X_DEG, SIZE.into())))
-        .collect();
-    let positions = views.iter().map(|(_, c)| [c.position.x, c.position.y]);
-    let region =
-        TruthRegion::around_positions(pyramid.layout(), LodConfig::default().grid_size, positions);
-    let mesh = TruthMesh::load(pyramid.as_ref(), region).expect("truth mesh");
-    let mut rows = Vec::new();
     let meshed = MeshedSource::open_or_build(pyramid.clone(), MeshOptions::for_tau(1.0), &Silent)
         .expect("the built-in terrain's node meshes");
-    let meshed = Arc::new(meshed);
-    for (meshes, budget) in points {
-        let source = Source { pyramid: &pyramid, meshed: meshes.then_some(&meshed) };
-        let row = measure(&source, &path, frames, &views, &mesh, budget);
+    let approach = Approach::new(pyramid, Arc::new(meshed), view_count);
+    let cruise = Cruise::new(view_count);
+    let mut rows = Vec::new();
+    for (kind, budget) in points {
+        let row = match kind {
+            Kind::Meshes => approach.measure(true, frames, budget),
+            Kind::Grids => approach.measure(false, frames, budget),
+            Kind::Cruise => cruise.measure(frames, budget),
+        };
         println!(
-            "  {:<12} budget {:>9}: {:.0} triangles, {:.1}/{:.1} ms p50/p99, tau {:.2}, p99.9 {:.3} px",
+            "  {} {:<12} budget {:>9}: {:.0} triangles, {:.1}/{:.1} ms p50/p99, tau {:.2}, p99.9 {:.3} px, own {:.1} MB",
+            row.flight,
             row.tiles,
             budget.map_or("none".into(), |b| b.to_string()),
             row.triangles,
             row.frame_ms_p50,
             row.frame_ms_p99,
             row.tau_mean,
-            row.error_p999_px
+            row.error_p999_px,
+            row.own_bytes as f64 / (1u64 << 20) as f64
         );
         rows.push(row);
     }
     report(&args, &rows, frames, view_count);
 }
 
-/// What the tiles are drawn from: node meshes when `meshed` is given.
-struct Source<'a> {
-    pyramid: &'a Arc<Pyramid>,
-    meshed: Option<&'a Arc<MeshedSource>>,
+/// The built-in approach: its pyramid, node meshes, measured views and
+/// the truth mesh around them.
+struct Approach {
+    pyramid: Arc<Pyramid>,
+    meshed: Arc<MeshedSource>,
+    path: FlightPath,
+    views: Vec<(f64, Camera)>,
+    mesh: TruthMesh,
 }
 
-fn display(
-    source: &Source<'_>,
+impl Approach {
+    fn new(pyramid: Arc<Pyramid>, meshed: Arc<MeshedSource>, view_count: u32) -> Approach {
+        let path = default_flight(&pyramid);
+        let views = views(&path, view_count);
+        let positions = views.iter().map(|(_, c)| [c.position.x, c.position.y]);
+        let grid = LodConfig::default().grid_size;
+        let region = TruthRegion::around_positions(pyramid.layout(), grid, positions);
+        let mesh = TruthMesh::load(pyramid.as_ref(), region).expect("truth mesh");
+        Approach { pyramid, meshed, path, views, mesh }
+    }
+
+    fn measure(&self, meshes: bool, frames: u32, budget: Option<u64>) -> Row {
+        let mut summary = TerrainSummary::from_pyramid(self.pyramid.info());
+        let source: Arc<dyn NodeSource> = if meshes {
+            summary.delta_per_level = self.meshed.delta_per_level();
+            self.meshed.clone()
+        } else {
+            self.pyramid.clone()
+        };
+        let (mut parts, flight) = fly(source, summary, &self.path, frames, budget);
+        let truth = TruthPass::new(parts.context.gl(), &self.mesh).expect("truth pass");
+        let pyramid = &self.pyramid;
+        let exact = |x: f64, y: f64| pyramid.exact_height(x, y);
+        let spacing = pyramid.layout().spacing_m;
+        let run =
+            measure_flight_with(&mut parts, Truth::Mesh(&truth), &exact, spacing, &self.views)
+                .expect("accuracy views");
+        let tiles = if meshes { "node meshes" } else { "regular grid" };
+        row("approach", tiles, &flight, &run, budget)
+    }
+}
+
+/// The built-in cruise over the procedural earth.
+struct Cruise {
+    earth: Arc<ProceduralEarth>,
+    path: FlightPath,
+    views: Vec<(f64, Camera)>,
+}
+
+impl Cruise {
+    fn new(view_count: u32) -> Cruise {
+        let earth = Arc::new(ProceduralEarth::new(EarthParams::display_earth()).expect("earth"));
+        let layout = *earth.layout();
+        let side = |k: usize| (layout.posts[k] - 1) as f64 * layout.spacing_m[k];
+        let half = CRUISE_AREA_M / 2.0;
+        let origin = [side(0) / 2.0 - half, side(1) / 2.0 - half];
+        let height = |x: f64, y: f64| earth.exact_height(x, y).ok();
+        let path = builtin_cruise(origin, [CRUISE_AREA_M; 2], &height);
+        let views = views(&path, view_count);
+        Cruise { earth, path, views }
+    }
+
+    fn measure(&self, frames: u32, budget: Option<u64>) -> Row {
+        let earth = &self.earth;
+        let [low, high] = earth.height_bounds();
+        let levels = earth.layout().levels;
+        let summary = TerrainSummary {
+            delta_per_level: (0..levels).map(|l| earth.delta_bound(l) as f64).collect(),
+            height_range: (low as f32, high as f32),
+        };
+        let (mut parts, flight) = fly(earth.clone(), summary, &self.path, frames, budget);
+        let exact = |x: f64, y: f64| earth.exact_height(x, y).ok();
+        let layout = earth.layout();
+        let ground = RayGround {
+            exact: &exact,
+            slope: earth.slope_bound(),
+            top_m: high,
+            spacing_m: layout.spacing_m[0].min(layout.spacing_m[1]),
+        };
+        let truth = Truth::Rays(ground);
+        let run = measure_flight_with(&mut parts, truth, &exact, layout.spacing_m, &self.views)
+            .expect("accuracy views");
+        row("cruise", "regular grid", &flight, &run, budget)
+    }
+}
+
+/// `count` views evenly spaced along `path`.
+fn views(path: &FlightPath, count: u32) -> Vec<(f64, Camera)> {
+    path.frame_times(count).map(|t| (t, path.sample(t).camera(FOV_X_DEG, SIZE.into()))).collect()
+}
+
+/// Flies `frames` evenly spaced frames of `path` over `source` as `fly`
+/// does (the loader thread, the default memory budget), from a display
+/// settled at the start; the display and its frames' stats. The heap peak
+/// is counted from before the display opens.
+fn fly(
+    source: Arc<dyn NodeSource>,
+    summary: TerrainSummary,
     path: &FlightPath,
     frames: u32,
     budget: Option<u64>,
-) -> DisplayParts {
+) -> (DisplayParts, Flown) {
     let mut config = DisplayConfig::new(GlBackend::Egl, SIZE);
     config.fov_x_deg = FOV_X_DEG;
-    config.loader = LoaderMode::Inline;
-    config.load_budget = 64;
+    config.memory_budget_bytes = Some(MEMORY_BYTES);
     config.scene.lod.max_travel_m = Some(path.max_travel_per_frame(frames).max(1.0));
     config.budget = budget.map(|b| BudgetConfig::new(BudgetTarget::Triangles(b)));
-    let mut summary = TerrainSummary::from_pyramid(source.pyramid.info());
-    let nodes: Arc<dyn NodeSource> = match source.meshed {
-        Some(meshed) => {
-            summary.delta_per_level = meshed.delta_per_level();
-            meshed.clone()
-        }
-        None => source.pyramid.clone(),
-    };
-    DisplayParts::open(&config, nodes, summary).expect("headless EGL display")
-}
-
-fn measure(
-    source: &Source<'_>,
-    path: &FlightPath,
-    frames: u32,
-    views: &[(f64, Camera)],
-    mesh: &TruthMesh,
-    budget: Option<u64>,
-) -> Row {
-    let pyramid = source.pyramid;
-    let mut parts = display(source, path, frames, budget);
+    let before = testkit::alloc::bytes_in_use();
+    testkit::alloc::reset_peak();
+    let mut parts = DisplayParts::open(&config, source, summary).expect("headless EGL display");
     let first = path.sample(path.start_time()).camera(FOV_X_DEG, SIZE.into());
     parts.pipeline.settle(&first, 10_000).expect("settle");
-    let flight: Vec<FrameStats> = path
+    let stats: Vec<FrameStats> = path
         .frame_times(frames)
         .map(|t| parts.frame(&path.sample(t).camera(FOV_X_DEG, SIZE.into())).expect("frame"))
         .collect();
-    let late = &flight[SETTLE.min(flight.len() - 1)..];
+    let heap = testkit::alloc::peak_bytes().saturating_sub(before);
+    let gpu = parts.pipeline.scene().config().buffer_bytes as u64;
+    (parts, Flown { stats, own_bytes: heap + gpu })
+}
+
+/// A flight's frames and what it took of memory.
+struct Flown {
+    stats: Vec<FrameStats>,
+    own_bytes: u64,
+}
+
+/// The row of a flight and its measured views.
+fn row(
+    flight_name: &'static str,
+    tiles: &'static str,
+    flight: &Flown,
+    run: &ridgeline::display::measure::AccuracyRun,
+    budget: Option<u64>,
+) -> Row {
+    let late = &flight.stats[SETTLE.min(flight.stats.len() - 1)..];
     let n = late.len() as f64;
     let mean = |f: &dyn Fn(&FrameStats) -> f64| late.iter().map(f).sum::<f64>() / n;
-    let mut ms: Vec<f64> = late.iter().map(|s| s.frame_ms).collect();
-    ms.sort_by(f64::total_cmp);
-    let pick = |q: f64| ms[((ms.len() - 1) as f64 * q).round() as usize];
-    let target = budget.unwrap_or(1) as f64;
-    let worst_miss = match budget {
-        Some(_) => {
-            late.iter().map(|s| (s.scene.triangles as f64 / target - 1.0).abs()).fold(0.0, f64::max)
-        }
-        None => 0.0,
+    let percentiles = |f: &dyn Fn(&FrameStats) -> f64| {
+        let mut values: Vec<f64> = late.iter().map(f).collect();
+        values.sort_by(f64::total_cmp);
+        let pick = |q: f64| values[((values.len() - 1) as f64 * q).round() as usize];
+        (pick(0.5), pick(0.99))
     };
-    let truth = TruthPass::new(parts.context.gl(), mesh).expect("truth pass");
-    let exact = |x: f64, y: f64| pyramid.exact_height(x, y);
-    let run = measure_flight(&mut parts, &truth, &exact, pyramid.layout().spacing_m, views)
-        .expect("accuracy views");
+    let (frame_ms_p50, frame_ms_p99) = percentiles(&|s| s.frame_ms);
+    let (gl_ms_p50, gl_ms_p99) = percentiles(&|s| s.gl_ms);
+    let (_, cpu_ms_p99) = percentiles(&|s| s.frame_ms - s.gl_ms);
+    let target = budget.unwrap_or(1) as f64;
+    let miss = |s: &FrameStats| (s.scene.triangles as f64 / target - 1.0).abs();
+    let worst_miss = budget.map_or(0.0, |_| late.iter().map(miss).fold(0.0, f64::max));
     Row {
-        tiles: if source.meshed.is_some() { "node meshes" } else { "regular grid" },
+        flight: flight_name,
+        tiles,
         budget,
         triangles: mean(&|s| s.scene.triangles as f64),
         worst_miss,
-        frame_ms_p50: pick(0.5),
-        frame_ms_p99: pick(0.99),
-        tau_mean: mean(&|s| s.scene.tau_px),
-        tau_max: late.iter().map(|s| s.scene.tau_px).fold(0.0, f64::max),
+        frame_ms_p50,
+        frame_ms_p99,
+        gl_ms_p50,
+        gl_ms_p99,
+        cpu_ms_p99,
+        own_bytes: flight.own_bytes,
+        tau_mean: mean(&|s| s.scene.bound_px),
+        tau_max: late.iter().map(|s| s.scene.bound_px).fold(0.0, f64::max),
         split_tests_made: mean(&|s| s.scene.life.fraction()),
         views_tau_max: run.tau_achieved_max_px,
         error_p50_px: run.summary.p50_px,
@@ -201,6 +330,7 @@ type Measure<'a> = (&'a str, &'a dyn Fn(&Row) -> (f64, f64));
 
 fn report(args: &BenchArgs, rows: &[Row], frames: u32, views: u32) {
     let header = [
+        "flight",
         "tiles",
         "budget",
         "triangles",
@@ -208,6 +338,9 @@ fn report(args: &BenchArgs, rows: &[Row], frames: u32, views: u32) {
         "ms p50",
         "ms p99",
         "p99/p50",
+        "GL p50/p99",
+        "CPU p99",
+        "own MB",
         "fps (p50)",
         "tau mean",
         "tau max",
@@ -220,6 +353,7 @@ fn report(args: &BenchArgs, rows: &[Row], frames: u32, views: u32) {
         .iter()
         .map(|r| {
             vec![
+                r.flight.to_string(),
                 r.tiles.to_string(),
                 r.budget.map_or("none (tau 1)".into(), |b| b.to_string()),
                 format!("{:.0}", r.triangles),
@@ -227,6 +361,9 @@ fn report(args: &BenchArgs, rows: &[Row], frames: u32, views: u32) {
                 format!("{:.1}", r.frame_ms_p50),
                 format!("{:.1}", r.frame_ms_p99),
                 format!("{:.2}", r.frame_ms_p99 / r.frame_ms_p50),
+                format!("{:.1}/{:.1}", r.gl_ms_p50, r.gl_ms_p99),
+                format!("{:.1}", r.cpu_ms_p99),
+                format!("{:.1}", r.own_bytes as f64 / (1u64 << 20) as f64),
                 format!("{:.1}", 1e3 / r.frame_ms_p50),
                 format!("{:.2}", r.tau_mean),
                 format!("{:.2}", r.tau_max.max(r.views_tau_max)),
@@ -239,8 +376,8 @@ fn report(args: &BenchArgs, rows: &[Row], frames: u32, views: u32) {
         .collect();
     print_table(
         &format!(
-            "Triangle budget sweep: built-in approach, {frames} frames (from frame {SETTLE} on), \
-             {views} measured views, 1280x720, requested tau 1 px"
+            "Triangle budget sweep: {frames} frames (from frame {SETTLE} on), {views} measured \
+             views, 1280x720, requested tau 1 px, 64 MB memory budget; tau is the bound held"
         ),
         &header,
         &table,
@@ -271,11 +408,16 @@ fn report(args: &BenchArgs, rows: &[Row], frames: u32, views: u32) {
     );
     // One line per kind of tiles and measure.
     let lines = |measures: &[Measure<'_>]| -> Vec<Series> {
-        let kinds = ["node meshes", "regular grid"];
-        let kind_lines = |kind: &'static str| {
+        let kinds =
+            [("approach", "node meshes"), ("approach", "regular grid"), ("cruise", "regular grid")];
+        let kind_lines = |(flight, kind): (&'static str, &'static str)| {
             measures.iter().map(move |(label, f)| Series {
-                label: format!("{kind}, {label}"),
-                points: rows.iter().filter(|r| r.tiles == kind).map(f).collect(),
+                label: format!("{flight} {kind}, {label}"),
+                points: rows
+                    .iter()
+                    .filter(|r| r.tiles == kind && r.flight == flight)
+                    .map(f)
+                    .collect(),
             })
         };
         kinds.into_iter().flat_map(kind_lines).filter(|s| !s.points.is_empty()).collect()
