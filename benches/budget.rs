@@ -150,7 +150,8 @@ fn main() {
         );
         rows.push(row);
     }
-    report(&args, &rows, frames, view_count);
+    let still = approach.still(frames);
+    report(&args, &rows, still, frames, view_count);
 }
 
 /// The built-in approach: its pyramid, node meshes, measured views and
@@ -172,6 +173,22 @@ impl Approach {
         let region = TruthRegion::around_positions(pyramid.layout(), grid, positions);
         let mesh = TruthMesh::load(pyramid.as_ref(), region).expect("truth mesh");
         Approach { pyramid, meshed, path, views, mesh }
+    }
+
+    /// The frame-time spread of the renderer alone: `frames` frames of
+    /// one still camera (the approach's first pose, node meshes, tau 1),
+    /// which upload nothing and draw the same list: p50 and p99 from frame
+    /// 30 on. On a shared machine the flights' spread is measured against it.
+    fn still(&self, frames: u32) -> Spread {
+        let mut summary = TerrainSummary::from_pyramid(self.pyramid.info());
+        summary.delta_per_level = self.meshed.delta_per_level();
+        let pose = self.path.sample(self.path.start_time());
+        let at = |t: f64| ridgeline::flight::path::Waypoint { t, pose };
+        let still = FlightPath::new(vec![at(0.0), at(self.path.duration())]).expect("a path");
+        let (_, flight) = fly(self.meshed.clone(), summary, &still, frames, None);
+        let late = &flight.stats[SETTLE.min(flight.stats.len() - 1)..];
+        let (p50, p99) = percentiles(late, &|s| s.frame_ms);
+        Spread { frame_ms_p50: p50, frame_ms_p99: p99 }
     }
 
     fn measure(&self, meshes: bool, frames: u32, budget: Option<u64>) -> Row {
@@ -274,6 +291,21 @@ fn fly(
     (parts, Flown { stats, own_bytes: heap + gpu })
 }
 
+/// p50 and p99 of `f` over `frames`.
+fn percentiles(frames: &[FrameStats], f: &dyn Fn(&FrameStats) -> f64) -> (f64, f64) {
+    let mut values: Vec<f64> = frames.iter().map(f).collect();
+    values.sort_by(f64::total_cmp);
+    let pick = |q: f64| values[((values.len() - 1) as f64 * q).round() as usize];
+    (pick(0.5), pick(0.99))
+}
+
+/// Frame-time percentiles of a still camera.
+#[derive(Clone, Copy, serde::Serialize)]
+struct Spread {
+    frame_ms_p50: f64,
+    frame_ms_p99: f64,
+}
+
 /// A flight's frames and what it took of memory.
 struct Flown {
     stats: Vec<FrameStats>,
@@ -291,15 +323,9 @@ fn row(
     let late = &flight.stats[SETTLE.min(flight.stats.len() - 1)..];
     let n = late.len() as f64;
     let mean = |f: &dyn Fn(&FrameStats) -> f64| late.iter().map(f).sum::<f64>() / n;
-    let percentiles = |f: &dyn Fn(&FrameStats) -> f64| {
-        let mut values: Vec<f64> = late.iter().map(f).collect();
-        values.sort_by(f64::total_cmp);
-        let pick = |q: f64| values[((values.len() - 1) as f64 * q).round() as usize];
-        (pick(0.5), pick(0.99))
-    };
-    let (frame_ms_p50, frame_ms_p99) = percentiles(&|s| s.frame_ms);
-    let (gl_ms_p50, gl_ms_p99) = percentiles(&|s| s.gl_ms);
-    let (_, cpu_ms_p99) = percentiles(&|s| s.frame_ms - s.gl_ms);
+    let (frame_ms_p50, frame_ms_p99) = percentiles(late, &|s| s.frame_ms);
+    let (gl_ms_p50, gl_ms_p99) = percentiles(late, &|s| s.gl_ms);
+    let (_, cpu_ms_p99) = percentiles(late, &|s| s.frame_ms - s.gl_ms);
     let target = budget.unwrap_or(1) as f64;
     let miss = |s: &FrameStats| (s.scene.triangles as f64 / target - 1.0).abs();
     let worst_miss = budget.map_or(0.0, |_| late.iter().map(miss).fold(0.0, f64::max));
@@ -328,7 +354,7 @@ fn row(
 /// A plotted line's label and its point for a row.
 type Measure<'a> = (&'a str, &'a dyn Fn(&Row) -> (f64, f64));
 
-fn report(args: &BenchArgs, rows: &[Row], frames: u32, views: u32) {
+fn report(args: &BenchArgs, rows: &[Row], still: Spread, frames: u32, views: u32) {
     let header = [
         "flight",
         "tiles",
@@ -382,6 +408,14 @@ fn report(args: &BenchArgs, rows: &[Row], frames: u32, views: u32) {
         &header,
         &table,
     );
+    println!(
+        "\n  The renderer's own spread, a still camera (the approach's first pose, node meshes, \
+         tau 1, nothing uploaded, the same draw list every frame): p50 {:.1} ms, p99 {:.1} ms, \
+         p99/p50 {:.2}. A flight's p99/p50 above it is what the flight adds.",
+        still.frame_ms_p50,
+        still.frame_ms_p99,
+        still.frame_ms_p99 / still.frame_ms_p50
+    );
     let wu: Vec<Vec<String>> = WU_TABLE_1
         .iter()
         .map(|(t, fps, e)| {
@@ -403,7 +437,7 @@ fn report(args: &BenchArgs, rows: &[Row], frames: u32, views: u32) {
     let json_path = write_json(
         "budget",
         &json!({ "quick": args.quick, "frames": frames, "settle": SETTLE, "views": views,
-                 "size": [SIZE.x, SIZE.y], "rows": rows,
+                 "size": [SIZE.x, SIZE.y], "rows": rows, "still_camera": still,
                  "wu_table_1": WU_TABLE_1.iter().map(|(t, f, e)| json!({"triangles": t, "fps": f, "ave_error_px": e})).collect::<Vec<_>>() }),
     );
     // One line per kind of tiles and measure.
