@@ -73,8 +73,9 @@ fn no_frame_of_the_default_flight_shows_sky_below_the_geometric_horizon() {
 /// the default flight over the node meshes draws coarser, never holes, says
 /// so (each frame's bound is above the requested tau), and Ridgeline's heap
 /// (counted from before the display opens) plus its GPU buffer stay within
-/// the budget. At 16 MB one pixel of one frame (frame 12) shows sky through
-/// the terrain: a pinhole between fallback tiles, not yet found.
+/// the budget. At 16 MB one pixel of one frame (frame 12, pixel 136, 416)
+/// shows sky through the terrain, with every edge's skirt hung as well:
+/// not yet found (DESIGN.md, "Cruise and memory").
 #[test]
 fn an_18_mb_budget_flies_the_default_flight_within_it_and_without_holes() {
     const BUDGET: u64 = 18 << 20;
