@@ -53,9 +53,6 @@ const FOV_X_DEG: f64 = 60.0;
 const SETTLE: usize = 30;
 /// `fly`'s default memory budget (no snapshots here).
 const MEMORY_BYTES: u64 = 64 << 20;
-/// Side of the square the cruise flies over in the procedural earth's
-/// middle, metres (`fly --dataset procedural --flight cruise`).
-const CRUISE_AREA_M: f64 = 100_000.0;
 
 /// Wu et al.'s Table 1, their own rows: triangles a frame, frames a second,
 /// average error (pixels), on a PIII 450 with a TNT2 at 600x600.
@@ -222,31 +219,23 @@ struct Cruise {
 impl Cruise {
     fn new(view_count: u32) -> Cruise {
         let earth = Arc::new(ProceduralEarth::new(EarthParams::display_earth()).expect("earth"));
-        let layout = *earth.layout();
-        let side = |k: usize| (layout.posts[k] - 1) as f64 * layout.spacing_m[k];
-        let half = CRUISE_AREA_M / 2.0;
-        let origin = [side(0) / 2.0 - half, side(1) / 2.0 - half];
+        let (origin, extent) = earth.flight_area_m();
         let height = |x: f64, y: f64| earth.exact_height(x, y).ok();
-        let path = builtin_cruise(origin, [CRUISE_AREA_M; 2], &height);
+        let path = builtin_cruise(origin, extent, &height);
         let views = views(&path, view_count);
         Cruise { earth, path, views }
     }
 
     fn measure(&self, frames: u32, budget: Option<u64>) -> Row {
         let earth = &self.earth;
-        let [low, high] = earth.height_bounds();
-        let levels = earth.layout().levels;
-        let summary = TerrainSummary {
-            delta_per_level: (0..levels).map(|l| earth.delta_bound(l) as f64).collect(),
-            height_range: (low as f32, high as f32),
-        };
+        let summary = TerrainSummary::from_procedural(earth);
         let (mut parts, flight) = fly(earth.clone(), summary, &self.path, frames, budget);
         let exact = |x: f64, y: f64| earth.exact_height(x, y).ok();
         let layout = earth.layout();
         let ground = RayGround {
             exact: &exact,
             slope: earth.slope_bound(),
-            top_m: high,
+            top_m: earth.height_bounds()[1],
             spacing_m: layout.spacing_m[0].min(layout.spacing_m[1]),
         };
         let truth = Truth::Rays(ground);

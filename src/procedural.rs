@@ -39,6 +39,10 @@ const KNEE_LOG2: i32 = 13;
 const HURST_ABOVE_KNEE: f64 = 0.15;
 const HURST_BELOW_KNEE: f64 = 0.85;
 
+/// Side of the square the built-in flights fly over, metres
+/// ([`ProceduralEarth::flight_area_m`]; the whole earth is 40 000 km a side).
+pub const FLIGHT_AREA_M: f64 = 100_000.0;
+
 /// What [`ProceduralEarth::new`] builds.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EarthParams {
@@ -218,6 +222,16 @@ impl ProceduralEarth {
             })
             .sum();
         std::f64::consts::SQRT_2 * (per_axis + 2.0 * ROUNDING_SLACK_M / spacing)
+    }
+
+    /// Where the built-in flights fly over this earth: the south-west corner
+    /// and the size, metres, of a square [`FLIGHT_AREA_M`] wide in the
+    /// middle of the earth.
+    pub fn flight_area_m(&self) -> ([f64; 2], [f64; 2]) {
+        let layout = &self.layout;
+        let side = |k: usize| (layout.posts[k] - 1) as f64 * layout.spacing_m[k];
+        let half = FLIGHT_AREA_M / 2.0;
+        ([side(0) / 2.0 - half, side(1) / 2.0 - half], [FLIGHT_AREA_M; 2])
     }
 
     /// Lowest and highest height any sample can have: base -/+ the amplitudes.

@@ -18,9 +18,6 @@ use super::ViewArgs;
 
 /// The `--dataset` name of the earth-size procedural source.
 pub const PROCEDURAL: &str = "procedural";
-/// Side of the square, metres, the built-in flights fly over the
-/// procedural earth, in its middle (the whole earth is 40 000 km a side).
-const PROCEDURAL_AREA_M: f64 = 100_000.0;
 
 /// A built-in flight, flown when no `--path` is given.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -103,11 +100,7 @@ impl Terrain {
                 Ok(builtin_cruise(origin, extent, &height))
             }
             (Ground::Procedural(earth), None) => {
-                let layout = earth.layout();
-                let side = |k: usize| (layout.posts[k] - 1) as f64 * layout.spacing_m[k];
-                let half = PROCEDURAL_AREA_M / 2.0;
-                let origin = [side(0) / 2.0 - half, side(1) / 2.0 - half];
-                let extent = [PROCEDURAL_AREA_M; 2];
+                let (origin, extent) = earth.flight_area_m();
                 Ok(match flight {
                     Flight::Approach => {
                         builtin_approach_over(origin, extent, &|x, y| height(x, y).unwrap_or(0.0))
@@ -125,11 +118,7 @@ fn open_procedural(view: &ViewArgs) -> Result<Terrain> {
         bail!("--mesh-error: --dataset procedural has no node meshes (it draws regular grids)");
     }
     let earth = Arc::new(ProceduralEarth::new(EarthParams::display_earth())?);
-    let [low, high] = earth.height_bounds();
-    let summary = TerrainSummary {
-        delta_per_level: (0..earth.layout().levels).map(|l| earth.delta_bound(l) as f64).collect(),
-        height_range: (low as f32, high as f32),
-    };
+    let summary = TerrainSummary::from_procedural(&earth);
     let source: Arc<dyn NodeSource> = earth.clone();
     let name = PROCEDURAL.to_string();
     Ok(Terrain { ground: Ground::Procedural(earth), source, summary, name, gapless: true })

@@ -362,11 +362,7 @@ impl DrawList {
         }));
         self.drawn.sort_unstable_by_key(|d| d.key);
         for draw in draws {
-            let mut tile = tile_uniforms(draw, &frame.posts, rings, &geometry);
-            let node_tiles = (geometry.node_size / geometry.grid_size).max(1);
-            tile.skirt_edges = skirt_edges(draw, &self.drawn, node_tiles);
-            let coarsest = coarsest_neighbour_source(draw, &self.drawn);
-            tile.skirt_depth = skirt_depth(draw, coarsest, geometry.delta_per_level);
+            let tile = tile_uniforms(draw, &frame.posts, rings, &geometry, &self.drawn);
             self.tiles.push(tile);
         }
         self.sort_front_to_back(geometry.grid_size);
@@ -388,12 +384,17 @@ impl DrawList {
     }
 }
 
+/// `draw`'s uniforms; `drawn` (the frame's tiles, sorted by key) decides
+/// which edges hang a skirt and how deep.
 fn tile_uniforms(
     draw: &TileDraw,
     posts: &PostFrame,
     rings: &LevelRings,
     geometry: &TileGeometry<'_>,
+    drawn: &[DrawnTile],
 ) -> TileUniforms {
+    let node_tiles = (geometry.node_size / geometry.grid_size).max(1);
+    let coarsest = coarsest_neighbour_source(draw, drawn);
     let key = draw.key;
     let step = 1i64 << key.level;
     let span = geometry.grid_size as i64 * step;
@@ -406,8 +407,8 @@ fn tile_uniforms(
         post_step: step as f32,
         vertex_step: draw.vertex_step,
         morph,
-        skirt_depth: skirt_depth(draw, draw.source_level, geometry.delta_per_level),
-        skirt_edges: ALL_EDGES,
+        skirt_depth: skirt_depth(draw, coarsest, geometry.delta_per_level),
+        skirt_edges: skirt_edges(draw, drawn, node_tiles),
         byte_offset: draw.byte_offset,
         index_byte_offset: draw.index_byte_offset,
         index_count: draw.index_count,
@@ -488,16 +489,12 @@ pub fn coarsest_neighbour_source(draw: &TileDraw, drawn: &[DrawnTile]) -> u8 {
     let (x, y) = (x as i64, y as i64);
     let mut coarsest = draw.source_level;
     let mut look = |level: i64, x: i64, y: i64| {
-        if level < 0
-            || level > u8::MAX as i64
-            || x < 0
-            || y < 0
-            || x > u32::MAX as i64
-            || y > u32::MAX as i64
-        {
+        // Keys off the lattice (below 0, past u32) name no tile.
+        let (Ok(level), Ok(x), Ok(y)) = (u8::try_from(level), u32::try_from(x), u32::try_from(y))
+        else {
             return;
-        }
-        let key = TileKey::new(level as u8, x as u32, y as u32);
+        };
+        let key = TileKey::new(level, x, y);
         if let Ok(at) = drawn.binary_search_by_key(&key, |d| d.key) {
             coarsest = coarsest.max(drawn[at].source_level);
         }

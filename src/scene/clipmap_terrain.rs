@@ -5,7 +5,8 @@ use super::terrain::{node_height_bounds, TerrainData};
 use crate::clipmap::{Clipmap, SlotState};
 use crate::lod::select::{children_node_stored, TileBounds};
 use crate::lod::TileKey;
-use crate::node::{NodeData, NodeId, NodeLayout};
+use crate::node::{NodeData, NodeId, NodeLayout, NodeSource};
+use crate::procedural::ProceduralEarth;
 use crate::pyramid::PyramidInfo;
 use crate::tiles::ResidentNodes;
 
@@ -25,6 +26,17 @@ impl TerrainSummary {
         TerrainSummary {
             delta_per_level: info.levels.iter().map(|level| level.delta_max as f64).collect(),
             height_range: (info.stats.height_min, info.stats.height_max),
+        }
+    }
+
+    /// The summary of the procedural earth: each level's delta bound and
+    /// the heights its samples can reach.
+    pub fn from_procedural(earth: &ProceduralEarth) -> Self {
+        let levels = earth.layout().levels;
+        let [low, high] = earth.height_bounds();
+        TerrainSummary {
+            delta_per_level: (0..levels).map(|l| earth.delta_bound(l) as f64).collect(),
+            height_range: (low as f32, high as f32),
         }
     }
 }
