@@ -395,10 +395,14 @@ impl Scene {
                 report.cpu_ms.draw_list_ms = ms(start, Instant::now());
                 Ok(())
             });
+            // A cluster that no window has room for is a full buffer too:
+            // coarser tiles make smaller clusters.
             let full = matches!(
                 outcome,
                 Err(SceneError::Tiles(TileError::BufferFull(_)))
-                    | Err(SceneError::Clusters(ClusterError::BufferFull(_)))
+                    | Err(SceneError::Clusters(
+                        ClusterError::BufferFull(_) | ClusterError::NoWindow { .. }
+                    ))
             );
             match outcome {
                 Ok(()) => break,
