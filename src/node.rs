@@ -263,19 +263,16 @@ impl NodeData {
             + self.mesh.indices.capacity() as u64 * std::mem::size_of::<u16>() as u64
     }
 
-    /// Gives back the buffers' room beyond an eighth over their lengths,
-    /// so that a byte-accounted atlas counts a node at about its own size
-    /// and not at the largest node its buffer once held. Reallocates: the
-    /// loader thread calls it after a read, never a frame.
+    /// Gives back the buffers' room beyond their lengths, so that a
+    /// byte-accounted atlas counts a node at its own size (what
+    /// [`NodeSource::node_bytes_of`] plans with) and not at the largest node
+    /// its buffer once held: a planned load that then measured more would be
+    /// refused and read again every frame. Reallocates: the loader thread
+    /// calls it after a read, never a frame.
     pub fn fit(&mut self) {
-        fn fit<T>(buffer: &mut Vec<T>) {
-            if buffer.capacity() > buffer.len() + buffer.len() / 8 {
-                buffer.shrink_to(buffer.len() + buffer.len() / 16);
-            }
-        }
-        fit(&mut self.heights);
-        fit(&mut self.mesh.vertices);
-        fit(&mut self.mesh.indices);
+        self.heights.shrink_to_fit();
+        self.mesh.vertices.shrink_to_fit();
+        self.mesh.indices.shrink_to_fit();
     }
 
     /// Height of centre post `(i, j)` (`0..=node_size` each, border excluded).

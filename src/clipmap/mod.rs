@@ -513,6 +513,14 @@ impl Clipmap {
             }
             Outcome::Read => {
                 self.loader.succeeded(id);
+                // Loads are planned at node_bytes_of; a fitted buffer is that.
+                debug_assert!(
+                    self.atlas.byte_budget().is_none()
+                        || data.heap_bytes() == self.source.node_bytes_of(id),
+                    "{id:?}: {} bytes read, {} planned",
+                    data.heap_bytes(),
+                    self.source.node_bytes_of(id)
+                );
                 if !self.wanted.contains_key(&id) {
                     stats.discarded += 1;
                 } else {
