@@ -242,6 +242,9 @@ pub struct NodeData {
     /// south-west to its north-east corner) and the level-0 posts it covers;
     /// with a mesh, the mesh's.
     pub delta: f32,
+    /// The same for the node's posts as a regular grid, whether or not it
+    /// has a mesh: what a tile made as a grid of its posts errs by.
+    pub grid_delta: f32,
     /// The node's adaptive mesh, if its source keeps one.
     pub mesh: NodeMesh,
 }

@@ -277,6 +277,7 @@ impl NodeSource for ProceduralEarth {
         out.min = min;
         out.max = max;
         out.delta = self.delta_bound(id.level);
+        out.grid_delta = out.delta;
         Ok(())
     }
 

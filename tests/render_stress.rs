@@ -56,13 +56,7 @@ fn earth_params(thin: u32) -> EarthParams {
 
 /// Per-level error and height range, from the earth's own bounds.
 fn summary(earth: &ProceduralEarth) -> TerrainSummary {
-    let [low, high] = earth.height_bounds();
-    TerrainSummary {
-        delta_per_level: (0..earth.layout().levels)
-            .map(|lod| earth.delta_bound(lod) as f64)
-            .collect(),
-        height_range: (low as f32, high as f32),
-    }
+    TerrainSummary::from_procedural(earth)
 }
 
 fn open(config: &DisplayConfig, earth: Arc<ProceduralEarth>) -> DisplayParts {

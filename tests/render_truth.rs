@@ -29,11 +29,7 @@ fn small_earth() -> (Arc<ProceduralEarth>, TerrainSummary) {
     // 512 cells a side in nodes of the default tile grid.
     let params = EarthParams { node_size: 32, levels: 5, border: 1, spacing_m: 30.0, seed: 7 };
     let earth = Arc::new(ProceduralEarth::new(params).expect("small earth"));
-    let [low, high] = earth.height_bounds();
-    let summary = TerrainSummary {
-        delta_per_level: (0..params.levels).map(|lod| earth.delta_bound(lod) as f64).collect(),
-        height_range: (low as f32, high as f32),
-    };
+    let summary = TerrainSummary::from_procedural(&earth);
     (earth, summary)
 }
 

@@ -19,10 +19,7 @@ use std::sync::Arc;
 /// tiles that was.
 fn corner_error(earth: &Arc<ProceduralEarth>, at: (f64, f64), radius: f64) -> (f64, usize) {
     let layout = *earth.layout();
-    let summary = TerrainSummary {
-        delta_per_level: (0..layout.levels).map(|l| earth.delta_bound(l) as f64).collect(),
-        height_range: (earth.height_bounds()[0] as f32, earth.height_bounds()[1] as f32),
-    };
+    let summary = TerrainSummary::from_procedural(earth);
     let ground = earth.exact_height(at.0, at.1).unwrap() as f64;
     let eye = DVec3::new(at.0, at.1, ground + 900.0);
     let config = ClipmapConfig {

@@ -97,6 +97,7 @@ impl NodeSource for MeshedSource {
     /// tile nearer than its box says is still morphing when it switches.
     fn read_node(&self, id: NodeId, out: &mut NodeData) -> Result<(), NodeError> {
         self.pyramid.read_node(id, out)?;
+        debug_assert_eq!(out.grid_delta, out.delta, "the pyramid's posts");
         out.delta = self.file.read(self.pyramid.layout(), id, &mut out.mesh)?;
         for v in &out.mesh.vertices {
             for h in [v.height, v.target].into_iter().filter(|h| h.is_finite()) {

@@ -357,6 +357,7 @@ impl NodeSource for Pyramid {
         out.min = summary.min;
         out.max = summary.max;
         out.delta = summary.delta;
+        out.grid_delta = summary.delta;
         Ok(())
     }
 }

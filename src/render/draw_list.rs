@@ -290,8 +290,12 @@ pub struct TileGeometry<'a> {
     pub node_size: u32,
     /// Level-0 post spacing, metres.
     pub spacing_m: [f64; 2],
-    /// Largest geometric error per level, metres.
+    /// Largest geometric error per level, metres (of the node meshes where
+    /// the source keeps them).
     pub delta_per_level: &'a [f64],
+    /// Largest error per level of the regular grid of posts, metres: what
+    /// a tile made as a grid errs by.
+    pub grid_delta_per_level: &'a [f64],
 }
 
 impl DrawList {
@@ -394,7 +398,6 @@ fn tile_uniforms(
     drawn: &[DrawnTile],
 ) -> TileUniforms {
     let node_tiles = (geometry.node_size / geometry.grid_size).max(1);
-    let coarsest = coarsest_neighbour_source(draw, drawn);
     let key = draw.key;
     let step = 1i64 << key.level;
     let span = geometry.grid_size as i64 * step;
@@ -407,7 +410,7 @@ fn tile_uniforms(
         post_step: step as f32,
         vertex_step: draw.vertex_step,
         morph,
-        skirt_depth: skirt_depth(draw, coarsest, geometry.delta_per_level),
+        skirt_depth: skirt_depth(draw, drawn, geometry),
         skirt_edges: skirt_edges(draw, drawn, node_tiles),
         byte_offset: draw.byte_offset,
         index_byte_offset: draw.index_byte_offset,
@@ -468,26 +471,45 @@ fn same_node(draw: &TileDraw, key: TileKey, node_tiles: u32) -> bool {
     draw.key.x / per_node == key.x / per_node && draw.key.y / per_node == key.y / per_node
 }
 
-/// Skirts must reach below any surface a neighbour may show along the edge:
-/// a neighbour is at most one level apart, and either side's data may come
-/// from a coarser level still (`coarsest`, the coarsest source level of the
-/// tile and its neighbours), so the depth covers twice the error of the
-/// coarsest of those levels, plus a metre for rounding. A small memory
-/// budget draws neighbours from sources levels apart: a depth from the
-/// tile's own source alone left pinholes at 16 MB.
-pub fn skirt_depth(draw: &TileDraw, coarsest: u8, delta_per_level: &[f64]) -> f32 {
-    let level = (draw.key.level as usize + 1).max(draw.source_level.max(coarsest) as usize);
-    let delta = delta_per_level.get(level).or(delta_per_level.last()).copied().unwrap_or(0.0);
-    (2.0 * delta + 1.0) as f32
+/// How far the surface a tile shows may lie from the data, metres: the
+/// error of its source, or of the level above its own toward which it
+/// morphs, whichever is larger; of the node meshes for a tile cut from one,
+/// of the regular grid of posts for a tile made as a grid (99.5 m at level 1
+/// of the built-in terrain, against 12 m for its meshes).
+pub fn tile_error_m(
+    key_level: u8,
+    source_level: u8,
+    node_mesh: bool,
+    geometry: &TileGeometry<'_>,
+) -> f64 {
+    let table = if node_mesh { geometry.delta_per_level } else { geometry.grid_delta_per_level };
+    let at = |level: usize| table.get(level).or(table.last()).copied().unwrap_or(0.0);
+    at(source_level as usize).max(at(key_level as usize + 1))
 }
 
-/// The coarsest source level among `draw` and the tiles of `drawn` (sorted
-/// by key) along its edges: of its level, the level above, or the level
-/// below (the neighbours a tile can have).
-pub fn coarsest_neighbour_source(draw: &TileDraw, drawn: &[DrawnTile]) -> u8 {
-    let TileKey { level, x, y } = draw.key;
+/// Skirts must reach below any surface a neighbour may show along the edge.
+/// Either side lies within its own error of the data ([`tile_error_m`]), so
+/// the depth is twice the largest error of the tile and the tiles along its
+/// edges (of its level, the level above, or the level below), plus a metre
+/// for rounding. A small memory budget draws neighbours from sources levels
+/// apart, and from grids of posts where the source's mesh is coarser than
+/// the tile: a depth from the tile's own source alone, or from the meshes'
+/// errors alone, left pinholes at 16 MB.
+pub fn skirt_depth(draw: &TileDraw, drawn: &[DrawnTile], geometry: &TileGeometry<'_>) -> f32 {
+    let mut error = tile_error_m(draw.key.level, draw.source_level, draw.node_mesh, geometry);
+    for_each_neighbour(draw.key, drawn, |other| {
+        let other = tile_error_m(other.key.level, other.source_level, other.node_mesh, geometry);
+        error = error.max(other);
+    });
+    (2.0 * error + 1.0) as f32
+}
+
+/// Calls `f` with each tile of `drawn` (sorted by key) along `key`'s edges:
+/// of its level, the level above, or the level below (the neighbours a
+/// tile can have).
+pub fn for_each_neighbour(key: TileKey, drawn: &[DrawnTile], mut f: impl FnMut(&DrawnTile)) {
+    let TileKey { level, x, y } = key;
     let (x, y) = (x as i64, y as i64);
-    let mut coarsest = draw.source_level;
     let mut look = |level: i64, x: i64, y: i64| {
         // Keys off the lattice (below 0, past u32) name no tile.
         let (Ok(level), Ok(x), Ok(y)) = (u8::try_from(level), u32::try_from(x), u32::try_from(y))
@@ -496,7 +518,7 @@ pub fn coarsest_neighbour_source(draw: &TileDraw, drawn: &[DrawnTile]) -> u8 {
         };
         let key = TileKey::new(level, x, y);
         if let Ok(at) = drawn.binary_search_by_key(&key, |d| d.key) {
-            coarsest = coarsest.max(drawn[at].source_level);
+            f(&drawn[at]);
         }
     };
     let level = level as i64;
@@ -510,7 +532,6 @@ pub fn coarsest_neighbour_source(draw: &TileDraw, drawn: &[DrawnTile]) -> u8 {
         look(level - 1, cx, cy);
         look(level - 1, cx + ax, cy + ay);
     }
-    coarsest
 }
 
 #[cfg(test)]
@@ -627,9 +648,10 @@ mod tests {
         DrawnTile { key: TileKey::new(level, x, y), source_level, node_mesh: true }
     }
 
-    /// A tile's skirts reach as deep as the coarsest data on either side of
+    /// A tile's skirts reach as deep as the largest error on either side of
     /// its edges: a neighbour of its level, the level above or the level
-    /// below (only the two finer tiles along the shared edge count).
+    /// below (only the two finer tiles along the shared edge count); a
+    /// tile made as a grid errs by the grid's deltas.
     #[test]
     fn skirts_reach_below_the_coarsest_neighbour() {
         let draw = TileDraw {
@@ -643,16 +665,26 @@ mod tests {
             coverage: crate::tiles::TileCoverage::Full,
         };
         let deltas = [0.0, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0];
+        let grid_deltas = deltas.map(|d| 10.0 * d);
+        let geometry = TileGeometry {
+            grid_size: 32,
+            node_size: 64,
+            spacing_m: [90.0, 90.0],
+            delta_per_level: &deltas,
+            grid_delta_per_level: &grid_deltas,
+        };
         let mut tiles = vec![drawn(2, 4, 4, 2), drawn(2, 5, 4, 3), drawn(1, 8, 10, 4)];
         // Diagonal and far tiles are no neighbours.
         tiles.extend([drawn(2, 5, 5, 6), drawn(1, 7, 7, 6), drawn(3, 3, 3, 6)]);
         tiles.sort_unstable_by_key(|d| d.key);
         // West of the tile, the finer tiles (1, 7, 8) and (1, 7, 9) touch it.
-        assert_eq!(coarsest_neighbour_source(&draw, &tiles), 4, "(1, 8, 10) is north of it");
-        assert_eq!(skirt_depth(&draw, 4, &deltas), 2.0 * 8.0 + 1.0);
+        assert_eq!(skirt_depth(&draw, &tiles, &geometry), 2.0 * 8.0 + 1.0, "(1, 8, 10) is north");
         tiles.push(drawn(1, 7, 9, 5));
         tiles.sort_unstable_by_key(|d| d.key);
-        assert_eq!(coarsest_neighbour_source(&draw, &tiles), 5);
-        assert_eq!(skirt_depth(&draw, 2, &deltas), 2.0 * 4.0 + 1.0, "level 3 at least");
+        assert_eq!(skirt_depth(&draw, &tiles, &geometry), 2.0 * 16.0 + 1.0);
+        assert_eq!(skirt_depth(&draw, &[], &geometry), 2.0 * 4.0 + 1.0, "level 3 at least");
+        // A grid neighbour of source level 3 errs by the grid's 40 m.
+        let grid = DrawnTile { node_mesh: false, ..drawn(2, 4, 3, 3) };
+        assert_eq!(skirt_depth(&draw, &[grid], &geometry), 2.0 * 40.0 + 1.0);
     }
 }

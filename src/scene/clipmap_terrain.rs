@@ -14,8 +14,13 @@ use crate::tiles::ResidentNodes;
 /// pyramid's header, or the procedural source's bounds).
 #[derive(Clone, Debug, PartialEq)]
 pub struct TerrainSummary {
-    /// Largest delta of each level, metres, finest level first.
+    /// Largest delta of each level, metres, finest level first: of the
+    /// node meshes where the source keeps them.
     pub delta_per_level: Vec<f64>,
+    /// Largest delta of each level's regular grid of posts, metres: what a
+    /// tile made as a grid of a node's posts errs by (the pyramid's deltas;
+    /// the same as `delta_per_level` where the source keeps no meshes).
+    pub grid_delta_per_level: Vec<f64>,
     /// Lowest and highest height of the data, metres.
     pub height_range: (f32, f32),
 }
@@ -23,8 +28,10 @@ pub struct TerrainSummary {
 impl TerrainSummary {
     /// The summary a pyramid file's header records.
     pub fn from_pyramid(info: &PyramidInfo) -> Self {
+        let deltas: Vec<f64> = info.levels.iter().map(|level| level.delta_max as f64).collect();
         TerrainSummary {
-            delta_per_level: info.levels.iter().map(|level| level.delta_max as f64).collect(),
+            grid_delta_per_level: deltas.clone(),
+            delta_per_level: deltas,
             height_range: (info.stats.height_min, info.stats.height_max),
         }
     }
@@ -34,8 +41,10 @@ impl TerrainSummary {
     pub fn from_procedural(earth: &ProceduralEarth) -> Self {
         let levels = earth.layout().levels;
         let [low, high] = earth.height_bounds();
+        let deltas: Vec<f64> = (0..levels).map(|l| earth.delta_bound(l) as f64).collect();
         TerrainSummary {
-            delta_per_level: (0..levels).map(|l| earth.delta_bound(l) as f64).collect(),
+            grid_delta_per_level: deltas.clone(),
+            delta_per_level: deltas,
             height_range: (low as f32, high as f32),
         }
     }
@@ -86,6 +95,10 @@ impl TileBounds for ClipmapTerrain<'_> {
 impl TerrainData for ClipmapTerrain<'_> {
     fn delta_per_level(&self) -> Vec<f64> {
         self.summary.delta_per_level.clone()
+    }
+
+    fn grid_delta_per_level(&self) -> Vec<f64> {
+        self.summary.grid_delta_per_level.clone()
     }
 
     fn height_range(&self) -> (f32, f32) {

@@ -188,6 +188,8 @@ pub struct Scene {
     rings: LevelRings,
     draw_list: DrawList,
     deltas: Vec<f64>,
+    /// The regular grid's deltas (what tiles made as grids err by).
+    grid_deltas: Vec<f64>,
     height_range_m: f64,
     /// Tau of the next frame, pixels: the configured one unless a budget set it.
     tau_px: f64,
@@ -250,6 +252,7 @@ impl Scene {
             draw_list,
             height_range_m: (hi - lo) as f64,
             deltas,
+            grid_deltas: terrain.grid_delta_per_level(),
             tau_px: config.lod.tau_px,
         })
     }
@@ -386,6 +389,7 @@ impl Scene {
                     node_size: layout.node_size,
                     spacing_m: layout.spacing_m,
                     delta_per_level: &self.deltas,
+                    grid_delta_per_level: &self.grid_deltas,
                 };
                 self.draw_list.build(uniforms, self.cache.draws(), &self.rings, geometry);
                 if let Some(clusters) = &mut self.clusters {
@@ -445,29 +449,30 @@ impl Scene {
     /// Tiles drawn from coarser data than their level's, and the bound the
     /// frame achieves with them: each such tile's error is its source
     /// node's delta seen from the tile's distance, or its parent's seen
-    /// from where the morph starts, so the frame's bound is the largest of
+    /// from where the morph starts (the grid's deltas for a tile made as a
+    /// grid of the source's posts), so the frame's bound is the largest of
     /// those and `tau_px`.
     fn fallback_bound(&self, camera: &Camera, tau_px: f64) -> (usize, f64) {
         let scale = camera.perspective_scale();
-        let top = self.deltas.len().saturating_sub(1);
         let mut fallback = 0;
         let mut bound = tau_px;
         for tile in self.selector.selected() {
             let level = tile.key.level;
-            let Some(source) = self.cache.source_level(tile.key) else { continue };
+            let Some((source, node_mesh)) = self.cache.made_from(tile.key) else { continue };
             if source <= level {
                 continue;
             }
             fallback += 1;
+            let table = if node_mesh { &self.deltas } else { &self.grid_deltas };
+            let delta = |level: u8| table.get(level as usize).or(table.last()).copied();
             // Inside its box the distance is 0: a metre keeps the bound finite.
             let near = tile.distance.max(1.0);
-            let own = self.deltas[source as usize] * scale / near;
+            let own = delta(source).unwrap_or(0.0) * scale / near;
             // Its vertices morph toward the source's parent from the morph
             // start on, wherever in the tile they are.
-            let parent = self.deltas[(source as usize + 1).min(top)] * scale
-                / near.max(self.rings.morph(level).0);
-            let error = own.max(parent);
-            bound = bound.max(error);
+            let parent =
+                delta(source + 1).unwrap_or(0.0) * scale / near.max(self.rings.morph(level).0);
+            bound = bound.max(own.max(parent));
         }
         (fallback, bound)
     }

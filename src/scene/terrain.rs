@@ -14,6 +14,12 @@ use std::collections::HashMap;
 pub trait TerrainData: ResidentNodes + TileBounds {
     /// Largest geometric error of each level, metres (level 0 first).
     fn delta_per_level(&self) -> Vec<f64>;
+    /// Largest error of each level's regular grid of posts, metres: what
+    /// a tile made as a grid errs by where the source also keeps node
+    /// meshes (whose errors `delta_per_level` gives). The same without them.
+    fn grid_delta_per_level(&self) -> Vec<f64> {
+        self.delta_per_level()
+    }
     /// Lowest and highest height of the data, metres.
     fn height_range(&self) -> (f32, f32);
 }
@@ -39,6 +45,7 @@ pub struct PreloadedTerrain {
     layout: NodeLayout,
     nodes: HashMap<NodeId, NodeData>,
     deltas: Vec<f64>,
+    grid_deltas: Vec<f64>,
     range: (f32, f32),
 }
 
@@ -49,6 +56,7 @@ impl PreloadedTerrain {
         let layout = *source.layout();
         let mut nodes = HashMap::new();
         let mut deltas = vec![0.0f64; layout.levels as usize];
+        let mut grid_deltas = deltas.clone();
         let mut range = (f32::INFINITY, f32::NEG_INFINITY);
         for lod in 0..layout.levels {
             let [nx, ny] = layout.nodes_at(lod);
@@ -61,13 +69,15 @@ impl PreloadedTerrain {
                     let mut data = NodeData::default();
                     source.read_node(id, &mut data)?;
                     deltas[lod as usize] = deltas[lod as usize].max(data.delta as f64);
+                    let grid = &mut grid_deltas[lod as usize];
+                    *grid = grid.max(data.grid_delta as f64);
                     // Every level: a layered pyramid's level 0 is sparse.
                     range = (range.0.min(data.min), range.1.max(data.max));
                     nodes.insert(id, data);
                 }
             }
         }
-        Ok(PreloadedTerrain { layout, nodes, deltas, range })
+        Ok(PreloadedTerrain { layout, nodes, deltas, grid_deltas, range })
     }
 }
 
@@ -106,6 +116,10 @@ impl TileBounds for PreloadedTerrain {
 impl TerrainData for PreloadedTerrain {
     fn delta_per_level(&self) -> Vec<f64> {
         self.deltas.clone()
+    }
+
+    fn grid_delta_per_level(&self) -> Vec<f64> {
+        self.grid_deltas.clone()
     }
 
     fn height_range(&self) -> (f32, f32) {

@@ -392,11 +392,14 @@ impl TileCache {
         Some(resident.mesh.indices as u64 / 3)
     }
 
-    /// The level of the node `key`'s resident tile was made from: above
-    /// `key.level` when only coarser data was resident (best available).
-    pub fn source_level(&self, key: TileKey) -> Option<u8> {
+    /// How `key`'s resident tile was made: the level of the node it came
+    /// from (above `key.level` when only coarser data was resident: best
+    /// available), and whether it was cut from that node's mesh (else made
+    /// as a grid of its posts).
+    pub fn made_from(&self, key: TileKey) -> Option<(u8, bool)> {
         let slot = *self.by_key.get(&key)?;
-        Some(self.slots.get(slot as usize)?.as_ref()?.source_level)
+        let resident = self.slots.get(slot as usize)?.as_ref()?;
+        Some((resident.source_level, resident.kind != TileMeshKind::Grid))
     }
 
     /// Resident tiles (for statistics and tests).

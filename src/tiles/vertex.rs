@@ -335,6 +335,7 @@ mod tests {
             min: 0.0,
             max: 120.0,
             delta: 0.0,
+            grid_delta: 0.0,
             mesh: Default::default(),
         };
         let reader =
@@ -372,6 +373,7 @@ mod tests {
             min: 0.0,
             max: 324.0,
             delta: 0.0,
+            grid_delta: 0.0,
             mesh: Default::default(),
         };
         let reader =
