@@ -165,6 +165,9 @@ pub fn measure_flight_with(
 ) -> Result<AccuracyRun, DisplayError> {
     let tau_px = display.pipeline.scene().config().lod.tau_px;
     let size = display.context.size();
+    // Another display on this thread may have made its context current:
+    // the position target must be made in this one.
+    display.context.make_current()?;
     let positions = OffscreenTarget::positions(display.context.gl(), size)?;
     let mut images = [PositionImage::default(), PositionImage::default()];
     let mut errors = ViewErrors::default();

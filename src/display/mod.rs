@@ -114,6 +114,15 @@ pub struct DisplayParts {
     pub pipeline: FramePipeline,
 }
 
+impl Drop for DisplayParts {
+    fn drop(&mut self) {
+        // The renderer's objects are deleted (fields drop in order) in
+        // whichever context is current: another display on this thread may
+        // have made its own current, whose objects share the names.
+        let _ = self.context.make_current();
+    }
+}
+
 impl DisplayParts {
     /// Opens the context and builds the renderer and the pipeline over
     /// `source` (whose per-level error and height range `summary` gives).
