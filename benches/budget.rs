@@ -20,16 +20,7 @@
 //!   approach, each pixel's ray on the CPU at cruise).
 //!
 //! Frame-time ratios are within one point's flight, so machine noise hits
-//! both percentiles alike. Noise that comes and goes within a flight does
-//! not: these machines are shared, and a still camera alone swings p99/p50
-//! by 1.2-1.3. So a *pacer*, a second display drawing one still view, draws
-//! a frame after each of the flight's. It uploads nothing and draws the
-//! same list, so its time follows only the machine; each flight frame's
-//! time is divided by the pacer's median over the nine frames around it
-//! (times the pacer's median over the flight), and the percentiles of that
-//! *steadied* time are reported beside the raw ones (not with `--quick`,
-//! whose 10 measured frames are too few to steady, and which must stay
-//! under a minute). Prints the table beside Wu's Table 1, writes
+//! both percentiles alike. Prints the table beside Wu's Table 1, writes
 //! target/bench/budget.json and target/bench/budget.svg.
 
 mod support;
@@ -86,9 +77,6 @@ struct Row {
     worst_miss: f64,
     frame_ms_p50: f64,
     frame_ms_p99: f64,
-    /// The same, steadied by the pacer (the machine's drift removed).
-    steadied_ms_p50: f64,
-    steadied_ms_p99: f64,
     gl_ms_p50: f64,
     gl_ms_p99: f64,
     /// The frame less its GL share (paging, selection, tiles), p99.
@@ -138,13 +126,12 @@ fn main() {
         .expect("the built-in terrain's node meshes");
     let approach = Approach::new(pyramid, Arc::new(meshed), view_count);
     let cruise = Cruise::new(view_count);
-    let mut pacer = (!args.quick).then(|| approach.pacer());
     let mut rows = Vec::new();
     for (kind, budget) in points {
         let row = match kind {
-            Kind::Meshes => approach.measure(true, frames, budget, pacer.as_mut()),
-            Kind::Grids => approach.measure(false, frames, budget, pacer.as_mut()),
-            Kind::Cruise => cruise.measure(frames, budget, pacer.as_mut()),
+            Kind::Meshes => approach.measure(true, frames, budget),
+            Kind::Grids => approach.measure(false, frames, budget),
+            Kind::Cruise => cruise.measure(frames, budget),
         };
         println!(
             "  {} {:<12} budget {:>9}: {:.0} triangles, {:.1}/{:.1} ms p50/p99, tau {:.2}, p99.9 {:.3} px, own {:.1} MB",
@@ -160,7 +147,7 @@ fn main() {
         );
         rows.push(row);
     }
-    let still = approach.still(frames, pacer.as_mut());
+    let still = approach.still(frames);
     report(&args, &rows, still, frames, view_count);
 }
 
@@ -189,52 +176,19 @@ impl Approach {
     /// one still camera (the approach's first pose, node meshes, tau 1),
     /// which upload nothing and draw the same list: p50 and p99 from frame
     /// 30 on. On a shared machine the flights' spread is measured against it.
-    fn still(&self, frames: u32, pacer: Option<&mut Pacer>) -> Spread {
+    fn still(&self, frames: u32) -> Spread {
+        let mut summary = TerrainSummary::from_pyramid(self.pyramid.info());
+        summary.delta_per_level = self.meshed.delta_per_level();
         let pose = self.path.sample(self.path.start_time());
         let at = |t: f64| ridgeline::flight::path::Waypoint { t, pose };
         let still = FlightPath::new(vec![at(0.0), at(self.path.duration())]).expect("a path");
-        let (_, flight) = fly(self.meshed.clone(), self.summary(), &still, frames, None, pacer);
-        let from = SETTLE.min(flight.stats.len() - 1);
-        let (p50, p99) = percentiles(&flight.stats[from..], &|s| s.frame_ms);
-        let (steadied_p50, steadied_p99) = quantiles(&flight.steadied()[from..]);
-        Spread {
-            frame_ms_p50: p50,
-            frame_ms_p99: p99,
-            steadied_ms_p50: steadied_p50,
-            steadied_ms_p99: steadied_p99,
-        }
+        let (_, flight) = fly(self.meshed.clone(), summary, &still, frames, None);
+        let late = &flight.stats[SETTLE.min(flight.stats.len() - 1)..];
+        let (p50, p99) = percentiles(late, &|s| s.frame_ms);
+        Spread { frame_ms_p50: p50, frame_ms_p99: p99 }
     }
 
-    /// The node meshes' summary.
-    fn summary(&self) -> TerrainSummary {
-        let mut summary = TerrainSummary::from_pyramid(self.pyramid.info());
-        summary.delta_per_level = self.meshed.delta_per_level();
-        summary
-    }
-
-    /// A pacer drawing the approach's first pose over the node meshes
-    /// (the view of the still camera), settled.
-    fn pacer(&self) -> Pacer {
-        let camera = self.path.sample(self.path.start_time()).camera(FOV_X_DEG, SIZE.into());
-        let mut config = DisplayConfig::new(GlBackend::Egl, SIZE);
-        config.fov_x_deg = FOV_X_DEG;
-        config.memory_budget_bytes = Some(MEMORY_BYTES);
-        let mut parts = DisplayParts::open(&config, self.meshed.clone(), self.summary())
-            .expect("pacer display");
-        parts.pipeline.settle(&camera, 10_000).expect("settle the pacer");
-        for _ in 0..4 {
-            parts.frame(&camera).expect("pacer frame");
-        }
-        Pacer { parts, camera }
-    }
-
-    fn measure(
-        &self,
-        meshes: bool,
-        frames: u32,
-        budget: Option<u64>,
-        pacer: Option<&mut Pacer>,
-    ) -> Row {
+    fn measure(&self, meshes: bool, frames: u32, budget: Option<u64>) -> Row {
         let mut summary = TerrainSummary::from_pyramid(self.pyramid.info());
         let source: Arc<dyn NodeSource> = if meshes {
             summary.delta_per_level = self.meshed.delta_per_level();
@@ -242,9 +196,7 @@ impl Approach {
         } else {
             self.pyramid.clone()
         };
-        let (mut parts, flight) = fly(source, summary, &self.path, frames, budget, pacer);
-        // The pacer's context was the last made current.
-        parts.context.make_current().expect("the flight's context");
+        let (mut parts, flight) = fly(source, summary, &self.path, frames, budget);
         let truth = TruthPass::new(parts.context.gl(), &self.mesh).expect("truth pass");
         let pyramid = &self.pyramid;
         let exact = |x: f64, y: f64| pyramid.exact_height(x, y);
@@ -274,10 +226,10 @@ impl Cruise {
         Cruise { earth, path, views }
     }
 
-    fn measure(&self, frames: u32, budget: Option<u64>, pacer: Option<&mut Pacer>) -> Row {
+    fn measure(&self, frames: u32, budget: Option<u64>) -> Row {
         let earth = &self.earth;
         let summary = TerrainSummary::from_procedural(earth);
-        let (mut parts, flight) = fly(earth.clone(), summary, &self.path, frames, budget, pacer);
+        let (mut parts, flight) = fly(earth.clone(), summary, &self.path, frames, budget);
         let exact = |x: f64, y: f64| earth.exact_height(x, y).ok();
         let layout = earth.layout();
         let ground = RayGround {
@@ -298,32 +250,16 @@ fn views(path: &FlightPath, count: u32) -> Vec<(f64, Camera)> {
     path.frame_times(count).map(|t| (t, path.sample(t).camera(FOV_X_DEG, SIZE.into()))).collect()
 }
 
-/// A second display drawing one still view between a flight's frames: how
-/// fast the machine is at that moment.
-struct Pacer {
-    parts: DisplayParts,
-    camera: Camera,
-}
-
-impl Pacer {
-    /// One still frame's time, ms.
-    fn time(&mut self) -> f64 {
-        self.parts.frame(&self.camera).expect("pacer frame").frame_ms
-    }
-}
-
 /// Flies `frames` evenly spaced frames of `path` over `source` as `fly`
 /// does (the loader thread, the default memory budget), from a display
-/// settled at the start, `pacer` drawing a frame after each; the display
-/// and its frames' stats. The heap peak is counted from before the display
-/// opens.
+/// settled at the start; the display and its frames' stats. The heap peak
+/// is counted from before the display opens.
 fn fly(
     source: Arc<dyn NodeSource>,
     summary: TerrainSummary,
     path: &FlightPath,
     frames: u32,
     budget: Option<u64>,
-    mut pacer: Option<&mut Pacer>,
 ) -> (DisplayParts, Flown) {
     let mut config = DisplayConfig::new(GlBackend::Egl, SIZE);
     config.fov_x_deg = FOV_X_DEG;
@@ -335,85 +271,34 @@ fn fly(
     let mut parts = DisplayParts::open(&config, source, summary).expect("headless EGL display");
     let first = path.sample(path.start_time()).camera(FOV_X_DEG, SIZE.into());
     parts.pipeline.settle(&first, 10_000).expect("settle");
-    let mut pace = Vec::with_capacity(frames as usize);
-
     let stats: Vec<FrameStats> = path
         .frame_times(frames)
-        .map(|t| {
-            let stats = parts.frame(&path.sample(t).camera(FOV_X_DEG, SIZE.into()));
-            if let Some(pacer) = pacer.as_mut() {
-                pace.push(pacer.time());
-            }
-            stats.expect("frame")
-        })
+        .map(|t| parts.frame(&path.sample(t).camera(FOV_X_DEG, SIZE.into())).expect("frame"))
         .collect();
     let heap = testkit::alloc::peak_bytes().saturating_sub(before);
     let gpu = parts.pipeline.scene().config().buffer_bytes as u64;
-    (parts, Flown { stats, pace, own_bytes: heap + gpu })
+    (parts, Flown { stats, own_bytes: heap + gpu })
 }
 
-/// Frames around each whose pacer times steady it, each side.
-const PACE_WINDOW: usize = 4;
-
-/// `frame_ms` with the machine's drift taken out: each times the pacer's
-/// median over the whole flight, over its median over the frames within
-/// [`PACE_WINDOW`] of it.
-fn steadied(frame_ms: &[f64], pace: &[f64]) -> Vec<f64> {
-    let median = |values: &[f64]| {
-        let mut v = values.to_vec();
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    };
-    let overall = median(pace);
-    let n = pace.len();
-    (0..n)
-        .map(|i| {
-            let window = &pace[i.saturating_sub(PACE_WINDOW)..(i + PACE_WINDOW + 1).min(n)];
-            frame_ms[i] * overall / median(window)
-        })
-        .collect()
-}
-
-/// p50 and p99 of `values`.
-fn quantiles(values: &[f64]) -> (f64, f64) {
-    let mut values = values.to_vec();
+/// p50 and p99 of `f` over `frames`.
+fn percentiles(frames: &[FrameStats], f: &dyn Fn(&FrameStats) -> f64) -> (f64, f64) {
+    let mut values: Vec<f64> = frames.iter().map(f).collect();
     values.sort_by(f64::total_cmp);
     let pick = |q: f64| values[((values.len() - 1) as f64 * q).round() as usize];
     (pick(0.5), pick(0.99))
 }
 
-/// p50 and p99 of `f` over `frames`.
-fn percentiles(frames: &[FrameStats], f: &dyn Fn(&FrameStats) -> f64) -> (f64, f64) {
-    quantiles(&frames.iter().map(f).collect::<Vec<_>>())
-}
-
-/// Frame-time percentiles of a still camera, raw and steadied.
+/// Frame-time percentiles of a still camera.
 #[derive(Clone, Copy, serde::Serialize)]
 struct Spread {
     frame_ms_p50: f64,
     frame_ms_p99: f64,
-    steadied_ms_p50: f64,
-    steadied_ms_p99: f64,
 }
 
-/// A flight's frames, the pacer's time after each, and what it took of
-/// memory.
+/// A flight's frames and what it took of memory.
 struct Flown {
     stats: Vec<FrameStats>,
-    pace: Vec<f64>,
     own_bytes: u64,
-}
-
-impl Flown {
-    /// Each frame's time steadied by the pacer ([`steadied`]); as it was
-    /// without one.
-    fn steadied(&self) -> Vec<f64> {
-        let frame_ms: Vec<f64> = self.stats.iter().map(|s| s.frame_ms).collect();
-        if self.pace.is_empty() {
-            return frame_ms;
-        }
-        steadied(&frame_ms, &self.pace)
-    }
 }
 
 /// The row of a flight and its measured views.
@@ -428,8 +313,6 @@ fn row(
     let n = late.len() as f64;
     let mean = |f: &dyn Fn(&FrameStats) -> f64| late.iter().map(f).sum::<f64>() / n;
     let (frame_ms_p50, frame_ms_p99) = percentiles(late, &|s| s.frame_ms);
-    let from = flight.stats.len() - late.len();
-    let (steadied_ms_p50, steadied_ms_p99) = quantiles(&flight.steadied()[from..]);
     let (gl_ms_p50, gl_ms_p99) = percentiles(late, &|s| s.gl_ms);
     let (_, cpu_ms_p99) = percentiles(late, &|s| s.frame_ms - s.gl_ms);
     let target = budget.unwrap_or(1) as f64;
@@ -443,8 +326,6 @@ fn row(
         worst_miss,
         frame_ms_p50,
         frame_ms_p99,
-        steadied_ms_p50,
-        steadied_ms_p99,
         gl_ms_p50,
         gl_ms_p99,
         cpu_ms_p99,
@@ -472,7 +353,6 @@ fn report(args: &BenchArgs, rows: &[Row], still: Spread, frames: u32, views: u32
         "ms p50",
         "ms p99",
         "p99/p50",
-        "steadied p99/p50",
         "GL p50/p99",
         "CPU p99",
         "own MB",
@@ -496,7 +376,6 @@ fn report(args: &BenchArgs, rows: &[Row], still: Spread, frames: u32, views: u32
                 format!("{:.1}", r.frame_ms_p50),
                 format!("{:.1}", r.frame_ms_p99),
                 format!("{:.2}", r.frame_ms_p99 / r.frame_ms_p50),
-                format!("{:.2}", r.steadied_ms_p99 / r.steadied_ms_p50),
                 format!("{:.1}/{:.1}", r.gl_ms_p50, r.gl_ms_p99),
                 format!("{:.1}", r.cpu_ms_p99),
                 format!("{:.1}", r.own_bytes as f64 / (1u64 << 20) as f64),
@@ -521,12 +400,10 @@ fn report(args: &BenchArgs, rows: &[Row], still: Spread, frames: u32, views: u32
     println!(
         "\n  The renderer's own spread, a still camera (the approach's first pose, node meshes, \
          tau 1, nothing uploaded, the same draw list every frame): p50 {:.1} ms, p99 {:.1} ms, \
-         p99/p50 {:.2}; steadied by the pacer {:.2}. A flight's p99/p50 above it is what the \
-         flight adds.",
+         p99/p50 {:.2}. A flight's p99/p50 above it is what the flight adds.",
         still.frame_ms_p50,
         still.frame_ms_p99,
-        still.frame_ms_p99 / still.frame_ms_p50,
-        still.steadied_ms_p99 / still.steadied_ms_p50
+        still.frame_ms_p99 / still.frame_ms_p50
     );
     let wu: Vec<Vec<String>> = WU_TABLE_1
         .iter()
@@ -577,7 +454,6 @@ fn report(args: &BenchArgs, rows: &[Row], still: Spread, frames: u32, views: u32
         series: lines(&[
             ("p50", &|r| (r.triangles, r.frame_ms_p50)),
             ("p99", &|r| (r.triangles, r.frame_ms_p99)),
-            ("p99 steadied", &|r| (r.triangles, r.steadied_ms_p99)),
         ]),
     };
     let error = Panel {
