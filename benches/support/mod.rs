@@ -179,3 +179,19 @@ pub fn mean_sd(values: &[f64]) -> (f64, f64) {
     let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
     (mean, var.sqrt())
 }
+
+/// CPU time every thread of this process has run so far, nanoseconds
+/// (the first field of each `/proc/self/task/*/schedstat`); `None` where
+/// the kernel does not keep it. On llvmpipe the GPU's work is the
+/// process's own threads, so a frame's CPU time is what it cost, whatever
+/// else the shared machine ran meanwhile (which wall time also counts).
+/// Threads that have exited are not counted.
+pub fn process_cpu_ns() -> Option<u64> {
+    let mut total = 0u64;
+    for task in std::fs::read_dir("/proc/self/task").ok()? {
+        let path = task.ok()?.path().join("schedstat");
+        let Ok(text) = std::fs::read_to_string(path) else { continue };
+        total += text.split_whitespace().next()?.parse::<u64>().ok()?;
+    }
+    Some(total)
+}
