@@ -508,8 +508,6 @@ impl TileCache {
         }
     }
 
-    /// Places the run, fills every queued tile's block, and keeps the dirty
-    /// ranges for the upload.
     /// Places and makes the queued blocks. When the buffer cannot take them
     /// all, finer data for tiles that have data already waits: the
     /// improvements are dropped and the new tiles placed alone, so a small
