@@ -482,9 +482,17 @@ pub fn tile_error_m(
     node_mesh: bool,
     geometry: &TileGeometry<'_>,
 ) -> f64 {
-    let table = if node_mesh { geometry.delta_per_level } else { geometry.grid_delta_per_level };
-    let at = |level: usize| table.get(level).or(table.last()).copied().unwrap_or(0.0);
-    at(source_level as usize).max(at(key_level as usize + 1))
+    let (meshes, grids) = (geometry.delta_per_level, geometry.grid_delta_per_level);
+    let at = |level: u8| made_delta(meshes, grids, node_mesh, level);
+    at(source_level).max(at(key_level.saturating_add(1)))
+}
+
+/// The delta of `level` for a tile made as it was: from `meshes` for a
+/// tile cut from a node mesh, from `grids` for one made as a grid of posts
+/// (levels past the tables take the coarsest; an empty table gives 0).
+pub fn made_delta(meshes: &[f64], grids: &[f64], node_mesh: bool, level: u8) -> f64 {
+    let table = if node_mesh { meshes } else { grids };
+    table.get(level as usize).or(table.last()).copied().unwrap_or(0.0)
 }
 
 /// Skirts must reach below any surface a neighbour may show along the edge.

@@ -24,7 +24,7 @@ use crate::lod::rings::RingInputs;
 use crate::lod::select::View;
 use crate::lod::{LevelRings, LodConfig, LodError, TileSelector};
 use crate::node::NodeLayout;
-use crate::render::draw_list::TileGeometry;
+use crate::render::draw_list::{made_delta, TileGeometry};
 use crate::render::draw_list::{DepthSlices, PostFrame};
 use crate::render::{palette, ClusterMorph, ClusterOrder, DrawList, FrameUniforms};
 use crate::tiles::{TileCache, TileCacheConfig, TileError};
@@ -463,15 +463,14 @@ impl Scene {
                 continue;
             }
             fallback += 1;
-            let table = if node_mesh { &self.deltas } else { &self.grid_deltas };
-            let delta = |level: u8| table.get(level as usize).or(table.last()).copied();
+            let delta = |level: u8| made_delta(&self.deltas, &self.grid_deltas, node_mesh, level);
             // Inside its box the distance is 0: a metre keeps the bound finite.
             let near = tile.distance.max(1.0);
-            let own = delta(source).unwrap_or(0.0) * scale / near;
+            let own = delta(source) * scale / near;
             // Its vertices morph toward the source's parent from the morph
             // start on, wherever in the tile they are.
             let parent =
-                delta(source + 1).unwrap_or(0.0) * scale / near.max(self.rings.morph(level).0);
+                delta(source.saturating_add(1)) * scale / near.max(self.rings.morph(level).0);
             bound = bound.max(own.max(parent));
         }
         (fallback, bound)

@@ -17,9 +17,7 @@ pub trait TerrainData: ResidentNodes + TileBounds {
     /// Largest error of each level's regular grid of posts, metres: what
     /// a tile made as a grid errs by where the source also keeps node
     /// meshes (whose errors `delta_per_level` gives). The same without them.
-    fn grid_delta_per_level(&self) -> Vec<f64> {
-        self.delta_per_level()
-    }
+    fn grid_delta_per_level(&self) -> Vec<f64>;
     /// Lowest and highest height of the data, metres.
     fn height_range(&self) -> (f32, f32);
 }
