@@ -78,6 +78,27 @@ fn budgets_the_display_cannot_work_in_are_refused_by_name() {
     }
 }
 
+/// A budget too small for the data's nodes names the least that would do,
+/// and that budget flies.
+#[test]
+fn a_refused_budget_names_one_that_flies() {
+    let out = fresh_dir("cli-fly-least");
+    let run = fly(&out, &["--frames", "2", "--memory-mb", "8", "--size", "160x90"]);
+    assert!(!run.status.success(), "8 MB was accepted");
+    let text = stderr(&run);
+    let least: u64 = text
+        .split("need at least ")
+        .nth(1)
+        .and_then(|rest| rest.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no least budget named: {text}"));
+    // Headless snapshots at 160x90 take 8 bytes a pixel on top.
+    let mb = (least + 8 * 160 * 90).div_ceil(1 << 20);
+    let mb = mb.to_string();
+    let run = fly(&out, &["--frames", "2", "--memory-mb", &mb, "--size", "160x90"]);
+    assert!(run.status.success(), "--memory-mb {mb}: {}", stderr(&run));
+}
+
 #[test]
 fn a_frame_time_target_is_recorded_and_every_frame_says_its_tau() {
     let out = fresh_dir("cli-fly-frame-ms");

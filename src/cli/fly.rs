@@ -111,7 +111,14 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     args.view.configure(&mut config, &path, interval);
     config.scene.clusters = args.clusters;
     config.fov_x_deg = args.view.fov;
-    let mut display = Display::new(&config, source, summary).context("opening the display")?;
+    let opening = match (args.memory(), config.memory_budget_bytes) {
+        (Some(mb), Some(display)) => format!(
+            "opening the display with --memory-mb {mb} ({:.1} MB after headless snapshots)",
+            display as f64 / MB as f64
+        ),
+        _ => "opening the display".to_owned(),
+    };
+    let mut display = Display::new(&config, source, summary).context(opening)?;
     let info = display.info().clone();
     println!(
         "ridgeline fly: {} on {} ({}), {}",

@@ -14,8 +14,8 @@
 mod sizing;
 
 pub use sizing::{
-    buffer_copies, clipmap_view, plan_memory, MemoryPlan, MAX_LOADER_QUEUE, MIN_BUDGET_BYTES,
-    MIN_BUFFER_BYTES,
+    buffer_copies, clipmap_view, least_budget, plan_memory, MemoryPlan, MAX_LOADER_QUEUE,
+    MIN_BUDGET_BYTES, MIN_BUFFER_BYTES,
 };
 
 use std::sync::Arc;
@@ -81,13 +81,13 @@ pub enum PipelineError {
     Scene(#[from] SceneError),
     /// The memory budget is below what the display keeps aside.
     #[error(
-        "memory budget {budget} bytes is too small: at least {least} bytes, and room for the \
-         loader's buffers of {node_bytes} bytes (the largest node)"
+        "memory budget {budget} bytes is too small: nodes of up to {node_bytes} bytes need at \
+         least {least} bytes (the atlas holds at least eight, the loader's buffers a few)"
     )]
     MemoryBudget {
         /// The budget asked for, bytes.
         budget: u64,
-        /// The least budget, bytes.
+        /// The least budget with a plan for these nodes, bytes.
         least: u64,
         /// Bytes a node buffer is counted at.
         node_bytes: u64,
@@ -321,8 +321,11 @@ fn plan(
         LoaderMode::Inline => 0,
     };
     let copies = buffer_copies(config.scene.clusters);
-    plan_memory(budget, node_bytes, queue, copies, config.scene.buffer_bytes)
-        .ok_or(PipelineError::MemoryBudget { budget, least: MIN_BUDGET_BYTES, node_bytes })
+    let buffer = config.scene.buffer_bytes;
+    plan_memory(budget, node_bytes, queue, copies, buffer).ok_or_else(|| {
+        let least = least_budget(node_bytes, queue, copies, buffer);
+        PipelineError::MemoryBudget { budget, least, node_bytes }
+    })
 }
 
 /// The band a triangle budget holds within each frame: the controller's

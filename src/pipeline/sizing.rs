@@ -148,6 +148,33 @@ pub fn plan_memory(
     Some(MemoryPlan { budget_bytes, atlas_bytes, loader_queue, node_bytes, buffer_bytes })
 }
 
+/// The least budget [`plan_memory`] has a plan for with these settings,
+/// bytes, so that a refused budget says what would do: bisected between a
+/// budget without a plan and one with (a byte less has none).
+pub fn least_budget(node_bytes: u64, queue: u32, copies: f64, max_buffer_bytes: u32) -> u64 {
+    let fits = |budget: u64| plan_memory(budget, node_bytes, queue, copies, max_buffer_bytes);
+    let (mut low, mut high) = (MIN_BUDGET_BYTES, MIN_BUDGET_BYTES.max(1 << 20));
+    while fits(high).is_none() {
+        if high >= 1 << 50 {
+            return high;
+        }
+        (low, high) = (high, high * 2);
+    }
+    while high - low > 1 {
+        let mid = low + (high - low) / 2;
+        if fits(mid).is_some() {
+            high = mid;
+        } else {
+            low = mid;
+        }
+    }
+    if fits(low).is_some() {
+        low
+    } else {
+        high
+    }
+}
+
 impl MemoryPlan {
     /// What the plan gives out, bytes: it never exceeds the budget.
     pub fn planned_bytes(&self, copies: f64) -> u64 {
@@ -189,6 +216,22 @@ mod tests {
                     prop_assert!(plan.buffer_bytes <= 84 << 20);
                     prop_assert!(plan.buffer_bytes as u64 >= MIN_BUFFER_BYTES - 4);
                 }
+            }
+        }
+
+        /// The least budget a refusal names has a plan, and a byte less
+        /// (above the floor) has none.
+        #[test]
+        fn the_least_budget_is_the_first_with_a_plan(
+            node_bytes in 1u64..(1 << 22),
+            queue in 0u32..512,
+            clusters: bool,
+        ) {
+            let copies = buffer_copies(clusters);
+            let least = least_budget(node_bytes, queue, copies, 84 << 20);
+            prop_assert!(plan_memory(least, node_bytes, queue, copies, 84 << 20).is_some());
+            if least > MIN_BUDGET_BYTES {
+                prop_assert!(plan_memory(least - 1, node_bytes, queue, copies, 84 << 20).is_none());
             }
         }
     }
