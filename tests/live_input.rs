@@ -49,13 +49,19 @@ const GDL90: Tolerance =
 
 /// Plays `datagrams` to a receiver for `kind` and checks a frame every
 /// 1/30 s; returns the frames checked and the worst errors.
-fn play(kind: &str, datagrams: Vec<Datagram>, seconds: f64, tolerance: &Tolerance) -> (u32, [f64; 3]) {
+fn play(
+    kind: &str,
+    datagrams: Vec<Datagram>,
+    seconds: f64,
+    tolerance: &Tolerance,
+) -> (u32, [f64; 3]) {
     let spec: InputSpec = format!("{kind}:127.0.0.1:0").parse().unwrap();
     let options = ReceiverOptions { stale: STALE, ..ReceiverOptions::default() };
     let mut input = LiveInput::start(&spec, &options).expect("listening");
     let to = input.local_addr();
     let start = Instant::now() + Duration::from_millis(50);
-    let times: Vec<(f64, bool, bool)> = datagrams.iter().map(|d| (d.t, d.position, d.attitude)).collect();
+    let times: Vec<(f64, bool, bool)> =
+        datagrams.iter().map(|d| (d.t, d.position, d.attitude)).collect();
     let sent = datagrams.len() as u64;
     let sender = std::thread::spawn(move || {
         let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
@@ -77,7 +83,10 @@ fn play(kind: &str, datagrams: Vec<Datagram>, seconds: f64, tolerance: &Toleranc
         let state = input.snapshot();
         let now = Instant::now();
         let LiveView::Live { pose, .. } = state.view(now, STALE) else {
-            panic!("{kind}: frame {frames} is stale with data flowing: {:?}", state.view(now, STALE));
+            panic!(
+                "{kind}: frame {frames} is stale with data flowing: {:?}",
+                state.view(now, STALE)
+            );
         };
         // The samples taken so far are the first `taken` datagrams (none is
         // lost on the loopback: checked below).
@@ -85,7 +94,9 @@ fn play(kind: &str, datagrams: Vec<Datagram>, seconds: f64, tolerance: &Toleranc
         let t_position = taken.iter().rev().find(|d| d.1).expect("a position").0;
         let t_attitude = taken.iter().rev().find(|d| d.2).expect("an attitude").0;
         let (position_at, attitude_at) = state.received();
-        let age = |at: Option<Instant>| now.duration_since(at.unwrap()).as_secs_f64().min(MAX_EXTRAPOLATION_S);
+        let age = |at: Option<Instant>| {
+            now.duration_since(at.unwrap()).as_secs_f64().min(MAX_EXTRAPOLATION_S)
+        };
         let (age_p, age_a) = (age(position_at), age(attitude_at));
         let expected_position = SCRIPT.pose(t_position + age_p);
         let expected_attitude = SCRIPT.pose(t_attitude + age_a);
@@ -107,7 +118,10 @@ fn play(kind: &str, datagrams: Vec<Datagram>, seconds: f64, tolerance: &Toleranc
     }
     let counts = input.counts();
     assert_eq!((counts.taken, counts.ignored_total()), (sent, 0), "{kind}: every datagram taken");
-    println!("{kind}: {frames} frames, worst {:.3} m, {:.3} m up, {:.4}°; {counts:?}", worst[0], worst[1], worst[2]);
+    println!(
+        "{kind}: {frames} frames, worst {:.3} m, {:.3} m up, {:.4}°; {counts:?}",
+        worst[0], worst[1], worst[2]
+    );
     (frames, worst)
 }
 
@@ -122,7 +136,8 @@ fn stream(hz: f64, seconds: f64, encode: impl Fn(f64) -> Vec<u8>) -> Vec<Datagra
 #[test]
 fn flightgear_v24_and_v25_follow_the_script() {
     for version in [24, 25] {
-        let (frames, _) = play("flightgear", stream(60.0, 3.0, |t| SCRIPT.flightgear(version, t)), 3.0, &EXACT);
+        let (frames, _) =
+            play("flightgear", stream(60.0, 3.0, |t| SCRIPT.flightgear(version, t)), 3.0, &EXACT);
         assert!(frames >= 60, "{frames} frames checked");
     }
 }
@@ -138,7 +153,8 @@ fn x_plane_rpos_follows_the_script() {
 /// the position is extrapolated for 0.5 s and then held.
 #[test]
 fn gdl90_ownship_and_stratux_ahrs_follow_the_script() {
-    let (frames, _) = play("gdl90", gdl90_schedule(20.0, |t| SCRIPT.gdl90_stratux_ahrs(t)), 3.5, &GDL90);
+    let (frames, _) =
+        play("gdl90", gdl90_schedule(20.0, |t| SCRIPT.gdl90_stratux_ahrs(t)), 3.5, &GDL90);
     assert!(frames >= 70);
 }
 
@@ -147,7 +163,8 @@ fn gdl90_ownship_and_stratux_ahrs_follow_the_script() {
 #[test]
 fn gdl90_ownship_and_foreflight_ahrs_follow_the_script() {
     let tolerance = Tolerance { attitude_lag_dps: SCRIPT.turn_dps, ..GDL90 };
-    let (frames, _) = play("gdl90", gdl90_schedule(5.0, |t| SCRIPT.gdl90_foreflight_ahrs(t)), 3.5, &tolerance);
+    let (frames, _) =
+        play("gdl90", gdl90_schedule(5.0, |t| SCRIPT.gdl90_foreflight_ahrs(t)), 3.5, &tolerance);
     assert!(frames >= 70);
 }
 
@@ -158,11 +175,12 @@ fn gdl90_schedule(hz: f64, ahrs: impl Fn(f64) -> Vec<u8>) -> Vec<Datagram> {
         .map(|k| k as f64)
         .map(|t| Datagram { t, position: true, attitude: false, bytes: SCRIPT.gdl90_ownship(t) })
         .collect();
-    datagrams.extend(
-        (0..(3.5 * hz) as usize)
-            .map(|k| 0.01 + k as f64 / hz)
-            .map(|t| Datagram { t, position: false, attitude: true, bytes: ahrs(t) }),
-    );
+    datagrams.extend((0..(3.5 * hz) as usize).map(|k| 0.01 + k as f64 / hz).map(|t| Datagram {
+        t,
+        position: false,
+        attitude: true,
+        bytes: ahrs(t),
+    }));
     datagrams.sort_by(|a, b| a.t.total_cmp(&b.t));
     datagrams
 }
@@ -182,8 +200,13 @@ fn x_plane_data_groups_give_a_held_pose() {
     }
     let state = input.snapshot();
     let later = Instant::now() + Duration::from_millis(300);
-    let LiveView::Live { pose, velocity_ned, .. } = state.view(later, STALE) else { panic!("stale") };
+    let LiveView::Live { pose, velocity_ned, .. } = state.view(later, STALE) else {
+        panic!("stale")
+    };
     assert_eq!(velocity_ned, None);
     let (horizontal, vertical, attitude) = pose_error(&SCRIPT.pose(0.0), &pose);
-    assert!(horizontal < 1.0 && vertical < 0.01 && attitude < 1e-4, "{horizontal} {vertical} {attitude}");
+    assert!(
+        horizontal < 1.0 && vertical < 0.01 && attitude < 1e-4,
+        "{horizontal} {vertical} {attitude}"
+    );
 }

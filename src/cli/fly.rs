@@ -385,7 +385,11 @@ impl PathFrames<'_> {
     }
 }
 
-fn fly_headless(args: &FlyArgs, display: &mut Display, drawer: &mut PathFrames) -> Result<Vec<Row>> {
+fn fly_headless(
+    args: &FlyArgs,
+    display: &mut Display,
+    drawer: &mut PathFrames,
+) -> Result<Vec<Row>> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("{}: cannot create the output folder", args.out.display()))?;
     let frames = args.frames.max(1);

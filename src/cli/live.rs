@@ -131,7 +131,9 @@ impl Live {
             age_ms: age.map(|s| s * 1e3),
             stale,
             reason,
-            latency_ms: state.newest().map(|at| drawn.saturating_duration_since(at).as_secs_f64() * 1e3),
+            latency_ms: state
+                .newest()
+                .map(|at| drawn.saturating_duration_since(at).as_secs_f64() * 1e3),
             taken: state.taken,
         };
         Ok((stats, FrameRecord { pose, input: Some(input), wall_time: wall_time() }))
@@ -214,8 +216,8 @@ pub struct InputReport {
     pub stale_frames: usize,
     /// Time spent stale, seconds (each stale frame until the next frame).
     pub stale_s: f64,
-    /// Frame drawn minus newest sample received, ms: p50, p99, max
-    /// (frames with a sample).
+    /// Frame drawn minus newest sample received, ms: p50, p99, max over
+    /// the frames drawn from live data.
     pub latency_ms: Option<[f64; 3]>,
     /// One frame interval plus 5 ms, ms: the latency bound the p99 is held to.
     pub latency_bound_ms: f64,
@@ -225,7 +227,13 @@ pub struct InputReport {
 
 impl InputReport {
     /// The report of a run of `rows` whose input counted `datagrams`.
-    pub fn new(args: &FlyArgs, address: &str, rows: &[Row], datagrams: Counts, recorded_rows: u64) -> InputReport {
+    pub fn new(
+        args: &FlyArgs,
+        address: &str,
+        rows: &[Row],
+        datagrams: Counts,
+        recorded_rows: u64,
+    ) -> InputReport {
         let source = rows.iter().find_map(|r| r.record.input).map_or("", |i| i.source);
         let stale = |r: &Row| r.record.input.is_some_and(|i| i.stale);
         let stale_s = rows
@@ -234,8 +242,11 @@ impl InputReport {
             .map(|pair| pair[1].t - pair[0].t)
             .sum::<f64>()
             + rows.last().filter(|r| stale(r)).map_or(0.0, |_| 1.0 / args.fps);
-        let mut latency: Vec<f64> =
-            rows.iter().filter_map(|r| r.record.input.and_then(|i| i.latency_ms)).collect();
+        // Frames drawn from live data only: a withdrawn frame shows no sample.
+        let mut latency: Vec<f64> = rows
+            .iter()
+            .filter_map(|r| r.record.input.filter(|i| !i.stale).and_then(|i| i.latency_ms))
+            .collect();
         latency.sort_by(f64::total_cmp);
         let pick = |q: f64| latency[((latency.len() - 1) as f64 * q).round() as usize];
         InputReport {
@@ -260,7 +271,8 @@ impl InputReport {
             .filter(|&&r| d.ignored_for(r) > 0)
             .map(|&r| format!("{} {}", r.name(), d.ignored_for(r)))
             .collect();
-        let reasons = if reasons.is_empty() { String::new() } else { format!(" ({})", reasons.join(", ")) };
+        let reasons =
+            if reasons.is_empty() { String::new() } else { format!(" ({})", reasons.join(", ")) };
         writeln!(
             out,
             "  input             {} on {}: {} datagrams taken, {} ignored{reasons}",

@@ -78,7 +78,8 @@ impl std::str::FromStr for InputSpec {
     type Err = String;
 
     fn from_str(text: &str) -> Result<InputSpec, String> {
-        let usage = || format!("`{text}`: expected KIND:[ADDR:]PORT with KIND flightgear, xplane or gdl90");
+        let usage =
+            || format!("`{text}`: expected KIND:[ADDR:]PORT with KIND flightgear, xplane or gdl90");
         let (kind, rest) = text.split_once(':').ok_or_else(usage)?;
         let kind = match kind.to_ascii_lowercase().as_str() {
             "flightgear" | "fg" | "jsbsim" => InputKind::Flightgear,
@@ -89,12 +90,14 @@ impl std::str::FromStr for InputSpec {
         let (ip, port) = match rest.rsplit_once(':') {
             Some((ip, port)) => {
                 let ip = ip.trim_start_matches('[').trim_end_matches(']');
-                let ip: IpAddr = ip.parse().map_err(|_| format!("`{text}`: `{ip}` is not an IP address"))?;
+                let ip: IpAddr =
+                    ip.parse().map_err(|_| format!("`{text}`: `{ip}` is not an IP address"))?;
                 (ip, port)
             }
             None => (IpAddr::V4(Ipv4Addr::LOCALHOST), rest),
         };
-        let port: u16 = port.parse().map_err(|_| format!("`{text}`: `{port}` is not a port number"))?;
+        let port: u16 =
+            port.parse().map_err(|_| format!("`{text}`: `{port}` is not a port number"))?;
         Ok(InputSpec { kind, address: SocketAddr::new(ip, port) })
     }
 }

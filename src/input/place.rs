@@ -67,9 +67,17 @@ mod tests {
 
     #[test]
     fn poses_go_there_and_back() {
-        let georef = GeoRef { crs: Crs::Geographic, origin: [40.0, 39.0], spacing: [1.0 / 1200.0; 2] };
+        let georef =
+            GeoRef { crs: Crs::Geographic, origin: [40.0, 39.0], spacing: [1.0 / 1200.0; 2] };
         let frame = DisplayFrame::new(&georef, [1201, 1201]).unwrap();
-        let pose = GeoPose { lat_deg: 39.5, lon_deg: 40.25, alt_m: 3000.0, heading_deg: 10.0, pitch_deg: -3.0, roll_deg: 5.0 };
+        let pose = GeoPose {
+            lat_deg: 39.5,
+            lon_deg: 40.25,
+            alt_m: 3000.0,
+            heading_deg: 10.0,
+            pitch_deg: -3.0,
+            roll_deg: 5.0,
+        };
         let local = frame.pose(&pose);
         assert!(local.position.x > 20_000.0 && local.position.y > 55_000.0, "{local:?}");
         let back = frame.geodetic(&local);

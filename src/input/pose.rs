@@ -106,7 +106,9 @@ impl Track {
     /// local scales.
     pub fn at(&self, dt_s: f64) -> Position {
         let dt = horizon(dt_s);
-        let Some([north, east, down]) = self.velocity_ned else { return self.position };
+        let Some([north, east, down]) = self.velocity_ned.filter(|_| dt > 0.0) else {
+            return self.position;
+        };
         let [east_m_per_deg, north_m_per_deg] = metres_per_degree(self.position.lat_deg);
         let lat = (self.position.lat_deg + north * dt / north_m_per_deg).clamp(-90.0, 90.0);
         // Over half a second the east scale hardly changes; near a pole it

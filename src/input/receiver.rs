@@ -140,7 +140,8 @@ pub struct LiveInput {
 impl LiveInput {
     /// Binds `spec`'s address and starts the receiver thread.
     pub fn start(spec: &InputSpec, options: &ReceiverOptions) -> Result<LiveInput, ReceiverError> {
-        let bind = |source| ReceiverError::Bind { kind: spec.kind.name(), address: spec.address, source };
+        let bind =
+            |source| ReceiverError::Bind { kind: spec.kind.name(), address: spec.address, source };
         let socket = UdpSocket::bind(spec.address).map_err(bind)?;
         socket.set_read_timeout(Some(POLL)).map_err(bind)?;
         let local = socket.local_addr().map_err(bind)?;
@@ -165,7 +166,13 @@ impl LiveInput {
             .name(format!("input-{}", spec.kind.name()))
             .spawn(move || worker.run())
             .map_err(|e| ReceiverError::Thread(e.to_string()))?;
-        Ok(LiveInput { shared, thread: Some(thread), local, kind: spec.kind, last: LiveState::default() })
+        Ok(LiveInput {
+            shared,
+            thread: Some(thread),
+            local,
+            kind: spec.kind,
+            last: LiveState::default(),
+        })
     }
 
     /// The address the socket is bound to (the port the system chose for port 0).
@@ -240,7 +247,12 @@ impl Worker {
             self.request_rpos(&mut requested);
             let length = match self.socket.recv_from(&mut buffer) {
                 Ok((length, _)) => length,
-                Err(e) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                    ) =>
+                {
                     continue
                 }
                 Err(_) => {
@@ -330,7 +342,11 @@ mod tests {
             velocity_ned: Some([50.0, 0.0, 0.0]),
             vertical_known: true,
         };
-        crate::input::flightgear::encode(24, &track, &Turning { attitude: Attitude::default(), rates_dps: None })
+        crate::input::flightgear::encode(
+            24,
+            &track,
+            &Turning { attitude: Attitude::default(), rates_dps: None },
+        )
     }
 
     /// Waits (bounded) until the receiver has counted `n` datagrams.

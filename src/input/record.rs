@@ -44,9 +44,19 @@ impl Recorder {
         let partial = PathBuf::from(partial);
         let fail = |source| RecordError { path: path.to_path_buf(), source };
         let mut writer = BufWriter::new(File::create(&partial).map_err(fail)?);
-        writeln!(writer, "# ridgeline fly --record: live poses, t seconds from the first\n{HEADER}")
-            .map_err(fail)?;
-        Ok(Recorder { writer, partial, path: path.to_path_buf(), start: None, last_t: -1.0, rows: 0 })
+        writeln!(
+            writer,
+            "# ridgeline fly --record: live poses, t seconds from the first\n{HEADER}"
+        )
+        .map_err(fail)?;
+        Ok(Recorder {
+            writer,
+            partial,
+            path: path.to_path_buf(),
+            start: None,
+            last_t: -1.0,
+            rows: 0,
+        })
     }
 
     /// Writes `pose`, received at `at`. Rows whose time does not advance
@@ -103,7 +113,10 @@ mod tests {
         assert!(!path.exists(), "not under its name until finished");
         assert_eq!(recorder.finish().unwrap(), 2);
         let text = std::fs::read_to_string(&path).unwrap();
-        assert!(text.contains("\nt,lat,lon,alt,heading,pitch,roll\n0,39.5,40.2,3000,0,0,0\n0.04,"), "{text}");
+        assert!(
+            text.contains("\nt,lat,lon,alt,heading,pitch,roll\n0,39.5,40.2,3000,0,0,0\n0.04,"),
+            "{text}"
+        );
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

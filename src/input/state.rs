@@ -199,14 +199,20 @@ mod tests {
     fn a_frame_goes_stale_the_moment_the_data_are_older_than_the_stale_time() {
         let mut state = LiveState::default();
         let t0 = Instant::now();
-        assert!(matches!(state.view(t0, STALE), LiveView::Stale { reason: StaleReason::NoData, age_s: None }));
+        assert!(matches!(
+            state.view(t0, STALE),
+            LiveView::Stale { reason: StaleReason::NoData, age_s: None }
+        ));
         state.take(&update(39.0), t0, STALE).unwrap();
         let ms = |n: u64| t0 + Duration::from_millis(n);
         let LiveView::Live { pose, age_s, .. } = state.view(ms(200), STALE) else { panic!() };
         assert!((age_s - 0.2).abs() < 1e-9);
         assert!(pose.lat_deg > 39.0, "extrapolated north");
         assert!(matches!(state.view(ms(1000), STALE), LiveView::Live { .. }));
-        assert!(matches!(state.view(ms(1001), STALE), LiveView::Stale { reason: StaleReason::Timeout, .. }));
+        assert!(matches!(
+            state.view(ms(1001), STALE),
+            LiveView::Stale { reason: StaleReason::Timeout, .. }
+        ));
         state.take(&update(39.0), ms(1500), STALE).unwrap();
         assert!(matches!(state.view(ms(1500), STALE), LiveView::Live { .. }), "recovers by itself");
     }
@@ -219,7 +225,11 @@ mod tests {
         let later = t0 + Duration::from_millis(100);
         // 0.01 degree (1.1 km) in 0.1 s: 11 km/s.
         assert_eq!(state.take(&update(39.01), later, STALE), Err(Ignored::Jump));
-        assert_eq!(state.take(&update(39.0005), later, STALE), Ok(()), "55 m is a fast aircraft's 0.1 s");
+        assert_eq!(
+            state.take(&update(39.0005), later, STALE),
+            Ok(()),
+            "55 m is a fast aircraft's 0.1 s"
+        );
         let reset = t0 + Duration::from_millis(1200);
         assert_eq!(state.take(&update(45.0), reset, STALE), Ok(()), "a reposition after silence");
     }
@@ -231,7 +241,10 @@ mod tests {
         state.take(&update(39.0), t0, STALE).unwrap();
         let flag = Update { position_valid: Some(false), ..Update::default() };
         state.take(&flag, t0, STALE).unwrap();
-        assert!(matches!(state.view(t0, STALE), LiveView::Stale { reason: StaleReason::PositionInvalid, .. }));
+        assert!(matches!(
+            state.view(t0, STALE),
+            LiveView::Stale { reason: StaleReason::PositionInvalid, .. }
+        ));
         state.take(&update(39.0), t0, STALE).unwrap();
         assert!(matches!(state.view(t0, STALE), LiveView::Live { .. }));
     }

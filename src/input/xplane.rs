@@ -129,7 +129,19 @@ pub fn encode_rpos(track: &Track, turning: &Turning, body_rates: [f64; 3]) -> Ve
 pub fn encode_data(position: &Position, attitude: &Attitude) -> Vec<u8> {
     let mut packet = b"DATA*".to_vec();
     let groups: [(i32, [f64; 8]); 2] = [
-        (17, [attitude.pitch_deg, attitude.roll_deg, attitude.heading_deg, 0.0, -999.0, -999.0, -999.0, -999.0]),
+        (
+            17,
+            [
+                attitude.pitch_deg,
+                attitude.roll_deg,
+                attitude.heading_deg,
+                0.0,
+                -999.0,
+                -999.0,
+                -999.0,
+                -999.0,
+            ],
+        ),
         (20, [position.lat_deg, position.lon_deg, position.alt_m / FEET, 0.0, 0.0, 0.0, 0.0, 0.0]),
     ];
     for (index, values) in groups {
@@ -164,7 +176,9 @@ mod tests {
         let got = update.track.unwrap();
         assert_eq!(got.position, track.position, "doubles are exact");
         let v = got.velocity_ned.unwrap();
-        assert!((v[0] - 60.0).abs() < 1e-5 && (v[1] + 12.0).abs() < 1e-5 && (v[2] - 3.0).abs() < 1e-5);
+        assert!(
+            (v[0] - 60.0).abs() < 1e-5 && (v[1] + 12.0).abs() < 1e-5 && (v[2] - 3.0).abs() < 1e-5
+        );
         let t = update.turning.unwrap();
         assert!((t.attitude.heading_deg - 348.5).abs() < 1e-4);
         // Wings level, a body yaw rate turns the heading at r / cos(pitch).

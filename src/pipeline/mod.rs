@@ -28,10 +28,10 @@ use crate::clipmap::{Clipmap, ClipmapConfig, ClipmapError, ClipmapStats, LoaderM
 use crate::lod::budget::{BudgetConfig, BudgetError, BudgetTarget, TauController};
 use crate::node::NodeSource;
 use crate::render::{CallStats, DrawList, FrameOutput, RenderBackend, SymbolBackend};
-use crate::symbology::SymbolMesh;
 use crate::scene::{
     ClipmapTerrain, Scene, SceneConfig, SceneError, SceneStats, TerrainSummary, TriangleBand,
 };
+use crate::symbology::SymbolMesh;
 
 /// Everything fixed for one pipeline.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -22,8 +22,6 @@ pub fn failure_flag(mesh: &mut SymbolMesh, viewport: [u32; 2], reason: &str) {
     mesh.begin(viewport, s.max(1.0));
     let size = DVec2::new(viewport[0] as f64, viewport[1] as f64);
     let width = 6.0 * s;
-    mesh.line(DVec2::ZERO, size, width, RED);
-    mesh.line(DVec2::new(0.0, size.y), DVec2::new(size.x, 0.0), width, RED);
     let centre = size / 2.0;
     // Sized for the viewport's height, narrowed to fit its width.
     let fit = |preferred: f64, words: &str| {
@@ -35,13 +33,27 @@ pub fn failure_flag(mesh: &mut SymbolMesh, viewport: [u32; 2], reason: &str) {
         inked(title_height, TITLE).max(inked(reason_height, reason)) / 2.0 + 8.0 * s,
         (title_height + reason_height) / 2.0 + 20.0 * s,
     );
+    // The cross stops at the panel, so the words stay clear.
+    let gap = (half.x / size.x).min(half.y / size.y) + 2.0 * s / size.length();
+    for (from, to) in [(DVec2::ZERO, size), (DVec2::new(0.0, size.y), DVec2::new(size.x, 0.0))] {
+        let at = |t: f64| from + (to - from) * t;
+        mesh.line(at(0.0), at(0.5 - gap), width, RED);
+        mesh.line(at(0.5 + gap), at(1.0), width, RED);
+    }
     mesh.panel(centre - half, centre + half, OUTLINE);
     let (corners, border) = (box_corners(centre - half, centre + half), 3.0 * s);
     mesh.polyline(&corners, border, RED);
     let up = DVec2::new(0.0, -1.0);
     let title_base = centre.y + half.y - 14.0 * s - reason_height - 10.0 * s;
     text(mesh, TITLE, DVec2::new(centre.x, title_base), up, title_height, RED);
-    text(mesh, reason, DVec2::new(centre.x, centre.y + half.y - 12.0 * s), up, reason_height, AMBER);
+    text(
+        mesh,
+        reason,
+        DVec2::new(centre.x, centre.y + half.y - 12.0 * s),
+        up,
+        reason_height,
+        AMBER,
+    );
     mesh.finish();
 }
 

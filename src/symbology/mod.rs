@@ -58,7 +58,11 @@ pub struct Layout {
 /// Lays out the reference symbols for `camera` into `mesh`, with the flight
 /// path marker for `velocity` (the display frame's x east, y north, z up;
 /// m/s) when it is known.
-pub fn reference_symbols(mesh: &mut SymbolMesh, camera: &Camera, velocity: Option<DVec3>) -> Layout {
+pub fn reference_symbols(
+    mesh: &mut SymbolMesh,
+    camera: &Camera,
+    velocity: Option<DVec3>,
+) -> Layout {
     let s = scale(camera.viewport);
     mesh.begin(camera.viewport, s.max(1.0));
     let projector = Projector::new(camera);
@@ -93,7 +97,14 @@ fn heading_marks(mesh: &mut SymbolMesh, projector: &Projector, s: f64, layout: &
         layout.marks += 1;
         if labelled {
             let mut digits = [0u8; 2];
-            text(mesh, heading_label(step / 3, &mut digits), at + up * (length + 5.0 * s), up, 12.0 * s, WHITE);
+            text(
+                mesh,
+                heading_label(step / 3, &mut digits),
+                at + up * (length + 5.0 * s),
+                up,
+                12.0 * s,
+                WHITE,
+            );
             layout.labels += 1;
         }
     }
@@ -119,7 +130,14 @@ fn heading_label(k: u32, digits: &mut [u8; 2]) -> &str {
 
 /// `label`, its baseline centred on `at`, upright along `up` (unit, in
 /// pixels), `height` pixels high.
-pub fn text(mesh: &mut SymbolMesh, label: &str, at: DVec2, up: DVec2, height: f64, colour: mesh::Rgba) {
+pub fn text(
+    mesh: &mut SymbolMesh,
+    label: &str,
+    at: DVec2,
+    up: DVec2,
+    height: f64,
+    colour: mesh::Rgba,
+) {
     let unit = height / font::HEIGHT;
     // Screen y grows down: "along" is `up` turned a quarter clockwise on screen.
     let along = DVec2::new(-up.y, up.x);
@@ -139,13 +157,23 @@ fn aircraft_symbol(mesh: &mut SymbolMesh, centre: DVec2, s: f64) {
         let p = |x: f64, y: f64| centre + DVec2::new(side * x * s, y * s);
         mesh.polyline(&[p(70.0, 0.0), p(24.0, 0.0), p(24.0, 10.0)], width, YELLOW);
     }
-    mesh.line(centre - DVec2::new(2.5 * s, 0.0), centre + DVec2::new(2.5 * s, 0.0), 5.0 * s, YELLOW);
+    mesh.line(
+        centre - DVec2::new(2.5 * s, 0.0),
+        centre + DVec2::new(2.5 * s, 0.0),
+        5.0 * s,
+        YELLOW,
+    );
 }
 
 /// The flight path marker where `velocity` points: a circle with wings
 /// level with the horizon and a tail up. `None` (not drawn) below
 /// [`FLIGHT_PATH_MIN_SPEED_MPS`] or when the direction is off the screen.
-fn flight_path_marker(mesh: &mut SymbolMesh, projector: &Projector, velocity: DVec3, s: f64) -> Option<DVec2> {
+fn flight_path_marker(
+    mesh: &mut SymbolMesh,
+    projector: &Projector,
+    velocity: DVec3,
+    s: f64,
+) -> Option<DVec2> {
     if !velocity.is_finite() || velocity.truncate().length() < FLIGHT_PATH_MIN_SPEED_MPS {
         return None;
     }
@@ -165,7 +193,12 @@ fn flight_path_marker(mesh: &mut SymbolMesh, projector: &Projector, velocity: DV
     }
     mesh.polyline(&ring, width, GREEN);
     for side in [-1.0, 1.0] {
-        mesh.line(centre + level * side * radius, centre + level * side * (radius + 12.0 * s), width, GREEN);
+        mesh.line(
+            centre + level * side * radius,
+            centre + level * side * (radius + 12.0 * s),
+            width,
+            GREEN,
+        );
     }
     mesh.line(centre + up * radius, centre + up * (radius + 8.0 * s), width, GREEN);
     Some(centre)
@@ -189,7 +222,8 @@ mod tests {
     #[test]
     fn labels_follow_the_compass_rose() {
         let mut digits = [0; 2];
-        let labels: Vec<String> = (0..12).map(|k| heading_label(k, &mut digits).to_owned()).collect();
+        let labels: Vec<String> =
+            (0..12).map(|k| heading_label(k, &mut digits).to_owned()).collect();
         assert_eq!(labels, ["N", "3", "6", "E", "12", "15", "S", "21", "24", "W", "30", "33"]);
     }
 

@@ -43,9 +43,9 @@ const fn crc_table() -> [u16; 256] {
 /// The frame check sequence of `message` (its ID and data), the ICD's
 /// `crcCompute`.
 pub fn crc(message: &[u8]) -> u16 {
-    message.iter().fold(0u16, |crc, &byte| {
-        CRC_TABLE[(crc >> 8) as usize] ^ (crc << 8) ^ byte as u16
-    })
+    message
+        .iter()
+        .fold(0u16, |crc, &byte| CRC_TABLE[(crc >> 8) as usize] ^ (crc << 8) ^ byte as u16)
 }
 
 /// Calls `each` with every message of `datagram` (ID and data, FCS
@@ -137,7 +137,8 @@ mod tests {
     use super::*;
 
     /// §2.2.4: a heartbeat with its flags and CRC.
-    const ICD_HEARTBEAT: [u8; 11] = [0x7E, 0x00, 0x81, 0x41, 0xDB, 0xD0, 0x08, 0x02, 0xB3, 0x8B, 0x7E];
+    const ICD_HEARTBEAT: [u8; 11] =
+        [0x7E, 0x00, 0x81, 0x41, 0xDB, 0xD0, 0x08, 0x02, 0xB3, 0x8B, 0x7E];
 
     #[test]
     fn the_icd_example_heartbeat_checks() {

@@ -146,10 +146,10 @@ fn ownship(data: &[u8]) -> Ownship {
     let angle = data[16] as f64 * TRACK_LSB_DEG;
     Ownship {
         lat_lon_deg: (!no_fix && nic != 0).then_some([lat, lon]),
-        pressure_altitude_ft: (altitude != 0xFFF).then(|| altitude as f64 * 25.0 - 1000.0),
+        pressure_altitude_ft: (altitude != 0xFFF).then_some(altitude as f64 * 25.0 - 1000.0),
         ground_speed_kt: (speed != 0xFFF).then_some(speed as f64),
         // 12-bit two's complement.
-        vertical_fpm: (vertical != 0x800).then(|| (((vertical << 4) as i16) >> 4) as f64 * 64.0),
+        vertical_fpm: (vertical != 0x800).then_some((((vertical << 4) as i16) >> 4) as f64 * 64.0),
         true_track_deg: (misc & 0b11 == 0b01).then_some(angle),
         true_heading_deg: (misc & 0b11 == 0b11).then_some(angle),
     }
@@ -197,7 +197,14 @@ pub fn encode_heartbeat(gps_valid: bool) -> Vec<u8> {
 /// An ownship report at `lat`, `lon` degrees, pressure altitude `feet`,
 /// ground speed `knots` along true track `track_deg`, vertical speed
 /// `fpm`, NIC 10 and NACp 9 (the ICD example's).
-pub fn encode_ownship(lat: f64, lon: f64, feet: f64, knots: f64, track_deg: f64, fpm: f64) -> Vec<u8> {
+pub fn encode_ownship(
+    lat: f64,
+    lon: f64,
+    feet: f64,
+    knots: f64,
+    track_deg: f64,
+    fpm: f64,
+) -> Vec<u8> {
     let semicircles = |deg: f64| {
         let raw = (deg / SEMICIRCLE_LSB_DEG).round() as i32 & 0xFF_FFFF;
         [(raw >> 16) as u8, (raw >> 8) as u8, raw as u8]
@@ -327,7 +334,10 @@ mod tests {
         let Message::Ahrs(sx) = decode(&encode_stratux_ahrs(&a, 3.0, -500.0)).unwrap() else {
             panic!()
         };
-        assert_eq!((sx.heading_deg, sx.turn_rate_dps, sx.vertical_fpm), (Some(271.3), Some(3.0), Some(-500.0)));
+        assert_eq!(
+            (sx.heading_deg, sx.turn_rate_dps, sx.vertical_fpm),
+            (Some(271.3), Some(3.0), Some(-500.0))
+        );
         let mut invalid = encode_stratux_ahrs(&a, 0.0, 0.0);
         invalid[4..6].copy_from_slice(&INVALID_16.to_be_bytes());
         assert_eq!(decode(&invalid), Ok(Message::AhrsInvalid));
@@ -338,7 +348,10 @@ mod tests {
     fn geometric_altitude_and_id_decode() {
         assert_eq!(decode(&[0x0B, 0xFF, 0x38, 0, 0]), Ok(Message::GeoAltitude { feet: -1000.0 }));
         assert_eq!(decode(&encode_geo_altitude(9875.0)), Ok(Message::GeoAltitude { feet: 9875.0 }));
-        assert_eq!(decode(&encode_foreflight_id(true)), Ok(Message::ForeFlightId { geo_altitude_msl: true }));
+        assert_eq!(
+            decode(&encode_foreflight_id(true)),
+            Ok(Message::ForeFlightId { geo_altitude_msl: true })
+        );
         assert_eq!(decode(&[0x14; 28]), Ok(Message::Other));
     }
 }

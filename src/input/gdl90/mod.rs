@@ -139,7 +139,8 @@ impl Gdl90 {
     /// AHRS's; and whether the vertical was measured.
     fn velocity(&self, ownship: &Ownship, now: Instant) -> Option<([f64; 3], bool)> {
         let (speed, track) = (ownship.ground_speed_kt?, ownship.true_track_deg?);
-        let (north, east) = (speed * KNOT * track.to_radians().cos(), speed * KNOT * track.to_radians().sin());
+        let (north, east) =
+            (speed * KNOT * track.to_radians().cos(), speed * KNOT * track.to_radians().sin());
         let ahrs = self.ahrs_vertical.filter(|(_, at)| seconds(*at, now) < 1.0).map(|(v, _)| v);
         let up = ownship.vertical_fpm.map(|fpm| fpm * FOOT / 60.0).or(ahrs);
         Some(([north, east, -up.unwrap_or(0.0)], up.is_some()))
@@ -188,14 +189,27 @@ mod tests {
         let mut gdl = Gdl90::new(30.0);
         let now = Instant::now();
         let first = gdl
-            .decode(&datagram(&[encode_heartbeat(true), encode_ownship(39.6, 40.1, 9000.0, 120.0, 90.0, 640.0)]), now)
+            .decode(
+                &datagram(&[
+                    encode_heartbeat(true),
+                    encode_ownship(39.6, 40.1, 9000.0, 120.0, 90.0, 640.0),
+                ]),
+                now,
+            )
             .unwrap();
         let track = first.track.unwrap();
         assert!((track.position.alt_m - 9000.0 * FOOT).abs() < 1e-9, "pressure altitude first");
         let v = track.velocity_ned.unwrap();
-        assert!(v[0].abs() < 1e-9 && (v[1] - 120.0 * KNOT).abs() < 1e-9 && (v[2] + 640.0 * FOOT / 60.0).abs() < 1e-9);
+        assert!(
+            v[0].abs() < 1e-9
+                && (v[1] - 120.0 * KNOT).abs() < 1e-9
+                && (v[2] + 640.0 * FOOT / 60.0).abs() < 1e-9
+        );
         let geo = gdl.decode(&datagram(&[encode_geo_altitude(9500.0)]), now).unwrap();
-        assert!((geo.track.unwrap().position.alt_m - (9500.0 * FOOT - 30.0)).abs() < 1e-9, "ellipsoid to MSL");
+        assert!(
+            (geo.track.unwrap().position.alt_m - (9500.0 * FOOT - 30.0)).abs() < 1e-9,
+            "ellipsoid to MSL"
+        );
         gdl.decode(&datagram(&[encode_foreflight_id(true)]), now).unwrap_err();
         let geo = gdl.decode(&datagram(&[encode_geo_altitude(9500.0)]), now).unwrap();
         assert!((geo.track.unwrap().position.alt_m - 9500.0 * FOOT).abs() < 1e-9, "already MSL");
@@ -210,7 +224,8 @@ mod tests {
     fn a_missing_heading_takes_the_true_track_and_invalid_flags_pass_through() {
         let mut gdl = Gdl90::new(0.0);
         let now = Instant::now();
-        gdl.decode(&datagram(&[encode_ownship(39.6, 40.1, 9000.0, 120.0, 45.0, 0.0)]), now).unwrap();
+        gdl.decode(&datagram(&[encode_ownship(39.6, 40.1, 9000.0, 120.0, 45.0, 0.0)]), now)
+            .unwrap();
         let mut ahrs = encode_foreflight_ahrs(&Attitude::default());
         ahrs[6..8].copy_from_slice(&[0xFF, 0xFF]);
         let t = gdl.decode(&datagram(&[ahrs]), now).unwrap().turning.unwrap();
