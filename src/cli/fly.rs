@@ -35,11 +35,12 @@ pub struct FlyArgs {
     #[arg(long, default_value = "target/fly")]
     pub out: PathBuf,
     /// Terrain this many metres above the aircraft, or higher, is red
-    /// (default: at the aircraft's altitude, as on EGPWS and TSO-C151 TAWS).
+    /// (default -30.48: terrain above or within 100 ft below the aircraft,
+    /// Garmin's SVT/TAWS convention).
     #[arg(long, default_value_t = ridgeline::render::palette::DEFAULT_WARNING_ABOVE_M)]
     pub warning_above: f32,
     /// Terrain less than this many metres below the aircraft is amber
-    /// (default 152.4 m, 500 ft, the EGPWS caution band).
+    /// (default 304.8 m, 1000 ft: Garmin's yellow band, 100 to 1000 ft below).
     #[arg(long, default_value_t = ridgeline::render::palette::DEFAULT_CAUTION_BELOW_M)]
     pub caution_below: f32,
     /// Draw a flat earth (no curvature drop).
