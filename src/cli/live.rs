@@ -8,53 +8,19 @@
 //! frame latency.
 
 use std::path::Path;
-use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
 use glam::DVec3;
 use ridgeline::display::Display;
 use ridgeline::input::place::DisplayFrame;
 use ridgeline::input::receiver::ReceiverOptions;
-use ridgeline::input::{Counts, GeoPose, Ignored, InputSpec, LiveInput, LiveView, StaleReason};
+use ridgeline::input::{Counts, Ignored, InputSpec, LiveInput, LiveView};
 use ridgeline::pipeline::FrameStats;
 use ridgeline::symbology::{flag, reference_symbols, SymbolMesh};
 
-use super::fly::{FlyArgs, Row};
-
-/// What one frame of `stats.json` says about where the aircraft was and
-/// where that came from (`pose`, `input`, `wall_time`).
-#[derive(Clone, Copy, Debug, serde::Serialize)]
-pub struct FrameRecord {
-    /// The pose drawn, geodetic (`null`: withdrawn, or a dataset without
-    /// a geographic frame).
-    pub pose: Option<GeoPose>,
-    /// The live input's state at the frame (`null`: a path was flown).
-    pub input: Option<InputFrame>,
-    /// Unix seconds when the frame was drawn.
-    pub wall_time: f64,
-}
-
-/// A frame's view of the live input.
-#[derive(Clone, Copy, Debug, serde::Serialize)]
-pub struct InputFrame {
-    /// The protocol.
-    pub source: &'static str,
-    /// Age of the newest sample when the frame was drawn, ms (`null`: none yet).
-    pub age_ms: Option<f64>,
-    /// Whether the terrain was withdrawn.
-    pub stale: bool,
-    /// Why, when it was.
-    pub reason: Option<StaleReason>,
-    /// Frame drawn minus newest sample received, ms.
-    pub latency_ms: Option<f64>,
-    /// Datagrams taken so far.
-    pub taken: u64,
-}
-
-/// Unix time now, seconds.
-pub fn wall_time() -> f64 {
-    SystemTime::now().duration_since(UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64())
-}
+use super::fly_args::FlyArgs;
+use super::frames::{wall_time, FrameRecord, InputFrame, Row};
 
 /// The live input and what a frame needs to draw from it.
 pub struct Live {

@@ -13,6 +13,8 @@ use ridgeline::lod::budget::{BudgetConfig, BudgetTarget};
 
 pub mod accuracy;
 pub mod fly;
+pub mod fly_args;
+pub mod frames;
 pub mod heap;
 pub mod import;
 pub mod info;
