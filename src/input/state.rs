@@ -4,7 +4,8 @@
 //! display is stale.
 //!
 //! Staleness is decided per frame from the frame's own time: a frame drawn
-//! `stale_ms` after the newest valid sample of either kind is stale, the
+//! `stale_ms` after the newest valid sample of either kind is stale (a
+//! position reported once a second, GDL 90's, that second later), the
 //! first such frame included, and the first frame after a valid sample
 //! returns is live again. Nothing else is carried: recovery is automatic.
 
@@ -76,6 +77,8 @@ pub struct LiveState {
     turning: Option<(Turning, Instant)>,
     position_valid: bool,
     attitude_valid: bool,
+    /// The source's position report interval, seconds (0: streaming).
+    position_interval: Duration,
     /// Samples taken (datagrams that changed the state).
     pub taken: u64,
 }
@@ -105,6 +108,9 @@ impl LiveState {
         }
         if let Some(valid) = update.attitude_valid {
             self.attitude_valid = valid;
+        }
+        if let Some(interval) = update.position_interval_s.filter(|s| (0.0..=10.0).contains(s)) {
+            self.position_interval = Duration::from_secs_f64(interval);
         }
         self.taken += 1;
         Ok(())
@@ -143,7 +149,7 @@ impl LiveState {
             Some(StaleReason::PositionInvalid)
         } else if !self.attitude_valid {
             Some(StaleReason::AttitudeInvalid)
-        } else if age(track_at) > stale || age(turning_at) > stale {
+        } else if age(track_at) > stale + self.position_interval || age(turning_at) > stale {
             Some(StaleReason::Timeout)
         } else {
             None

@@ -19,6 +19,11 @@ pub struct Update {
     pub position_valid: Option<bool>,
     /// The source flags its attitude valid (`Some(true)`) or invalid.
     pub attitude_valid: Option<bool>,
+    /// How often the source reports its position, seconds, when it is
+    /// slower than the frame rate (GDL 90's ownship report: once a
+    /// second): the position goes stale that much later, so a report a
+    /// little late does not withdraw the terrain.
+    pub position_interval_s: Option<f64>,
 }
 
 impl Update {
@@ -36,6 +41,7 @@ impl Update {
         self.turning = other.turning.or(self.turning);
         self.position_valid = other.position_valid.or(self.position_valid);
         self.attitude_valid = other.attitude_valid.or(self.attitude_valid);
+        self.position_interval_s = other.position_interval_s.or(self.position_interval_s);
     }
 }
 

@@ -26,6 +26,9 @@ use messages::{Ahrs, Message, Ownship, FOOT, KNOT};
 use super::pose::{Attitude, Position, Track, Turning};
 use super::update::{Ignored, Update};
 
+/// How often the ownship report comes, seconds (ICD §3.4: once a second).
+pub const OWNSHIP_INTERVAL_S: f64 = 1.0;
+
 /// How long a geometric altitude stays usable, seconds (it comes once a
 /// second, after each ownship report).
 pub const GEO_ALTITUDE_FRESH_S: f64 = 2.5;
@@ -130,6 +133,7 @@ impl Gdl90 {
         Update {
             track: Some(track),
             position_valid: Some(self.heartbeat_gps_valid),
+            position_interval_s: Some(OWNSHIP_INTERVAL_S),
             ..Update::default()
         }
     }
