@@ -17,10 +17,12 @@
 //! | [`tiles`] | per-tile mesh blocks (vertices, then indices), the regular grid mesh, vertex data, the tile cache on the allocator |
 //! | [`clusters`] | cluster batches (Judnich & Ling): the frame's tiles gathered into two-level clusters, each cluster's block (its members' vertices, one 16-bit index list) in the cluster buffer |
 //! | [`render`] | the GL-free half of drawing: draw lists, the backend trait, the counting null backend, the palette |
+//! | [`symbology`] | the reference symbols over the terrain (zero-pitch line and heading marks, aircraft symbol, flight path marker) and the failure flag, as GL-free geometry; the built-in stroke font |
 //! | [`flight`] | camera paths for `fly`: the `--path` CSV, interpolation, frame times, the built-in approach |
 //! | [`scene`] | one frame of the display, GL-free: rings, selection, tile uploads, draw list, stage times |
 //! | [`dataset`] | which terrain a run uses; the built-in SRTM tile, built into `cache/` on first use |
 //! | [`gl`] | the thin GL layer: contexts (window, EGL, OSMesa), owner types for GL objects, error checks |
+//! | [`input`] | live aircraft state over UDP (FlightGear, X-Plane, GDL 90): decoders, plausibility, the receiver thread, staleness, extrapolation |
 //! | [`display`] | the display put together: GL context and renderer, scene, clipmap; one call per frame |
 //! | [`node`] | the node pyramid's vocabulary: node ids, layout, node data, the `NodeSource` trait |
 //! | [`pyramid`] | building the node pyramid from a grid (split, downsample, stitch, delta), its checksummed file, writing it atomically, opening it memory-mapped |
@@ -40,6 +42,7 @@ pub mod display;
 pub mod flight;
 pub mod geo;
 pub mod gl;
+pub mod input;
 pub mod lod;
 pub mod mesh;
 pub mod meshes;
@@ -49,4 +52,5 @@ pub mod procedural;
 pub mod pyramid;
 pub mod render;
 pub mod scene;
+pub mod symbology;
 pub mod tiles;

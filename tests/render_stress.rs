@@ -106,7 +106,7 @@ struct EarthView {
 /// are low), so the picture is smooth but for the terrain-awareness bands:
 /// - "horizon": 900 m above the ground, nose 8 degrees down, every level out
 ///   to the horizon;
-/// - "band": nose 20 degrees down, the aircraft 152.4 m (the caution band)
+/// - "band": nose 20 degrees down, the aircraft the caution band (304.8 m)
 ///   above the ground 250 m ahead, so the amber band's sharp edge crosses the
 ///   picture where a metre is about a pixel.
 fn near_views(earth: &ProceduralEarth) -> [EarthView; 2] {

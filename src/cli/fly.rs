@@ -3,61 +3,24 @@
 //! headless otherwise; headless it writes PNG snapshots, the last frame and
 //! `stats.json`, and ends with a summary table.
 
-use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
 use ridgeline::display::{Display, DisplayConfig};
 use ridgeline::flight::FlightPath;
 use ridgeline::gl::{GlBackend, GlesVersion, OpenedBackend};
+use ridgeline::input::place::DisplayFrame;
+use ridgeline::input::InputSpec;
 use ridgeline::pipeline::FrameStats;
+use ridgeline::symbology::{reference_symbols, SymbolMesh};
 use serde_json::json;
 
+use super::frames::{FrameRecord, Row};
+use super::live::{self, InputReport, Live};
 use super::progress::Bar;
 
-#[derive(clap::Args)]
-pub struct FlyArgs {
-    #[command(flatten)]
-    pub view: super::ViewArgs,
-    /// Headless: frames at evenly spaced times along the path.
-    #[arg(long, default_value_t = 120)]
-    pub frames: u32,
-    #[arg(long, value_enum, default_value_t = GlBackend::Auto)]
-    pub backend: GlBackend,
-    /// Ask for an OpenGL ES 2.0 context (the low-end path).
-    #[arg(long)]
-    pub es2: bool,
-    /// Where headless runs write their images and stats.json.
-    #[arg(long, default_value = "target/fly")]
-    pub out: PathBuf,
-    /// Terrain this many metres above the aircraft, or higher, is red
-    /// (default: at the aircraft's altitude, as on EGPWS and TSO-C151 TAWS).
-    #[arg(long, default_value_t = ridgeline::render::palette::DEFAULT_WARNING_ABOVE_M)]
-    pub warning_above: f32,
-    /// Terrain less than this many metres below the aircraft is amber
-    /// (default 152.4 m, 500 ft, the EGPWS caution band).
-    #[arg(long, default_value_t = ridgeline::render::palette::DEFAULT_CAUTION_BELOW_M)]
-    pub caution_below: f32,
-    /// Draw a flat earth (no curvature drop).
-    #[arg(long)]
-    pub flat_earth: bool,
-    /// Draw the tiles as clusters of up to 16 neighbours, one draw call
-    /// each (Judnich & Ling), instead of one draw call per tile.
-    #[arg(long)]
-    pub clusters: bool,
-    /// PNG snapshots written along a headless flight (the last frame always is).
-    #[arg(long, default_value_t = 6)]
-    pub snapshots: u32,
-    /// Ridgeline's own memory, MB (its heap and its GPU buffers, headless
-    /// snapshots included): sizes the node atlas (counted in bytes), the
-    /// loader, the staging copy and the GPU buffer at start. A budget too
-    /// small for the view draws coarser data, never holes, and the summary
-    /// and stats.json say the bound was loosened. 0: no budget, sized for
-    /// the view (every atlas slot holds the largest node; 276 MB on the
-    /// default flight).
-    #[arg(long, default_value_t = 64)]
-    pub memory_mb: u32,
-}
+pub use super::fly_args::FlyArgs;
+
 /// The smallest and largest `--memory-mb` (besides 0, no budget).
 const MEMORY_MB_RANGE: std::ops::RangeInclusive<u32> = 4..=65_536;
 /// The frame rate a window is taken to keep for the valid life's declared travel.
@@ -72,6 +35,7 @@ impl FlyArgs {
 
 pub fn run(args: &FlyArgs) -> Result<()> {
     args.view.check()?;
+    live::check(args)?;
     if !(args.warning_above.is_finite()
         && args.caution_below.is_finite()
         && args.caution_below >= 0.0)
@@ -88,29 +52,18 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     let bar = Bar::new();
     let terrain = args.view.open_terrain(&bar)?;
     bar.finish();
-    let path = terrain.flight_path(args.view.path.as_deref(), args.view.flight)?;
-    let dataset_name = terrain.name.clone();
-    let gapless = terrain.gapless;
-    let (source, summary) = (terrain.source, terrain.summary);
-    let mut config = DisplayConfig::new(args.backend, args.view.size);
-    config.scene.horizon_culling = gapless;
-    config.memory_budget_bytes = args.memory().map(|mb| display_budget(args, mb)).transpose()?;
-    config.version = if args.es2 { GlesVersion::Es2 } else { GlesVersion::Es3 };
-    config.scene.warning_above_m = args.warning_above;
-    config.scene.caution_below_m = args.caution_below;
-    config.scene.curvature = !args.flat_earth;
-    // Headless frames are evenly spaced along the path; a window is taken to
-    // show WINDOW_RATE_HZ (slower frames re-test every tile); `auto` may open
-    // either, so it declares the longer interval.
-    let headless = path.duration() / args.frames.saturating_sub(1).max(1) as f64;
-    let interval = match args.backend {
-        GlBackend::Window => 1.0 / WINDOW_RATE_HZ,
-        GlBackend::Auto => headless.max(1.0 / WINDOW_RATE_HZ),
-        _ => headless,
+    // Live runs need the dataset's latitude and longitude; path runs report
+    // them where the dataset has them.
+    let frame = match args.input {
+        Some(_) => Some(live::display_frame(&terrain)?),
+        None => live::display_frame(&terrain).ok(),
     };
-    args.view.configure(&mut config, &path, interval);
-    config.scene.clusters = args.clusters;
-    config.fov_x_deg = args.view.fov;
+    let path = match args.input {
+        Some(_) => None,
+        None => Some(terrain.flight_path(args.view.path.as_deref(), args.view.flight)?),
+    };
+    let config = display_config(args, &terrain, path.as_ref())?;
+    let dataset_name = terrain.name.clone();
     let opening = match (args.memory(), config.memory_budget_bytes) {
         (Some(mb), Some(display)) => format!(
             "opening the display with --memory-mb {mb} ({:.1} MB after headless snapshots)",
@@ -118,7 +71,7 @@ pub fn run(args: &FlyArgs) -> Result<()> {
         ),
         _ => "opening the display".to_owned(),
     };
-    let mut display = Display::new(&config, source, summary).context(opening)?;
+    let mut display = Display::new(&config, terrain.source, terrain.summary).context(opening)?;
     let info = display.info().clone();
     println!(
         "ridgeline fly: {} on {} ({}), {}",
@@ -132,17 +85,92 @@ pub fn run(args: &FlyArgs) -> Result<()> {
         // then uses only what ES 2.0 has.
         println!("ridgeline fly: OpenGL ES 2.0 requested: features capped to ES 2.0");
     }
-    let rows = if info.backend == OpenedBackend::Window {
-        fly_window(args, &mut display, &path)?
-    } else {
-        fly_headless(args, &mut display, &path)?
+    let window = info.backend == OpenedBackend::Window;
+    let (rows, input) = match (path, args.input, frame) {
+        (Some(path), _, _) => (fly_path(args, &mut display, &path, frame.as_ref(), window)?, None),
+        (None, Some(spec), Some(frame)) => fly_live(args, &mut display, &spec, frame, window)?,
+        (None, _, _) => bail!("--input: no dataset frame"),
     };
     let memory = memory_report(args, &display, &rows);
-    if info.backend != OpenedBackend::Window {
+    if !window {
         let travel = config.scene.lod.max_travel_m;
-        write_stats(args, &info, &dataset_name, &rows, &memory, travel)?;
+        let run = RunInfo { info: &info, dataset: &dataset_name, max_travel_m: travel };
+        write_stats(args, &run, &rows, &memory, input.as_ref())?;
     }
-    print_summary(&rows, &memory)
+    print_summary(&rows, &memory, input.as_ref())
+}
+
+/// The display's configuration for `args` over `terrain`, along `path`
+/// (or live, without one).
+fn display_config(
+    args: &FlyArgs,
+    terrain: &super::terrain::Terrain,
+    path: Option<&FlightPath>,
+) -> Result<DisplayConfig> {
+    let mut config = DisplayConfig::new(args.backend, args.view.size);
+    config.scene.horizon_culling = terrain.gapless;
+    config.memory_budget_bytes = args.memory().map(|mb| display_budget(args, mb)).transpose()?;
+    config.version = if args.es2 { GlesVersion::Es2 } else { GlesVersion::Es3 };
+    config.scene.warning_above_m = args.warning_above;
+    config.scene.caution_below_m = args.caution_below;
+    config.scene.curvature = !args.flat_earth;
+    match path {
+        Some(path) => {
+            // Headless frames are evenly spaced along the path; a window is
+            // taken to show WINDOW_RATE_HZ (slower frames re-test every
+            // tile); `auto` may open either, so it declares the longer interval.
+            let headless = path.duration() / args.frames.saturating_sub(1).max(1) as f64;
+            let interval = match args.backend {
+                GlBackend::Window => 1.0 / WINDOW_RATE_HZ,
+                GlBackend::Auto => headless.max(1.0 / WINDOW_RATE_HZ),
+                _ => headless,
+            };
+            args.view.configure(&mut config, path, interval);
+        }
+        None => args.view.configure_at(&mut config, live::max_speed(args), 1.0 / args.fps),
+    }
+    config.scene.clusters = args.clusters;
+    config.fov_x_deg = args.view.fov;
+    Ok(config)
+}
+
+/// Flies `path` in a window or headless.
+fn fly_path(
+    args: &FlyArgs,
+    display: &mut Display,
+    path: &FlightPath,
+    frame: Option<&DisplayFrame>,
+    window: bool,
+) -> Result<Vec<Row>> {
+    let mut drawer = PathFrames { args, path, frame, symbols: SymbolMesh::new() };
+    if window {
+        fly_window(display, &mut drawer)
+    } else {
+        fly_headless(args, display, &mut drawer)
+    }
+}
+
+/// Flies live from `spec`: listens, draws, stops; the rows and what the
+/// input did.
+fn fly_live(
+    args: &FlyArgs,
+    display: &mut Display,
+    spec: &InputSpec,
+    frame: DisplayFrame,
+    window: bool,
+) -> Result<(Vec<Row>, Option<InputReport>)> {
+    let mut live = Live::start(args, spec, frame)?;
+    println!("ridgeline fly: listening for {} on {}", spec.kind.name(), live.address());
+    std::io::Write::flush(&mut std::io::stdout())?;
+    let rows = if window {
+        live::fly_window(args, display, &mut live)?
+    } else {
+        live::fly_headless(args, display, &mut live)?
+    };
+    let address = live.address().to_owned();
+    let (counts, recorded) = live.stop()?;
+    let report = InputReport::new(args, &address, &rows, counts, recorded);
+    Ok((rows, Some(report)))
 }
 
 const MB: u64 = 1 << 20;
@@ -226,19 +254,45 @@ fn memory_report(args: &FlyArgs, display: &Display, rows: &[Row]) -> MemoryRepor
     }
 }
 
-/// One row of stats.json.
-#[derive(serde::Serialize)]
-struct Row {
-    frame: u32,
-    t: f64,
-    #[serde(flatten)]
-    stats: FrameStats,
+/// Draws a path's frames, with the reference symbols unless they are off.
+struct PathFrames<'a> {
+    args: &'a FlyArgs,
+    path: &'a FlightPath,
+    frame: Option<&'a DisplayFrame>,
+    symbols: SymbolMesh,
 }
 
-fn fly_headless(args: &FlyArgs, display: &mut Display, path: &FlightPath) -> Result<Vec<Row>> {
+impl PathFrames<'_> {
+    /// Draws the path's pose at `t`.
+    fn draw(&mut self, display: &mut Display, t: f64) -> Result<(FrameStats, FrameRecord)> {
+        let size = [self.args.view.size.x, self.args.view.size.y];
+        let pose = self.path.sample(t);
+        let camera = pose.camera(self.args.view.fov, size);
+        let stats = if self.args.symbology.on() {
+            let velocity = live::path_velocity(self.path, t);
+            reference_symbols(&mut self.symbols, &camera, velocity);
+            display.frame_with_symbols(&camera, &self.symbols)?
+        } else {
+            display.frame(&camera)?
+        };
+        let record = FrameRecord {
+            pose: self.frame.map(|f| f.geodetic(&pose)),
+            input: None,
+            wall_time: super::frames::wall_time(),
+        };
+        Ok((stats, record))
+    }
+}
+
+fn fly_headless(
+    args: &FlyArgs,
+    display: &mut Display,
+    drawer: &mut PathFrames,
+) -> Result<Vec<Row>> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("{}: cannot create the output folder", args.out.display()))?;
     let frames = args.frames.max(1);
+    let path = drawer.path;
     // Start-up: page in the terrain around the first pose, as a display would
     // before it is shown, so the first frame is not drawn from the root alone.
     let first =
@@ -248,22 +302,23 @@ fn fly_headless(args: &FlyArgs, display: &mut Display, path: &FlightPath) -> Res
     let mut rows = Vec::with_capacity(frames as usize);
     for (k, t) in path.frame_times(frames).enumerate() {
         let k = k as u32;
-        let camera = path.sample(t).camera(args.view.fov, [args.view.size.x, args.view.size.y]);
-        let stats = display.frame(&camera).with_context(|| format!("frame {k} at t = {t:.2} s"))?;
+        let (stats, record) =
+            drawer.draw(display, t).with_context(|| format!("frame {k} at t = {t:.2} s"))?;
         let last = k + 1 == frames;
         if k % every == 0 || last {
             let image = display.read_pixels()?;
             let name = if last { "last.png".to_string() } else { format!("frame_{k:05}.png") };
             super::save_png(&image, &args.out.join(name))?;
         }
-        rows.push(Row { frame: k, t, stats });
+        rows.push(Row { frame: k, t, stats, record });
     }
     Ok(rows)
 }
 
-fn fly_window(args: &FlyArgs, display: &mut Display, path: &FlightPath) -> Result<Vec<Row>> {
+fn fly_window(display: &mut Display, drawer: &mut PathFrames) -> Result<Vec<Row>> {
     let start = Instant::now();
     let mut rows = Vec::new();
+    let path = drawer.path;
     let duration = path.end_time() - path.start_time();
     loop {
         let elapsed = start.elapsed().as_secs_f64();
@@ -271,10 +326,9 @@ fn fly_window(args: &FlyArgs, display: &mut Display, path: &FlightPath) -> Resul
             break;
         }
         let t = path.start_time() + elapsed;
-        let camera = path.sample(t).camera(args.view.fov, [args.view.size.x, args.view.size.y]);
-        let stats = display.frame(&camera)?;
+        let (stats, record) = drawer.draw(display, t)?;
         display.present()?;
-        rows.push(Row { frame: rows.len() as u32, t, stats });
+        rows.push(Row { frame: rows.len() as u32, t, stats, record });
         if display.pump_events(Some(Duration::ZERO)).close_requested {
             break;
         }
@@ -282,14 +336,21 @@ fn fly_window(args: &FlyArgs, display: &mut Display, path: &FlightPath) -> Resul
     Ok(rows)
 }
 
+/// What stats.json says about the run besides its frames.
+struct RunInfo<'a> {
+    info: &'a ridgeline::gl::GlInfo,
+    dataset: &'a str,
+    max_travel_m: Option<f64>,
+}
+
 fn write_stats(
     args: &FlyArgs,
-    info: &ridgeline::gl::GlInfo,
-    dataset: &str,
+    run: &RunInfo,
     rows: &[Row],
     memory: &MemoryReport,
-    max_travel_m: Option<f64>,
+    input: Option<&InputReport>,
 ) -> Result<()> {
+    let (info, dataset, max_travel_m) = (run.info, run.dataset, run.max_travel_m);
     let frames: Vec<serde_json::Value> = rows
         .iter()
         .map(|row| {
@@ -341,6 +402,16 @@ fn write_stats(
                 "frame_ms": s.frame_ms,
             })
         })
+        .zip(rows)
+        .map(|(mut frame, row)| {
+            // `pose`, `input`, `wall_time`: the record's own serde output.
+            if let (Some(frame), Ok(serde_json::Value::Object(record))) =
+                (frame.as_object_mut(), serde_json::to_value(row.record))
+            {
+                frame.extend(record);
+            }
+            frame
+        })
         .collect();
     let report = json!({
         "backend": info.backend.name(),
@@ -359,6 +430,8 @@ fn write_stats(
         "fov_x_deg": args.view.fov,
         "flight": format!("{:?}", args.view.flight).to_lowercase(),
         "memory": memory,
+        "symbology": args.symbology.on(),
+        "input": input,
         "frames": frames,
     });
     let path = args.out.join("stats.json");
@@ -367,7 +440,7 @@ fn write_stats(
     Ok(())
 }
 
-fn print_summary(rows: &[Row], memory: &MemoryReport) -> Result<()> {
+fn print_summary(rows: &[Row], memory: &MemoryReport, input: Option<&InputReport>) -> Result<()> {
     use std::fmt::Write as _;
     if rows.is_empty() {
         return Ok(());
@@ -450,6 +523,9 @@ fn print_summary(rows: &[Row], memory: &MemoryReport) -> Result<()> {
     )?;
     write_tau(&mut out, rows)?;
     write_split_tests(&mut out, rows)?;
+    if let Some(input) = input {
+        input.write(&mut out, rows.len())?;
+    }
     super::print(&out)
 }
 

@@ -13,9 +13,12 @@ use ridgeline::lod::budget::{BudgetConfig, BudgetTarget};
 
 pub mod accuracy;
 pub mod fly;
+pub mod fly_args;
+pub mod frames;
 pub mod heap;
 pub mod import;
 pub mod info;
+pub mod live;
 mod progress;
 pub mod terrain;
 
@@ -121,10 +124,15 @@ impl ViewArgs {
     /// declared travel (`--max-speed`, else `path`'s fastest leg, times
     /// `frame_interval_s`) to `config`.
     fn configure(&self, config: &mut DisplayConfig, path: &FlightPath, frame_interval_s: f64) {
+        let speed = self.max_speed.unwrap_or_else(|| path.max_speed());
+        self.configure_at(config, speed, frame_interval_s);
+    }
+
+    /// [`ViewArgs::configure`] for a camera moving at most `speed` m/s.
+    fn configure_at(&self, config: &mut DisplayConfig, speed: f64, frame_interval_s: f64) {
         config.scene.lod.tau_px = self.tau;
         config.fov_x_deg = self.fov;
         config.budget = self.budget();
-        let speed = self.max_speed.unwrap_or_else(|| path.max_speed());
         config.scene.lod.max_travel_m = Some((speed * frame_interval_s * 1.001).max(1e-3));
     }
 

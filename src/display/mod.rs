@@ -19,6 +19,7 @@ use crate::gl::{
 use crate::node::NodeSource;
 use crate::pipeline::{FrameError, FramePipeline, FrameStats, PipelineConfig, PipelineError};
 use crate::scene::{SceneConfig, TerrainSummary};
+use crate::symbology::SymbolMesh;
 
 /// Everything fixed for one display.
 #[derive(Clone, Debug, PartialEq)]
@@ -154,6 +155,24 @@ impl DisplayParts {
         self.context.bind_target();
         Ok(self.pipeline.frame(camera, &mut self.renderer)?)
     }
+
+    /// [`DisplayParts::frame`] with `symbols` drawn over the terrain.
+    pub fn frame_with_symbols(
+        &mut self,
+        camera: &crate::camera::Camera,
+        symbols: &SymbolMesh,
+    ) -> Result<FrameStats, DisplayError> {
+        self.context.make_current()?;
+        self.context.bind_target();
+        Ok(self.pipeline.frame_with_symbols(camera, symbols, &mut self.renderer)?)
+    }
+
+    /// A frame with the terrain withdrawn and `flag` drawn instead.
+    pub fn withdrawn_frame(&mut self, flag: &SymbolMesh) -> Result<FrameStats, DisplayError> {
+        self.context.make_current()?;
+        self.context.bind_target();
+        Ok(self.pipeline.withdrawn_frame(flag, &mut self.renderer)?)
+    }
 }
 
 /// A display: one context, its renderer and pipeline, one call per frame.
@@ -186,6 +205,21 @@ impl Display {
     /// the GPU (glFinish) so `frame_ms` is the whole frame.
     pub fn frame(&mut self, camera: &crate::camera::Camera) -> Result<FrameStats, DisplayError> {
         self.parts.frame(camera)
+    }
+
+    /// [`Display::frame`] with the reference symbols `symbols` (laid out
+    /// for `camera`) drawn over the terrain.
+    pub fn frame_with_symbols(
+        &mut self,
+        camera: &crate::camera::Camera,
+        symbols: &SymbolMesh,
+    ) -> Result<FrameStats, DisplayError> {
+        self.parts.frame_with_symbols(camera, symbols)
+    }
+
+    /// A frame with the terrain withdrawn (stale data) and `flag` drawn.
+    pub fn withdrawn_frame(&mut self, flag: &SymbolMesh) -> Result<FrameStats, DisplayError> {
+        self.parts.withdrawn_frame(flag)
     }
 
     /// Pages in every node the view wants around `camera` before the first

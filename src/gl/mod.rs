@@ -16,6 +16,7 @@
 //! | `check` | [`gl_check!`](crate::gl_check) |
 //! | `smoke` | [`SmokePass`]: clear and one triangle, proving a context draws |
 //! | `terrain_pass`, `sky_pass` | the terrain tiles (heights as attributes, transforms as uniforms) and the sky |
+//! | `symbol_pass` | the reference symbols and the failure flag, one draw of a [`SymbolMesh`](crate::symbology::SymbolMesh) |
 //! | `chunked_baseline` | [`ChunkedBaseline`]: plain Chunked LOD, a vertex buffer and an upload per tile (the bench's baseline) |
 //! | `truth_pass` | [`TruthPass`]: the brute-force ground truth, every level-0 post drawn with the terrain shaders |
 //! | `renderer` | [`GlRenderer`]: the GL [`RenderBackend`](crate::render::RenderBackend) |
@@ -37,6 +38,7 @@ pub mod probe;
 mod renderer;
 mod sky_pass;
 mod smoke;
+mod symbol_pass;
 mod terrain_pass;
 mod truth_pass;
 mod window;

@@ -19,6 +19,13 @@
 //! - no vertex array object bound where the context has them (where it has
 //!   none, `GL_ELEMENT_ARRAY_BUFFER` of the default one is the tile buffer too);
 //! - clear colour the sky's horizon colour, clear depth 1.
+//!
+//! With reference symbols drawn over the frame
+//! ([`SymbolBackend::draw_symbols`], `FramePipeline::frame_with_symbols`)
+//! and on a withdrawn frame, the same but for the program and buffers: the
+//! symbol pass's program is in use and `GL_ARRAY_BUFFER` is bound to its
+//! vertex buffer. A withdrawn frame's clear colour is
+//! [`WITHDRAWN_CLEAR`](crate::symbology::flag::WITHDRAWN_CLEAR).
 
 use std::rc::Rc;
 
@@ -26,17 +33,21 @@ use super::calls::Calls;
 use super::error::GlError;
 use super::handle::Gl;
 use super::sky_pass::SkyPass;
+use super::symbol_pass::SymbolPass;
 use super::terrain_pass::{TerrainOutput, TerrainPass};
 use crate::gl_check;
 use crate::render::{
     palette, CallStats, CostModel, DrawList, FrameOutput, FrameUniforms, RenderBackend,
+    SymbolBackend,
 };
+use crate::symbology::{flag::WITHDRAWN_CLEAR, SymbolMesh};
 
 /// The display's passes on one context.
 pub struct GlRenderer {
     gl: Rc<Gl>,
     terrain: TerrainPass,
     sky: SkyPass,
+    symbols: SymbolPass,
     /// Clear colour with the sky pass off, so tests can look for gaps.
     sentinel: Option<[f32; 4]>,
 }
@@ -49,6 +60,7 @@ impl GlRenderer {
             gl: Rc::clone(gl),
             terrain: TerrainPass::new(gl, buffer_bytes)?,
             sky: SkyPass::new(gl)?,
+            symbols: SymbolPass::new(gl)?,
             sentinel: None,
         })
     }
@@ -156,5 +168,17 @@ impl RenderBackend for GlRenderer {
 
     fn take_calls(&mut self) -> CallStats {
         self.gl.take_calls()
+    }
+}
+
+impl SymbolBackend for GlRenderer {
+    fn draw_symbols(&mut self, symbols: &SymbolMesh) -> Result<(), GlError> {
+        self.symbols.draw(symbols)
+    }
+
+    fn render_withdrawn(&mut self, flag: &SymbolMesh) -> Result<(), GlError> {
+        self.gl.tally(|c| c.frames += 1);
+        self.clear(flag.viewport(), WITHDRAWN_CLEAR)?;
+        self.symbols.draw(flag)
     }
 }

@@ -27,10 +27,11 @@ use crate::camera::Camera;
 use crate::clipmap::{Clipmap, ClipmapConfig, ClipmapError, ClipmapStats, LoaderMode, ViewId};
 use crate::lod::budget::{BudgetConfig, BudgetError, BudgetTarget, TauController};
 use crate::node::NodeSource;
-use crate::render::{CallStats, DrawList, FrameOutput, RenderBackend};
+use crate::render::{CallStats, DrawList, FrameOutput, RenderBackend, SymbolBackend};
 use crate::scene::{
     ClipmapTerrain, Scene, SceneConfig, SceneError, SceneStats, TerrainSummary, TriangleBand,
 };
+use crate::symbology::SymbolMesh;
 
 /// Everything fixed for one pipeline.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -201,6 +202,54 @@ impl FramePipeline {
         camera: &Camera,
         backend: &mut B,
     ) -> Result<FrameStats, FrameError<B::Error>> {
+        self.frame_then(camera, backend, |_| Ok(()))
+    }
+
+    /// [`FramePipeline::frame`] with `symbols` (laid out for `camera`,
+    /// [`crate::symbology::reference_symbols`]) drawn over the terrain
+    /// before the frame is finished.
+    pub fn frame_with_symbols<B: SymbolBackend>(
+        &mut self,
+        camera: &Camera,
+        symbols: &SymbolMesh,
+        backend: &mut B,
+    ) -> Result<FrameStats, FrameError<B::Error>> {
+        self.frame_then(camera, backend, |backend| backend.draw_symbols(symbols))
+    }
+
+    /// A frame without terrain, for stale or invalid data: nothing is paged
+    /// or tiled, the backend clears and draws `flag` (the failure flag,
+    /// [`crate::symbology::flag::failure_flag`]) and finishes.
+    pub fn withdrawn_frame<B: SymbolBackend>(
+        &mut self,
+        flag: &SymbolMesh,
+        backend: &mut B,
+    ) -> Result<FrameStats, FrameError<B::Error>> {
+        let start = Instant::now();
+        backend.render_withdrawn(flag).map_err(FrameError::Backend)?;
+        backend.finish();
+        let calls = backend.take_calls();
+        let ms = ms(start, Instant::now());
+        Ok(FrameStats {
+            draw_calls: calls.draw_calls,
+            calls,
+            resident_nodes: self.clipmap.atlas().resident_count(),
+            atlas_bytes: self.clipmap.atlas().resident_bytes(),
+            gl_ms: ms,
+            frame_ms: ms,
+            tau_requested_px: self.scene.config().lod.tau_px,
+            ..FrameStats::default()
+        })
+    }
+
+    /// A frame, with `overlay` drawn on the backend after the terrain and
+    /// before the wait.
+    fn frame_then<B: RenderBackend>(
+        &mut self,
+        camera: &Camera,
+        backend: &mut B,
+        overlay: impl FnOnce(&mut B) -> Result<(), B::Error>,
+    ) -> Result<FrameStats, FrameError<B::Error>> {
         let start = Instant::now();
         let update = self.page(camera)?;
         let paged = Instant::now();
@@ -215,6 +264,7 @@ impl FramePipeline {
         let indices = self.scene.index_uploads();
         let output = FrameOutput { list: self.scene.draw_list(), staging, dirty, indices };
         backend.render(&output).map_err(FrameError::Backend)?;
+        overlay(backend).map_err(FrameError::Backend)?;
         backend.finish();
         let done = Instant::now();
         let calls = backend.take_calls();
@@ -231,6 +281,12 @@ impl FramePipeline {
             frame_ms: ms(start, done),
             tau_requested_px: self.scene.config().lod.tau_px,
         };
+        self.observe_budget(&stats);
+        Ok(stats)
+    }
+
+    /// Feeds the frame budget's controller the frame's triangles or time.
+    fn observe_budget(&mut self, stats: &FrameStats) {
         if let Some(budget) = &mut self.budget {
             budget.set_ceiling(self.scene.tau_ceiling());
             if stats.scene.reselected > 0 && stats.scene.coarsened == 0 {
@@ -241,7 +297,6 @@ impl FramePipeline {
                 BudgetTarget::FrameMs(_) => stats.frame_ms,
             });
         }
-        Ok(stats)
     }
 
     /// The frame budget's controller, when there is a budget.

@@ -8,6 +8,7 @@
 //! the calls, in the order the pass makes them.
 
 use super::{DrawList, Slice};
+use crate::symbology::SymbolMesh;
 use std::ops::Range;
 
 /// GL calls by kind, summed over frames (since creation or the last take).
@@ -221,5 +222,40 @@ pub fn terrain(model: &CostModel, list: &DrawList) -> CallStats {
         }
     }
     stats.clears += slices.len() as u64 - 1;
+    stats
+}
+
+/// The symbol pass (`gl::symbol_pass`) drawing `mesh`: nothing for an
+/// empty mesh; else glViewport, glDisable(DEPTH), glDepthMask,
+/// glDisable(CULL), glDisable(BLEND), glUseProgram, the viewport uniform,
+/// the VAO bind, the buffer bind, one glBufferSubData of the vertices, two
+/// attribute enables and pointers, glDrawArrays, two disables, the VAO
+/// unbind, then glDepthMask, glEnable(DEPTH) and glEnable(CULL).
+pub fn symbols(model: &CostModel, mesh: &SymbolMesh) -> CallStats {
+    if mesh.is_empty() {
+        return CallStats::default();
+    }
+    CallStats {
+        state_changes: 8,
+        program_binds: 1,
+        uniform_writes: 1,
+        vertex_array_binds: 2 * model.vertex_arrays as u64,
+        buffer_binds: 1,
+        upload_calls: 1,
+        bytes_uploaded: mesh.bytes().len() as u64,
+        attribute_array_toggles: 4,
+        attribute_pointer_changes: 2,
+        draw_calls: 1,
+        triangles: mesh.vertices().len() as u64 / 3,
+        ..CallStats::default()
+    }
+}
+
+/// A withdrawn frame (stale data): the clear, and the failure flag by the
+/// symbol pass.
+pub fn withdrawn(model: &CostModel, flag: &SymbolMesh) -> CallStats {
+    let mut stats = clear();
+    stats.add(&symbols(model, flag));
+    stats.frames = 1;
     stats
 }

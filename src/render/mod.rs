@@ -19,6 +19,8 @@ pub use null::NullBackend;
 
 use std::ops::Range;
 
+use crate::symbology::SymbolMesh;
+
 /// What a frame hands its backend: the draw list, the staging copy the GPU
 /// buffer mirrors, and the ranges of it this frame changed.
 #[derive(Clone, Copy, Debug)]
@@ -49,6 +51,19 @@ pub trait RenderBackend {
     fn finish(&mut self) {}
     /// The calls issued since the last take, and a new count from zero.
     fn take_calls(&mut self) -> CallStats;
+}
+
+/// A backend that also draws the reference symbols over a frame, and the
+/// frame without terrain that stale data call for. The GL renderer and the
+/// counting null backend implement it.
+pub trait SymbolBackend: RenderBackend {
+    /// Draws `symbols` over the frame just rendered (before
+    /// [`RenderBackend::finish`]).
+    fn draw_symbols(&mut self, symbols: &SymbolMesh) -> Result<(), Self::Error>;
+    /// Draws a frame with no terrain and no sky: the target cleared to
+    /// [`crate::symbology::flag::WITHDRAWN_CLEAR`] and `flag` (laid out
+    /// for the frame's viewport) over it.
+    fn render_withdrawn(&mut self, flag: &SymbolMesh) -> Result<(), Self::Error>;
 }
 
 /// Errors every backend reports the same way.

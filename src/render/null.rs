@@ -3,7 +3,11 @@
 //! frames, so tests and benchmarks can check what a frame costs without any
 //! GL context.
 
-use super::{check_uploads, cost, CallStats, CostModel, FrameOutput, RenderBackend, RenderError};
+use super::{
+    check_uploads, cost, CallStats, CostModel, FrameOutput, RenderBackend, RenderError,
+    SymbolBackend,
+};
+use crate::symbology::SymbolMesh;
 
 /// Counts what the GL backend would issue.
 #[derive(Debug)]
@@ -43,5 +47,17 @@ impl RenderBackend for NullBackend {
 
     fn take_calls(&mut self) -> CallStats {
         std::mem::take(&mut self.calls)
+    }
+}
+
+impl SymbolBackend for NullBackend {
+    fn draw_symbols(&mut self, symbols: &SymbolMesh) -> Result<(), RenderError> {
+        self.calls.add(&cost::symbols(&self.model, symbols));
+        Ok(())
+    }
+
+    fn render_withdrawn(&mut self, flag: &SymbolMesh) -> Result<(), RenderError> {
+        self.calls.add(&cost::withdrawn(&self.model, flag));
+        Ok(())
     }
 }

@@ -1,17 +1,23 @@
 //! Colours and bands of the display, with where their defaults come from.
 //!
-//! Terrain-awareness colouring follows the convention of Honeywell's EGPWS
-//! terrain display and FAA TSO-C151 class A TAWS: terrain at or above the
-//! aircraft is red, terrain less than 500 ft (152.4 m) below it is amber
-//! (yellow on EGPWS), terrain further below keeps its elevation tint. Both
-//! bands are configurable because operators and phases of flight differ
-//! (TSO-C151 uses 700, 350 and 150 ft of required clearance en route, in the
-//! terminal area and on approach).
+//! Terrain-awareness colouring follows Garmin's published convention for
+//! its terrain display and synthetic vision (G1000 Pilot's Guide for the
+//! Cessna Nav III, 190-00498-07 Rev. A, Figure 6-115 "Terrain
+//! Altitude/Color Correlation", and the same figure in the TERRAIN-SVS and
+//! TAWS-B sections): terrain above the aircraft or within 100 ft below it
+//! is red, terrain 100 to 1000 ft below it is yellow (amber here),
+//! terrain further below keeps its elevation tint (Garmin draws it black
+//! on the terrain page). Both bands are configurable (`--warning-above`,
+//! `--caution-below`) because operators and phases of flight differ.
+//! Earlier defaults (at the aircraft, 500 ft) matched neither Garmin's nor
+//! Honeywell's published bands.
 
-/// Terrain this many metres above the aircraft, or higher, is red.
-pub const DEFAULT_WARNING_ABOVE_M: f32 = 0.0;
-/// Terrain less than this many metres below the aircraft is amber (500 ft).
-pub const DEFAULT_CAUTION_BELOW_M: f32 = 152.4;
+/// Terrain this many metres above the aircraft, or higher, is red:
+/// -30.48 m, so terrain within 100 ft below the aircraft is red too.
+pub const DEFAULT_WARNING_ABOVE_M: f32 = -30.48;
+/// Terrain less than this many metres below the aircraft is amber
+/// (1000 ft).
+pub const DEFAULT_CAUTION_BELOW_M: f32 = 304.8;
 /// Sun elevation and azimuth used for slope shading: from the north-west,
 /// as cartographers light relief so that it reads as raised, not sunken.
 pub const SUN_AZIMUTH_DEG: f64 = 315.0;

@@ -8,6 +8,7 @@
 //! | [`pyramid`] | random grids, pyramids built and written |
 //! | [`clipmap`] | a small-node procedural earth and checks of the clipmap's state |
 //! | [`scene`] | the frame pipeline over the built-in terrain on the null backend, shared-edge checks |
+//! | [`live`] | the scripted flight the live-input tests play, and each protocol's datagrams of it |
 //! | [`gl`] | one GL context at a time, loud skips of optional backends, Xvfb, child processes |
 //! | [`render`] | displays over the built-in terrain, the fixed views, image comparison ([`compare`]) and hole detection ([`coverage`]) |
 //!
@@ -21,6 +22,7 @@ pub mod compare;
 pub mod coverage;
 pub mod dem;
 pub mod gl;
+pub mod live;
 pub mod pyramid;
 pub mod render;
 pub mod scene;
