@@ -7,10 +7,10 @@
 //! (`accuracy::trace_truth`), so its LOD error is zero and all that is
 //! measured is the frame.
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 use ridgeline::accuracy::{
-    measure_earth, trace_earth, trace_truth, DisplayFrame, EarthErrors, EarthGround, EarthImage,
-    EarthView, ErrorSummary, PositionImage, RayGround, TrueCamera, ViewGeometry,
+    measure_earth, trace_earth, trace_ray, trace_truth, DisplayFrame, EarthErrors, EarthGround,
+    EarthImage, EarthView, ErrorSummary, PositionImage, RayGround, TrueCamera, ViewGeometry,
 };
 use ridgeline::camera::Camera;
 use ridgeline::earth::GridPlacement;
@@ -18,10 +18,12 @@ use ridgeline::geo::{Crs, GeoRef};
 use ridgeline::node::{cell_surface, NodeData, NodeError, NodeId, NodeLayout, NodeSource};
 use ridgeline::render::{DepthSlices, FrameUniforms, PostFrame};
 
-/// Smooth hills on a geographic grid, computed post by post.
+/// Smooth hills on a geographic grid, computed post by post (or a flat
+/// sea at 0 m).
 struct Hills {
     layout: NodeLayout,
     georef: GeoRef,
+    flat: bool,
 }
 
 impl Hills {
@@ -34,7 +36,7 @@ impl Hills {
             posts,
             spacing_m: georef.spacing_m(posts),
         };
-        Hills { layout, georef }
+        Hills { layout, georef, flat: false }
     }
 
     fn placement(&self) -> GridPlacement {
@@ -42,6 +44,9 @@ impl Hills {
     }
 
     fn post(&self, i: i64, j: i64) -> f32 {
+        if self.flat {
+            return 0.0;
+        }
         let last = self.layout.posts.map(|p| p as i64 - 1);
         let (i, j) = (i.clamp(0, last[0]) as f64, j.clamp(0, last[1]) as f64);
         let (x, y) = (i * self.layout.spacing_m[0], j * self.layout.spacing_m[1]);
@@ -164,4 +169,66 @@ fn the_geodetic_truth_flags_the_planar_frame_away_from_its_centre_latitude() {
     assert!(right.p999_px < 0.3, "where the frame is right the truth agrees: {right:?}");
     assert!(centre.p50_px < 0.2 && centre.p999_px > 1.0, "far and off the meridian: {centre:?}");
     assert!(north.p50_px > 2.0, "the frame's east-west stretch, on every pixel: {north:?}");
+}
+
+/// The first row from the top whose pixel centre shows terrain, in column
+/// `col` of a `rows`-row image, by bisection (sky above, terrain below).
+fn horizon_row(rows: u32, terrain: impl Fn(u32) -> bool) -> u32 {
+    let (mut sky, mut ground) = (0u32, rows - 1);
+    assert!(!terrain(sky) && terrain(ground), "the horizon is in view");
+    while ground - sky > 1 {
+        let mid = (sky + ground) / 2;
+        if terrain(mid) {
+            ground = mid;
+        } else {
+            sky = mid;
+        }
+    }
+    ground
+}
+
+/// A flat sea at 0 m seen level from 10 km at 60 N (a 30-degree band of a
+/// global grid's latitudes): the planar display's horizon against the
+/// geometric one (the geodetic truth's), column by column, looking east and
+/// north, 1280 x 720 over 60 degrees. The planar display's sea is its
+/// paraboloid `-d^2 / 2R` (mean radius, as its shader lowers vertices), whose
+/// horizon is where rays dip by `atan(sqrt(2 h / R))`: within a pixel of the
+/// earth's already (the `d^2 / 2R` model is good near the eye).
+#[test]
+fn a_flat_sea_from_ten_km_shows_its_horizon_where_the_earth_does() {
+    let mut sea = Hills::new([0.0, 45.0], 0.05, [7201, 601]);
+    sea.flat = true;
+    let placement = sea.placement();
+    for heading in [90.0, 0.0] {
+        let [x, y] = placement.chart_of_geodetic(60f64.to_radians(), 180f64.to_radians());
+        let camera = Camera {
+            position: DVec3::new(x, y, 10_000.0),
+            heading_deg: heading,
+            pitch_deg: 0.0,
+            roll_deg: 0.0,
+            fov_x_deg: 60.0,
+            viewport: [1280, 720],
+        };
+        let truth_camera = TrueCamera::new(&camera, &placement);
+        let ground = EarthGround::load(&sea, placement, &[truth_camera.eye], 600_000.0).unwrap();
+        let dip = (2.0 * 10_000.0 / ridgeline::camera::EARTH_RADIUS_M).sqrt().atan();
+        let half_y = (camera.fov_y() / 2.0).tan();
+        let mut worst: f64 = 0.0;
+        for col in (0..1280).step_by(160) {
+            let earth = horizon_row(720, |row| {
+                let pixel = DVec2::new(col as f64 + 0.5, row as f64 + 0.5);
+                trace_ray(&truth_camera, &ground, pixel, 600_000.0).is_some()
+            });
+            // The planar display's horizon in this column: the pixel row
+            // whose centre's ray dips below the level by `dip`.
+            let x_ndc = (col as f64 + 0.5) / 640.0 - 1.0;
+            let half_x = (camera.fov_x_deg.to_radians() / 2.0).tan();
+            let tan_down = dip.tan() * (1.0 + (x_ndc * half_x).powi(2)).sqrt();
+            let planar_edge = 360.0 * (1.0 + tan_down / half_y);
+            let planar = (planar_edge - 0.5).ceil();
+            worst = worst.max((earth as f64 - planar).abs());
+            println!("heading {heading}, column {col}: earth row {earth}, planar row {planar}");
+        }
+        assert!(worst <= 1.0, "heading {heading}: {worst} px apart");
+    }
 }

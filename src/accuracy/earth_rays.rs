@@ -181,6 +181,17 @@ pub fn trace_earth(
         .sum();
 }
 
+/// The hit of the ray through `pixel` (column and row from the top left; a
+/// pixel's centre at `+0.5`), followed out to `reach_m` metres.
+pub fn trace_ray(
+    camera: &TrueCamera,
+    ground: &EarthGround,
+    pixel: DVec2,
+    reach_m: f64,
+) -> Option<EarthHit> {
+    march(ground, camera.eye, camera.ray(pixel), reach_m).0
+}
+
 /// Where the ray's parameter lies inside the ellipsoid of semi-axes
 /// `(a, a, b)` (from 0 on); `None` when it misses it.
 fn inside_ellipsoid(eye: DVec3, dir: DVec3, a: f64, b: f64) -> Option<(f64, f64)> {

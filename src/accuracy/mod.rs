@@ -62,7 +62,7 @@ mod tile_triangles;
 
 pub use earth_error::{measure_earth, DisplayFrame, EarthErrors, EarthView};
 pub use earth_ground::EarthGround;
-pub use earth_rays::{trace_earth, EarthHit, EarthImage, TrueCamera};
+pub use earth_rays::{trace_earth, trace_ray, EarthHit, EarthImage, TrueCamera};
 pub use heat_map::{heat_map, HEAT_MISMATCH, HEAT_SKY};
 pub use lod_surface::LodSurface;
 pub use pixel_error::{measure_view, ExactHeight, ViewErrors, ViewGeometry};
