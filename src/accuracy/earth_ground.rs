@@ -36,6 +36,10 @@ struct BlockLevel {
     /// Highest height of the 3 x 3 blocks around each block (row-major),
     /// `-inf` where none has data.
     around: Vec<f32>,
+    /// Highest height of each row of blocks and the rows beside it, all
+    /// columns: near a pole, where blocks are slivers east-west, a ray
+    /// skips by latitude bands instead.
+    bands: Vec<f32>,
 }
 
 /// The best data on the ellipsoid, loaded for the places a set of views can see.
@@ -50,8 +54,10 @@ pub struct EarthGround {
     block_posts: u32,
     levels: Vec<BlockLevel>,
     /// Per row of level-0 blocks: the least distance on the ellipsoid
-    /// between neighbouring posts over that row and the rows beside it, metres.
+    /// between neighbouring posts over that row and the rows beside it,
+    /// east or north, metres; and north only.
     row_spacing_m: Vec<f64>,
+    row_north_m: Vec<f64>,
     top_m: f64,
     bottom_m: f64,
 }
@@ -125,6 +131,7 @@ impl EarthGround {
             block_posts: block_posts(&layout),
             levels: Vec::new(),
             row_spacing_m: Vec::new(),
+            row_north_m: Vec::new(),
             top_m: f64::NEG_INFINITY,
             bottom_m: f64::INFINITY,
         };
@@ -220,6 +227,30 @@ impl EarthGround {
         self.row_spacing_m[row.min(self.row_spacing_m.len() - 1)]
     }
 
+    /// The least distance between neighbouring posts north-south around
+    /// grid row `v`, metres.
+    pub fn north_spacing_near(&self, v: f64) -> f64 {
+        let row = (v / self.block_posts as f64).floor().max(0.0) as usize;
+        self.row_north_m[row.min(self.row_north_m.len() - 1)]
+    }
+
+    /// The largest latitude band (a row of blocks of level `k` and the rows
+    /// beside it, every column) whose highest height is below `height_m`
+    /// at grid row `v`: its level and that height.
+    pub fn clear_band(&self, v: f64, height_m: f64) -> Option<(usize, f64)> {
+        let mut found = None;
+        for (k, level) in self.levels.iter().enumerate() {
+            let row = (v / self.block_side_posts(k)).floor().max(0.0) as usize;
+            let top = level.bands[row.min(level.size[1] - 1)];
+            if (top as f64) < height_m {
+                found = Some((k, top as f64));
+            } else {
+                break;
+            }
+        }
+        found
+    }
+
     /// Level-0 posts per side of a block at level `k`.
     pub fn block_side_posts(&self, k: usize) -> f64 {
         self.block_posts as f64 * (1u64 << k) as f64
@@ -247,14 +278,18 @@ impl EarthGround {
         let mut level = blocks;
         let mut level_size = size;
         loop {
-            self.levels
-                .push(BlockLevel { size: level_size, around: dilate(&level, level_size, wraps) });
+            let around = dilate(&level, level_size, wraps);
+            let bands = around
+                .chunks(level_size[0])
+                .map(|row| row.iter().copied().fold(f32::NEG_INFINITY, f32::max))
+                .collect();
+            self.levels.push(BlockLevel { size: level_size, around, bands });
             if level_size[0] <= 1 && level_size[1] <= 1 {
                 break;
             }
             (level, level_size) = halve(&level, level_size);
         }
-        self.row_spacing_m = self.row_spacings(size[1]);
+        (self.row_spacing_m, self.row_north_m) = self.row_spacings(size[1]);
     }
 
     /// The highest post of the best data over level-0 block `(col, row)`:
@@ -284,12 +319,13 @@ impl EarthGround {
         top
     }
 
-    /// Per row of level-0 blocks, the least post spacing over it and the
-    /// rows beside it (sampled at 9 columns, every row edge), less 1 %.
-    fn row_spacings(&self, rows: usize) -> Vec<f64> {
+    /// Per row of level-0 blocks, the least post spacing (east or north,
+    /// and north alone) over it and the rows beside it (sampled at 9
+    /// columns, every row edge), less 1 %.
+    fn row_spacings(&self, rows: usize) -> (Vec<f64>, Vec<f64>) {
         let b = self.block_posts as f64;
         let last = self.layout.posts.map(|p| p.saturating_sub(1).max(1) as f64);
-        let edge: Vec<f64> = (0..=rows)
+        let edge: Vec<[f64; 2]> = (0..=rows)
             .map(|r| {
                 let v = (r as f64 * b).min(last[1]);
                 (0..=8)
@@ -299,18 +335,21 @@ impl EarthGround {
                         let dv = if v + 1.0 > last[1] { -1.0 } else { 1.0 };
                         let here = self.placement.ecef(u, v, 0.0);
                         let east = here.distance(self.placement.ecef(u + du, v, 0.0));
-                        east.min(here.distance(self.placement.ecef(u, v + dv, 0.0)))
+                        let north = here.distance(self.placement.ecef(u, v + dv, 0.0));
+                        [east.min(north), north]
                     })
-                    .fold(f64::INFINITY, f64::min)
+                    .fold([f64::INFINITY; 2], |a, b| [a[0].min(b[0]), a[1].min(b[1])])
             })
             .collect();
-        (0..rows)
-            .map(|r| {
-                let lo = r.saturating_sub(1);
-                let hi = (r + 2).min(rows);
-                edge[lo..=hi].iter().copied().fold(f64::INFINITY, f64::min) * 0.99
-            })
-            .collect()
+        let least = |axis: usize| -> Vec<f64> {
+            (0..rows)
+                .map(|r| {
+                    let (lo, hi) = (r.saturating_sub(1), (r + 2).min(rows));
+                    edge[lo..=hi].iter().map(|e| e[axis]).fold(f64::INFINITY, f64::min) * 0.99
+                })
+                .collect()
+        };
+        (least(0), least(1))
     }
 }
 

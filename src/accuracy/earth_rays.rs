@@ -45,6 +45,9 @@ const SHELL_PAD_M: f64 = 200.0;
 /// The least radius of curvature of a line of constant height on the
 /// ellipsoid, metres (the meridian's at the equator, 6335 km), less a margin.
 const LEAST_RADIUS_M: f64 = 6.3e6;
+/// Most lattice crossings one segment is checked at; a segment crossing
+/// more is halved.
+const CROSSINGS: usize = 32;
 /// Most steps a ray takes before it is given up as sky (a guard).
 const MAX_STEPS: u32 = 2_000_000;
 
@@ -265,19 +268,41 @@ fn march(ground: &EarthGround, eye: DVec3, dir: DVec3, reach_m: f64) -> (Option<
             s += off_grid_step(ground, here.post);
             continue;
         };
-        if let Some((k, top_k)) = ground.clear_block(u, v, here.height) {
-            let side_m = ground.block_side_posts(k) * ground.post_spacing_near(v);
-            s += (here.height - top_k).min(side_m).max(0.01);
+        if let Some(step) = skip(ground, u, v, here.height) {
+            s += step;
             continue;
         }
+        // Half a cell, by its narrower side; near a pole, where cells are
+        // slivers east-west, at least a sixteenth of their north side (the
+        // lattice crossings between are all checked).
         let cell = ground.cell_posts(u, v).unwrap_or(1.0);
-        let length = (0.5 * cell * ground.post_spacing_near(v)).max(0.05);
+        let side = ground.post_spacing_near(v).max(ground.north_spacing_near(v) / 16.0);
+        let length = (0.5 * cell * side).max(0.05);
         if let Some(hit) = check_segment(&ray, here, s + length) {
             return (Some(ray.hit(hit)), step);
         }
         s += length;
     }
     (None, MAX_STEPS)
+}
+
+/// How far a ray at grid post `(u, v)` and `height` may move without
+/// meeting the ground: by the clearest 3 x 3 block neighbourhood, or where
+/// blocks are slivers (near a pole) the clearest latitude band, whichever
+/// lets it go farther; `None` when neither is clear.
+fn skip(ground: &EarthGround, u: f64, v: f64, height: f64) -> Option<f64> {
+    let block = ground.clear_block(u, v, height).map(|(k, top)| {
+        let side_m = ground.block_side_posts(k) * ground.post_spacing_near(v);
+        (height - top).min(side_m)
+    });
+    let band = ground.clear_band(v, height).map(|(k, top)| {
+        let side_m = ground.block_side_posts(k) * ground.north_spacing_near(v);
+        (height - top).min(side_m)
+    });
+    match (block, band) {
+        (None, None) => None,
+        (a, b) => Some(a.unwrap_or(0.0).max(b.unwrap_or(0.0)).max(0.01)),
+    }
 }
 
 /// How far a ray off the grid at `post` may move before it can reach the
@@ -299,8 +324,13 @@ fn off_grid_step(ground: &EarthGround, post: [f64; 2]) -> f64 {
 /// the hit's parameter if it does.
 fn check_segment(ray: &Ray<'_>, from: Sample, to: f64) -> Option<f64> {
     let end = ray.at(to);
-    let mut cuts = [0.0f64; 8];
+    let mut cuts = [0.0f64; CROSSINGS];
     let count = lattice_crossings(ray.ground, from.post, end.post, &mut cuts);
+    if count == CROSSINGS && to - from.s > 2.0 * HIT_TOLERANCE_M {
+        // More lattice lines than room: the two halves on their own.
+        let middle = 0.5 * (from.s + to);
+        return check_segment(ray, from, middle).or_else(|| check_segment(ray, ray.at(middle), to));
+    }
     let mut previous = from;
     for &t in cuts[..count].iter().chain(std::iter::once(&1.0)) {
         let next = if t >= 1.0 { end } else { ray.at(from.s + t * (to - from.s)) };
@@ -315,7 +345,12 @@ fn check_segment(ray: &Ray<'_>, from: Sample, to: f64) -> Option<f64> {
 /// Parameters in (0, 1) where the straight grid segment `a` to `b` crosses
 /// a lattice line or a cell diagonal of the best data's finer cell at
 /// either end, sorted; how many were written to `out`.
-fn lattice_crossings(ground: &EarthGround, a: [f64; 2], b: [f64; 2], out: &mut [f64; 8]) -> usize {
+fn lattice_crossings(
+    ground: &EarthGround,
+    a: [f64; 2],
+    b: [f64; 2],
+    out: &mut [f64; CROSSINGS],
+) -> usize {
     let cell = |p: [f64; 2]| ground.cell_posts(p[0], p[1]);
     let c = match (cell(a), cell(b)) {
         (Some(x), Some(y)) => x.min(y),

@@ -256,6 +256,43 @@ impl GridPlacement {
         }
     }
 
+    /// How far a cell of `cell_posts` level-0 posts drawn as two flat
+    /// triangles (split south-west to north-east) strays from the grid's
+    /// own surface, metres: the largest distance, over cells sampled on a
+    /// 9 x 9 lattice over the grid and points sampled in each triangle,
+    /// between a point of the flat triangle and the point of the same grid
+    /// coordinates on the earth (both at height 0). It holds the sag of the
+    /// chord below the curved earth and, near the poles, the shift across
+    /// a cell whose width changes along it. What a level whose cells are
+    /// that size adds to its delta when drawn on the ellipsoid.
+    pub fn flat_cell_error_m(&self, cell_posts: f64) -> f64 {
+        let [w, h] = self.posts.map(|p| p.saturating_sub(1) as f64);
+        let mut worst: f64 = 0.0;
+        for a in 0..=8 {
+            for b in 0..=8 {
+                let u = ((w - cell_posts) * a as f64 / 8.0).max(0.0);
+                let v = ((h - cell_posts) * b as f64 / 8.0).max(0.0);
+                let corner =
+                    |du: f64, dv: f64| self.ecef(u + du * cell_posts, v + dv * cell_posts, 0.0);
+                let [sw, se, nw, ne] =
+                    [corner(0.0, 0.0), corner(1.0, 0.0), corner(0.0, 1.0), corner(1.0, 1.0)];
+                for i in 0..=6 {
+                    for j in 0..=6 {
+                        let (fu, fv) = (i as f64 / 6.0, j as f64 / 6.0);
+                        let flat = if fu >= fv {
+                            sw + (se - sw) * fu + (ne - se) * fv
+                        } else {
+                            sw + (nw - sw) * fv + (ne - nw) * fu
+                        };
+                        let true_point = self.ecef(u + fu * cell_posts, v + fv * cell_posts, 0.0);
+                        worst = worst.max(flat.distance(true_point));
+                    }
+                }
+            }
+        }
+        worst
+    }
+
     /// The largest distance on the ellipsoid between neighbouring posts,
     /// east and north, anywhere on the grid, metres (sampled on a lattice
     /// of 9 x 9 places, then 1 % added): what sizes a tile in the LOD's
@@ -334,6 +371,25 @@ mod tests {
         // A local grid keeps its metres: posts 90 m apart at its centre.
         let d = local.ecef(600.0, 600.0, 0.0).distance(local.ecef(601.0, 600.0, 0.0));
         assert!((d - 90.0).abs() < 1e-6, "{d}");
+    }
+
+    /// 90 m cells stray a third of a millimetre, a level-6 cell of 90 m
+    /// data (5.8 km) 1.3 m, ETOPO5's 9 km cells 3.4 m (their sag), and a
+    /// level-6 ETOPO5 cell (5.3 degrees) kilometres.
+    #[test]
+    fn flat_cells_stray_from_the_earth_by_their_sag() {
+        let srtm = GridPlacement::new(
+            &GeoRef { crs: Crs::Geographic, origin: [40.0, 39.0], spacing: [1.0 / 1200.0; 2] },
+            [1201, 1201],
+            [71.0, 92.5],
+        );
+        let fine = srtm.flat_cell_error_m(1.0);
+        let coarse = srtm.flat_cell_error_m(64.0);
+        let etopo = global(true).flat_cell_error_m(1.0);
+        let etopo_6 = global(true).flat_cell_error_m(64.0);
+        println!("{fine} {coarse} {etopo} {etopo_6}");
+        assert!(fine < 1e-3 && (0.5..3.0).contains(&coarse), "{fine} {coarse}");
+        assert!((1.0..10.0).contains(&etopo) && etopo_6 > 1000.0, "{etopo} {etopo_6}");
     }
 
     #[test]
