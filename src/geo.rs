@@ -118,6 +118,15 @@ impl GeoRef {
         }
     }
 
+    /// Whether a geographic grid of `width` posts a row spans the whole
+    /// turn without its closing column: its last column is one spacing west
+    /// of its first, 360 degrees on. Such a grid gets that column (a copy of
+    /// the first) at import, so the cells across the seam are drawn and
+    /// the grid wraps (see [`crate::earth::GridPlacement`]).
+    pub fn lacks_closing_column(&self, width: u32) -> bool {
+        self.crs == Crs::Geographic && ((width as f64 * self.spacing[0]) - 360.0).abs() < 1e-6
+    }
+
     /// Why this georeference cannot describe a grid, if it cannot: spacing
     /// must be positive and finite, the origin finite, latitudes on the earth.
     pub fn problem(&self, samples: [u32; 2]) -> Option<String> {

@@ -9,6 +9,7 @@
 //! | [`accuracy`] | the accuracy tool's measurements: per-pixel screen-space error of the LOD against full resolution, its statistics and heat map |
 //! | [`allocator`] | the contiguous two-pass buffer allocator: one address space, its staging copy, who holds which bytes |
 //! | [`geo`] | georeference conventions and the local metric frame |
+//! | [`earth`] | the WGS 84 ellipsoid (geodetic and ECEF), the projections grids are placed with, where a grid's posts are on the earth |
 //! | [`dem`] | elevation importers (GeoTIFF, SRTM, DTED, ASCII grid) producing an [`dem::ElevationGrid`] |
 //! | [`camera`] | the viewer's position and attitude, projection, frustum, earth curvature |
 //! | [`lod`] | UDLOD tiling on the CPU: distance rings with Ulrich's bound, quadtree selection, morph |
@@ -39,6 +40,7 @@ pub mod clusters;
 pub mod dataset;
 pub mod dem;
 pub mod display;
+pub mod earth;
 pub mod flight;
 pub mod geo;
 pub mod gl;

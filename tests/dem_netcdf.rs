@@ -77,20 +77,35 @@ fn the_committed_etopo5_crop_is_georeferenced_around_the_srtm_tile() {
 #[test]
 #[ignore]
 fn make_etopo5_crop() {
+    // 37..44 E, 37..42.5 N
+    crop_etopo5([37 * 12, (37 + 90) * 12], [7 * 12 + 1, 5 * 12 + 7], "etopo5_e37_e44_n37_n42.nc");
+}
+
+/// Cuts the regional database of `tests/earth_truth.rs` and the
+/// accuracy runs at 45-47 N (the Alps, Zurich to Nice: 5-11 E, 43.5-47.5 N)
+/// out of the global ETOPO5 grid. Run once by hand, as above.
+#[test]
+#[ignore = "needs ETOPO5=/usr/share/ferret-vis/data/etopo5.cdf (ferret-datasets)"]
+fn make_etopo5_alps_crop() {
+    crop_etopo5([5 * 12, (43 + 90) * 12 + 6], [6 * 12 + 1, 4 * 12 + 1], "etopo5_e5_e11_n43_n47.nc");
+}
+
+/// Writes `size` posts of the global ETOPO5 grid from post `[i0, j0]`
+/// (columns from 0 E, rows from 90 S, 12 a degree) to `assets/dem/name`.
+fn crop_etopo5([i0, j0]: [u32; 2], size: [usize; 2], name: &str) {
     let source = std::env::var("ETOPO5").expect("ETOPO5=path/to/etopo5.cdf");
     let global = read_raw(Path::new(&source)).unwrap();
     assert_eq!((global.width, global.height), (4320, 2161));
     assert_eq!(global.georef.origin, [0.0, -90.0]);
-    let (i0, j0) = (37 * 12, (37 + 90) * 12);
-    let size = [7 * 12 + 1, 5 * 12 + 7]; // 37..44 E, 37..42.5 N
     let mut heights = Vec::new();
     for j in 0..size[1] {
         for i in 0..size[0] {
             heights.push(global.heights[global.index(i0 + i as u32, j0 + j as u32)]);
         }
     }
-    let out = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/dem/etopo5_e37_e44_n37_n42.nc");
-    write_grid(&out, size, [37.0, 37.0], 1.0 / 12.0, &heights);
+    let origin = [i0 as f64 / 12.0, j0 as f64 / 12.0 - 90.0];
+    let out = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/dem").join(name);
+    write_grid(&out, size, origin, 1.0 / 12.0, &heights);
 }
 
 // ------------------------------------------------------------- bad input

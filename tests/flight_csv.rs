@@ -201,7 +201,7 @@ fn bad_inputs() -> Vec<(&'static str, String, GeoRef, Vec<&'static str>)> {
         ),
         ("heading", row("1,100,200,1500,400,-3,0"), local(), vec!["row 2", "`heading`", "outside"]),
         ("altitude", row("1,100,200,200000,45,-3,0"), local(), vec!["row 2", "`alt`", "outside"]),
-        ("position", row("1,3e7,200,1500,45,-3,0"), local(), vec!["row 2", "`x`", "outside"]),
+        ("position", row("1,6e7,200,1500,45,-3,0"), local(), vec!["row 2", "`x`", "outside"]),
         (
             "latitude",
             "t,lat,lon,alt,heading,pitch,roll\n0,39.5,40.5,1500,0,0,0\n1,91,40.5,1500,0,0,0\n"
@@ -210,10 +210,12 @@ fn bad_inputs() -> Vec<(&'static str, String, GeoRef, Vec<&'static str>)> {
             vec!["row 2", "`lat`", "outside [-90, 90]"],
         ),
         (
+            // [-180, 180] and [0, 360] are both read (and one turn past
+            // them, across a seam); beyond that is a typing error.
             "longitude",
-            "t,lat,lon,alt,heading,pitch,roll\n0,39.5,-180.5,1500,0,0,0\n".into(),
+            "t,lat,lon,alt,heading,pitch,roll\n0,39.5,-360.5,1500,0,0,0\n".into(),
             geographic(),
-            vec!["row 1", "`lon`", "outside [-180, 180]"],
+            vec!["row 1", "`lon`", "outside [-360, 360]"],
         ),
     ]
 }

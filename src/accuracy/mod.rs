@@ -27,6 +27,15 @@
 //! nothing there: terrain drawn past the data's edge, or data not drawn.
 //! Coverage mismatches are reported as a share of all pixels.
 //!
+//! **Against the earth.** That measure compares the display with the full
+//! resolution drawn in the display's own frame: it sees the LOD's error
+//! only. The *geodetic truth* (`earth_*`) is independent of the display's
+//! geometry: each pixel's ray from the true camera pose, cast in ECEF
+//! against the best data on the WGS 84 ellipsoid, and the display's error
+//! against it measured by where places are on the screen
+//! ([`measure_earth`] says exactly how), so that a surface drawn in the
+//! wrong place is caught, not only one drawn at the wrong height.
+//!
 //! | file | owns |
 //! |---|---|
 //! | `positions` | [`PositionImage`]: a camera-relative surface point per pixel, read back from the GPU |
@@ -36,7 +45,13 @@
 //! | `ray_truth` | [`trace_truth`]: the full-resolution image by each pixel's ray on the CPU, where the mesh is too large to draw |
 //! | `summary` | [`ErrorSummary`]: percentiles over all views |
 //! | `heat_map` | the error image of a view as colours |
+//! | `earth_ground` | [`EarthGround`]: the best data on the ellipsoid, with the bounds rays skip by |
+//! | `earth_rays` | [`TrueCamera`] and [`trace_earth`]: the geodetic truth's image, each pixel's ray in ECEF |
+//! | `earth_error` | [`measure_earth`]: the display's error against the geodetic truth, and the [`DisplayFrame`] it reads the display in |
 
+mod earth_error;
+mod earth_ground;
+mod earth_rays;
 mod heat_map;
 mod lod_surface;
 mod pixel_error;
@@ -45,6 +60,9 @@ mod ray_truth;
 mod summary;
 mod tile_triangles;
 
+pub use earth_error::{measure_earth, DisplayFrame, EarthErrors, EarthView};
+pub use earth_ground::EarthGround;
+pub use earth_rays::{trace_earth, trace_ray, EarthHit, EarthImage, TrueCamera};
 pub use heat_map::{heat_map, HEAT_MISMATCH, HEAT_SKY};
 pub use lod_surface::LodSurface;
 pub use pixel_error::{measure_view, ExactHeight, ViewErrors, ViewGeometry};

@@ -150,7 +150,7 @@ fn shell(a: f64, b: f64, k: f64) -> Option<(f64, f64)> {
 
 /// Bisects `[lo, hi]` (ray above the surface at `lo`, below at `hi`) to
 /// [`HIT_TOLERANCE_M`] along the ray.
-fn bisect(above: &dyn Fn(f64) -> Option<f64>, mut lo: f64, mut hi: f64) -> f64 {
+pub(super) fn bisect(above: &dyn Fn(f64) -> Option<f64>, mut lo: f64, mut hi: f64) -> f64 {
     while hi - lo > HIT_TOLERANCE_M {
         let mid = 0.5 * (lo + hi);
         match above(mid) {

@@ -10,9 +10,11 @@ use std::sync::Arc;
 
 use anyhow::{bail, Context, Result};
 use ridgeline::accuracy::RayGround;
+use ridgeline::accuracy::{EarthGround, TrueCamera};
 use ridgeline::camera::Camera;
-use ridgeline::display::measure::{measure_flight_with, AccuracyRun, Truth};
+use ridgeline::display::measure::{measure_flight_on_earth, AccuracyRun, EarthTruth, Truth};
 use ridgeline::display::{DisplayConfig, DisplayParts};
+use ridgeline::earth::GridPlacement;
 use ridgeline::gl::{GlBackend, TruthMesh, TruthPass, TruthRegion};
 use serde_json::json;
 
@@ -35,6 +37,10 @@ pub struct AccuracyArgs {
     /// Where accuracy.json, heat_map.png and picture.png (the worst view) go.
     #[arg(long, default_value = "target/accuracy")]
     pub out: PathBuf,
+    /// Against the geodetic truth, trace every N-th pixel across and down
+    /// (1: every pixel; 0: do not measure against the earth).
+    #[arg(long, default_value_t = 1)]
+    pub earth_stride: u32,
 }
 
 pub fn run(args: &AccuracyArgs) -> Result<()> {
@@ -61,6 +67,15 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
         .map(|t| (t, path.sample(t).camera(args.view.fov, [args.view.size.x, args.view.size.y])))
         .collect();
     let exact = |x: f64, y: f64| terrain.exact_height(x, y);
+    let placement = GridPlacement::new(&terrain.georef(), layout.posts, layout.spacing_m);
+    let ground = earth_ground(args, &terrain, placement, &views)?;
+    let on_earth = ground.as_ref().map(|(ground, reach_m)| EarthTruth {
+        placement,
+        ground,
+        stride: args.earth_stride,
+        reach_m: *reach_m,
+    });
+    let on_earth = on_earth.as_ref();
     let run = match &terrain.ground {
         Ground::Procedural(earth) => {
             // Out to the horizon the full-resolution mesh is 10^8 triangles
@@ -71,7 +86,8 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
                 top_m: earth.height_bounds()[1],
                 spacing_m: layout.spacing_m[0].min(layout.spacing_m[1]),
             };
-            measure_flight_with(&mut display, Truth::Rays(ground), &exact, layout.spacing_m, &views)
+            let truth = Truth::Rays(ground);
+            measure_flight_on_earth(&mut display, truth, on_earth, &exact, layout.spacing_m, &views)
         }
         Ground::Pyramid(_) => {
             // The full-resolution mesh around the flight: all of a single
@@ -83,7 +99,8 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
                 .with_context(|| format!("{dataset_name}: the full-resolution mesh"))?;
             let truth = TruthPass::new(display.context.gl(), &mesh)
                 .context("uploading the full-resolution mesh")?;
-            measure_flight_with(&mut display, Truth::Mesh(&truth), &exact, layout.spacing_m, &views)
+            let truth = Truth::Mesh(&truth);
+            measure_flight_on_earth(&mut display, truth, on_earth, &exact, layout.spacing_m, &views)
         }
     }
     .context("measuring the views")?;
@@ -118,6 +135,7 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
         "truth_frame_ms": mean(&run, |v| v.truth_frame_ms),
         "views": run.views.len(),
         "worst_view": run.worst.as_ref().map(|w| w.index),
+        "earth": run.earth,
         "per_view": run.views,
     });
     write_outputs(args, &run, &report)?;
@@ -134,6 +152,34 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The best data on the ellipsoid for the geodetic truth, loaded as far as
+/// the views can see (the horizon of the highest view over the lowest
+/// ground, and that of the highest ground), and that reach; `None` with
+/// `--earth-stride 0`.
+fn earth_ground(
+    args: &AccuracyArgs,
+    terrain: &super::terrain::Terrain,
+    placement: GridPlacement,
+    views: &[(f64, Camera)],
+) -> Result<Option<(EarthGround, f64)>> {
+    if args.earth_stride == 0 {
+        return Ok(None);
+    }
+    let (low, high) = terrain.summary.height_range;
+    let eyes: Vec<_> = views.iter().map(|(_, c)| TrueCamera::new(c, &placement).eye).collect();
+    let highest = views.iter().map(|(_, c)| c.position.z).fold(high as f64, f64::max);
+    let horizon = |h: f64| (2.0 * 6_400_000.0 * (h - low as f64).max(1.0)).sqrt();
+    let reach_m = 1.1 * (horizon(highest) + horizon(high as f64)) + 10_000.0;
+    // Heights only: the pyramid itself, not the source with its meshes.
+    let source: &dyn ridgeline::node::NodeSource = match &terrain.ground {
+        super::terrain::Ground::Pyramid(pyramid) => pyramid.as_ref(),
+        super::terrain::Ground::Procedural(earth) => earth.as_ref(),
+    };
+    let ground = EarthGround::load(source, placement, &eyes, reach_m)
+        .with_context(|| format!("{}: the best data for the geodetic truth", terrain.name))?;
+    Ok(Some((ground, reach_m)))
 }
 
 fn check_args(args: &AccuracyArgs) -> Result<()> {
@@ -247,6 +293,26 @@ fn print_tables(run: &AccuracyRun) -> Result<()> {
     if run.truth == "cpu_rays" {
         writeln!(out, "  truth             each pixel's ray on the CPU against the exact heights")?;
     }
+    if let Some(earth) = &run.earth {
+        let e = &earth.errors;
+        writeln!(
+            out,
+            "  against the earth p50 {:.3}, p99 {:.3}, p99.9 {:.3}, max {:.3} px over {} traced pixels \
+             ({}; {:.4}% coverage mismatch, {} holes; rays {:.0} ms a view)",
+            e.p50_px,
+            e.p99_px,
+            e.p999_px,
+            e.max_px,
+            e.pixels,
+            match earth.stride {
+                1 => "every pixel".to_string(),
+                n => format!("one pixel in {n} across and down"),
+            },
+            100.0 * earth.coverage_mismatch,
+            earth.holes,
+            earth.truth_ms
+        )?;
+    }
     writeln!(
         out,
         "  horizon culled    {:.0} tiles a view (in the frustum, below the horizon)",
@@ -269,5 +335,10 @@ fn print_tables(run: &AccuracyRun) -> Result<()> {
     let bound = (run.tau_achieved_max_px * 100.0).round() / 100.0;
     let verdict = if s.p999_px <= run.tau_achieved_max_px { "confirmed" } else { "NOT confirmed" };
     writeln!(out, "  bound             p99.9 {:.3} px <= tau {bound} px: {verdict}", s.p999_px)?;
+    if let Some(earth) = &run.earth {
+        let p999 = earth.errors.p999_px;
+        let verdict = if p999 <= run.tau_achieved_max_px { "confirmed" } else { "NOT confirmed" };
+        writeln!(out, "  bound on earth    p99.9 {p999:.3} px <= tau {bound} px: {verdict}")?;
+    }
     super::print(&out)
 }

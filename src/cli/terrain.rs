@@ -8,6 +8,7 @@ use std::sync::Arc;
 
 use anyhow::{bail, Result};
 use ridgeline::flight::{builtin_approach_over, builtin_cruise, default_flight, FlightPath};
+use ridgeline::geo::GeoRef;
 use ridgeline::meshes::{MeshOptions, MeshedSource};
 use ridgeline::node::NodeSource;
 use ridgeline::procedural::{EarthParams, ProceduralEarth};
@@ -72,6 +73,15 @@ impl Terrain {
         Ok(Terrain { ground: Ground::Pyramid(pyramid), source, summary, name, gapless })
     }
 
+    /// The georeference of the terrain's posts (the procedural earth has
+    /// none: a local grid).
+    pub fn georef(&self) -> GeoRef {
+        match &self.ground {
+            Ground::Pyramid(pyramid) => pyramid.info().georef,
+            Ground::Procedural(earth) => GeoRef::local(earth.layout().spacing_m),
+        }
+    }
+
     /// The full-resolution height at a local point, metres (`None` outside the data).
     pub fn exact_height(&self, x: f64, y: f64) -> Option<f32> {
         match &self.ground {
@@ -87,7 +97,11 @@ impl Terrain {
         match (&self.ground, path) {
             (Ground::Pyramid(pyramid), Some(file)) => {
                 let layout = *pyramid.layout();
-                Ok(FlightPath::read(file, &pyramid.info().georef, layout.posts)?)
+                let path = FlightPath::read(file, &pyramid.info().georef, layout.posts)?;
+                if let Some(note) = path.longitude_note() {
+                    eprintln!("{}: {note}", file.display());
+                }
+                Ok(path)
             }
             (Ground::Procedural(_), Some(_)) => {
                 bail!("--path over --dataset procedural: it has no georeference; use --flight")

@@ -75,9 +75,27 @@ pub fn read_raw(path: &Path) -> Result<RawGrid, ImportError> {
 }
 
 /// Imports one file and fills its small voids (large ones stay NaN, see
-/// [`voids`]).
+/// [`voids`]); a global grid gets its closing column ([`close_global`]).
 pub fn import_file(path: &Path) -> Result<ElevationGrid, ImportError> {
-    voids::fill_small(read_raw(path)?)
+    voids::fill_small(read_raw(path)?).map(close_global)
+}
+
+/// A geographic grid whose columns span 360 degrees less one spacing (the
+/// way global grids are stored, 0 to 359.92 degrees for ETOPO5) gets a
+/// copy of its first column as its last, 360 degrees on: the cells across
+/// the seam then exist, and the grid wraps with no seam at 0 or 360
+/// degrees. Other grids are returned as they are.
+pub fn close_global(grid: ElevationGrid) -> ElevationGrid {
+    if !grid.georef.lacks_closing_column(grid.width) {
+        return grid;
+    }
+    let width = grid.width as usize;
+    let mut heights = Vec::with_capacity((width + 1) * grid.height as usize);
+    for row in grid.heights.chunks(width) {
+        heights.extend_from_slice(row);
+        heights.push(row[0]);
+    }
+    ElevationGrid { width: grid.width + 1, heights, ..grid }
 }
 
 /// Imports several files (any mix of formats) of one lattice as one mosaic
@@ -88,7 +106,7 @@ pub fn import_files(paths: &[PathBuf]) -> Result<ElevationGrid, ImportError> {
         return Err(ImportError::new(Path::new(""), Problem::NoInput));
     }
     let grids = paths.iter().map(|p| read_raw(p)).collect::<Result<Vec<_>, _>>()?;
-    voids::fill_small(mosaic::mosaic(grids)?)
+    voids::fill_small(mosaic::mosaic(grids)?).map(close_global)
 }
 
 /// Imports files of different resolutions as layers for
@@ -125,5 +143,5 @@ pub fn import_layers(paths: &[PathBuf]) -> Result<Vec<ElevationGrid>, ImportErro
             None => groups.push(vec![grid]),
         }
     }
-    groups.into_iter().map(|g| voids::fill_small(mosaic::mosaic(g)?)).collect()
+    groups.into_iter().map(|g| voids::fill_small(mosaic::mosaic(g)?).map(close_global)).collect()
 }

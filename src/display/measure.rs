@@ -15,10 +15,12 @@ use image::RgbaImage;
 
 use super::{DisplayError, DisplayParts};
 use crate::accuracy::{
-    heat_map, measure_view, percentile, trace_truth, ErrorSummary, ExactHeight, LodSurface,
-    PositionImage, RayGround, ViewErrors, ViewGeometry,
+    heat_map, measure_earth, measure_view, percentile, trace_earth, trace_truth, DisplayFrame,
+    EarthErrors, EarthGround, EarthImage, EarthView, ErrorSummary, ExactHeight, LodSurface,
+    PositionImage, RayGround, TrueCamera, ViewErrors, ViewGeometry,
 };
 use crate::camera::Camera;
+use crate::earth::GridPlacement;
 use crate::gl::{GlError, OffscreenTarget, TruthFrameStats, TruthPass};
 use crate::render::{DrawList, FrameUniforms, RenderBackend};
 use std::time::Instant;
@@ -81,6 +83,55 @@ pub struct ViewRow {
     pub lod_frame_ms: f64,
     /// Milliseconds of the truth's draw, to glFinish.
     pub truth_frame_ms: f64,
+    /// The view's error against the geodetic truth, when measured.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub earth: Option<EarthRow>,
+}
+
+/// One view's error against the geodetic truth (see [`crate::accuracy`]).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct EarthRow {
+    /// Percentiles over the traced pixels, pixels.
+    #[serde(flatten)]
+    pub errors: ErrorSummary,
+    /// Share of the traced pixels where one image shows terrain over
+    /// ground the other has no surface for.
+    pub coverage_mismatch: f64,
+    /// Traced pixels with terrain in one image only, measured.
+    pub silhouette: usize,
+    /// Traced terrain pixels whose true place no drawn tile covers.
+    pub holes: usize,
+    /// Milliseconds the rays took (every traced pixel).
+    pub truth_ms: f64,
+}
+
+/// The geodetic truth a run measures against: the best data on the
+/// ellipsoid, and which pixels to trace.
+pub struct EarthTruth<'a> {
+    /// Where the grid's posts are on the earth.
+    pub placement: GridPlacement,
+    /// The best data on the ellipsoid, loaded for the views.
+    pub ground: &'a EarthGround,
+    /// Every `stride`-th pixel across and down is traced (1: all).
+    pub stride: u32,
+    /// Rays are followed this far, metres (the views' horizon and more).
+    pub reach_m: f64,
+}
+
+/// The error against the geodetic truth over every view.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct EarthSummary {
+    /// Percentiles over every traced pixel of every view, pixels.
+    #[serde(flatten)]
+    pub errors: ErrorSummary,
+    /// Share of all traced pixels with a coverage mismatch.
+    pub coverage_mismatch: f64,
+    /// Traced terrain pixels whose true place no drawn tile covers.
+    pub holes: usize,
+    /// Every `stride`-th pixel across and down was traced.
+    pub stride: u32,
+    /// Mean milliseconds the rays took per view.
+    pub truth_ms: f64,
 }
 
 /// The view with the largest p99.9 error (then the largest maximum).
@@ -120,6 +171,8 @@ pub struct AccuracyRun {
     pub views: Vec<ViewRow>,
     /// The view with the largest p99.9 error; `None` when there were no views.
     pub worst: Option<WorstView>,
+    /// The error against the geodetic truth, when it was measured.
+    pub earth: Option<EarthSummary>,
 }
 
 /// Where the full-resolution image of a view comes from.
@@ -163,6 +216,18 @@ pub fn measure_flight_with(
     spacing_m: [f64; 2],
     views: &[(f64, Camera)],
 ) -> Result<AccuracyRun, DisplayError> {
+    measure_flight_on_earth(display, truth, None, exact, spacing_m, views)
+}
+
+/// [`measure_flight_with`], and against the geodetic truth `earth` too.
+pub fn measure_flight_on_earth(
+    display: &mut DisplayParts,
+    truth: Truth<'_>,
+    earth: Option<&EarthTruth<'_>>,
+    exact: ExactHeight<'_>,
+    spacing_m: [f64; 2],
+    views: &[(f64, Camera)],
+) -> Result<AccuracyRun, DisplayError> {
     let tau_px = display.pipeline.scene().config().lod.tau_px;
     let size = display.context.size();
     // Another display on this thread may have made its context current:
@@ -172,6 +237,9 @@ pub fn measure_flight_with(
     let mut images = [PositionImage::default(), PositionImage::default()];
     let mut errors = ViewErrors::default();
     let mut all_errors: Vec<f32> = Vec::new();
+    let mut earth_buffers = (EarthImage::default(), EarthErrors::default());
+    let mut earth_all: Vec<f32> = Vec::new();
+    let (mut earth_mismatched, mut earth_pixels) = (0usize, 0usize);
     let (mut mismatched, mut pixels, mut holes) = (0usize, 0usize, 0usize);
     let mut rows: Vec<ViewRow> = Vec::with_capacity(views.len());
     let mut worst: Option<WorstView> = None;
@@ -184,10 +252,17 @@ pub fn measure_flight_with(
         }
     }
     for (t, camera) in views {
-        let passes = Passes { truth, positions: &positions };
-        let row =
-            measure_one(display, passes, exact, spacing_m, *t, camera, &mut images, &mut errors)?;
+        let passes = Passes { truth, positions: &positions, earth };
+        let buffers =
+            Buffers { images: &mut images, errors: &mut errors, earth: &mut earth_buffers };
+        let row = measure_one(display, passes, exact, spacing_m, *t, camera, buffers)?;
         all_errors.extend(errors.errors_px.iter().copied().filter(|e| !e.is_nan()));
+        if earth.is_some() {
+            let errors = &earth_buffers.1;
+            earth_all.extend(errors.errors_px.iter().copied().filter(|e| !e.is_nan()));
+            earth_mismatched += errors.lod_only + errors.truth_only;
+            earth_pixels += errors.errors_px.len();
+        }
         mismatched += errors.lod_only + errors.truth_only + errors.no_data;
         pixels += errors.errors_px.len();
         holes += errors.holes;
@@ -210,6 +285,14 @@ pub fn measure_flight_with(
     let max_surface_px = rows.iter().map(|r| r.max_surface_px).fold(0.0, f64::max);
     let tau_achieved_max_px = rows.iter().map(|r| r.tau_px).fold(tau_px, f64::max);
     let tau_loosened_views = rows.iter().filter(|r| r.tau_px > tau_px).count();
+    let earth = earth.map(|earth| EarthSummary {
+        errors: ErrorSummary::of(&mut earth_all),
+        coverage_mismatch: earth_mismatched as f64 / earth_pixels.max(1) as f64,
+        holes: rows.iter().filter_map(|r| r.earth.as_ref()).map(|e| e.holes).sum(),
+        stride: earth.stride,
+        truth_ms: rows.iter().filter_map(|r| r.earth.as_ref()).map(|e| e.truth_ms).sum::<f64>()
+            / rows.len().max(1) as f64,
+    });
     Ok(AccuracyRun {
         tau_px,
         truth: truth.route(),
@@ -222,6 +305,7 @@ pub fn measure_flight_with(
         max_surface_px,
         views: rows,
         worst,
+        earth,
     })
 }
 
@@ -230,9 +314,16 @@ pub fn measure_flight_with(
 struct Passes<'a> {
     truth: Truth<'a>,
     positions: &'a OffscreenTarget,
+    earth: Option<&'a EarthTruth<'a>>,
 }
 
-#[allow(clippy::too_many_arguments)]
+/// What one view's measurement writes into, kept between views.
+struct Buffers<'a> {
+    images: &'a mut [PositionImage; 2],
+    errors: &'a mut ViewErrors,
+    earth: &'a mut (EarthImage, EarthErrors),
+}
+
 fn measure_one(
     display: &mut DisplayParts,
     passes: Passes<'_>,
@@ -240,9 +331,9 @@ fn measure_one(
     spacing_m: [f64; 2],
     t: f64,
     camera: &Camera,
-    images: &mut [PositionImage; 2],
-    errors: &mut ViewErrors,
+    buffers: Buffers<'_>,
 ) -> Result<ViewRow, DisplayError> {
+    let Buffers { images, errors, earth: earth_buffers } = buffers;
     display.pipeline.settle(camera, SETTLE_UPDATES)?;
     // The first frame at a new pose makes and uploads its tiles; the timed
     // one is the steady frame a display shows there.
@@ -281,6 +372,11 @@ fn measure_one(
     let eye = DVec2::new(camera.position.x, camera.position.y);
     let surface = LodSurface::new(list, staging, grid_size, spacing_m, eye);
     measure_view(&geometry, lod, truth_positions, &surface, staging, exact, errors);
+    let earth = passes.earth.map(|earth| {
+        let heights = |x: f64, y: f64| surface.height_at(staging, x, y);
+        let frame = DisplayFrame::planar(earth.placement, camera, &frame);
+        measure_view_on_earth(earth, &frame, camera, &heights, lod, earth_buffers)
+    });
     let mut view_errors: Vec<f32> =
         errors.errors_px.iter().copied().filter(|e| !e.is_nan()).collect();
     let mut mirror: Vec<f32> = errors.mirror_m.iter().copied().filter(|e| !e.is_nan()).collect();
@@ -312,7 +408,36 @@ fn measure_one(
         horizon_culled: lod_stats.scene.horizon_culled,
         lod_frame_ms: lod_stats.frame_ms,
         truth_frame_ms: truth_stats.frame_ms,
+        earth,
     })
+}
+
+/// One view against the geodetic truth: the true camera's rays, then the
+/// display's positions `lod` (drawn in `frame`, its surface `heights` at a
+/// chart point) measured against them.
+fn measure_view_on_earth(
+    earth: &EarthTruth<'_>,
+    frame: &DisplayFrame,
+    camera: &Camera,
+    heights: &(dyn Fn(f64, f64) -> Option<f64> + Sync),
+    lod: &PositionImage,
+    (image, errors): &mut (EarthImage, EarthErrors),
+) -> EarthRow {
+    let start = Instant::now();
+    let true_camera = TrueCamera::new(camera, &earth.placement);
+    trace_earth(&true_camera, earth.ground, earth.stride, earth.reach_m, image);
+    let truth_ms = start.elapsed().as_secs_f64() * 1e3;
+    let view = EarthView { frame, camera: &true_camera, ground: earth.ground, surface: heights };
+    measure_earth(&view, lod, image, errors);
+    let mut values: Vec<f32> = errors.errors_px.iter().copied().filter(|e| !e.is_nan()).collect();
+    EarthRow {
+        errors: ErrorSummary::of(&mut values),
+        coverage_mismatch: (errors.lod_only + errors.truth_only) as f64
+            / errors.errors_px.len().max(1) as f64,
+        silhouette: errors.silhouette,
+        holes: errors.holes,
+        truth_ms,
+    }
 }
 
 /// The truth of one view by rays: its positions, the rays' time, and the

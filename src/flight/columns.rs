@@ -92,9 +92,16 @@ impl Column {
         match self {
             // Differences of times this size are still exact to nanoseconds.
             Column::Time => (-1e7, 1e7, "seconds", ""),
-            Column::X | Column::Y => (-2.5e7, 2.5e7, "metres", " (farther is off the earth)"),
+            Column::X | Column::Y => (
+                -5e7,
+                5e7,
+                "metres",
+                " (a global grid's chart is 40 075 km wide; farther is off the earth)",
+            ),
             Column::Lat => (-90.0, 90.0, "degrees", ""),
-            Column::Lon => (-180.0, 180.0, "degrees", ""),
+            // [-180, 180] or [0, 360] as data store them, and one turn
+            // more for a path that crosses a grid's seam.
+            Column::Lon => (-360.0, 360.0, "degrees", ""),
             Column::Altitude => {
                 (-11_000.0, 100_000.0, "metres", " (the deepest ocean to the edge of space)")
             }

@@ -14,15 +14,23 @@
 //! wing down. A geographic dataset also accepts `lat`/`lon` degrees in place of
 //! `x`/`y`, mapped by [`super::geographic`]. Every problem is reported with the
 //! file, the row (and its line in the file) and the column.
+//!
+//! **Longitudes** may be given as the data store them (0 to 360 for a
+//! grid stored so) or in [-180, 180]: each is read in the turn that holds
+//! the grid, and over a grid that wraps (its columns span 360 degrees) in
+//! the turn nearest the previous row's, so a path crossing the grid's seam
+//! (Greenwich for a 0-360 grid, the antimeridian for a -180-180 one) is
+//! followed across it, not back over the whole earth. What was done is
+//! said: [`FlightPath::longitude_note`].
 
 use std::path::{Path, PathBuf};
 
 use glam::{DVec2, DVec3};
 
 use super::columns::{Column, ValueProblem};
-use super::geographic::Equirectangular;
 use super::path::{FlightPath, Waypoint};
 use super::pose::Pose;
+use crate::earth::GridPlacement;
 use crate::geo::{Crs, GeoRef};
 
 /// Larger files are refused before reading: a path of 1 Hz rows this size
@@ -147,6 +155,42 @@ pub enum PathProblem {
     },
 }
 
+/// The chart point of `lat`, `lon` (degrees): in the grid's turn, or over
+/// a grid that wraps in the turn nearest `previous_x` (the previous row's
+/// chart `x`); counted in `longitudes` when moved by a turn.
+fn chart_point(
+    placement: &GridPlacement,
+    lat: f64,
+    lon: f64,
+    previous_x: Option<f64>,
+    longitudes: &mut Longitudes,
+) -> DVec2 {
+    let [mut x, y] = placement.chart_of_geodetic(lat.to_radians(), lon.to_radians());
+    let [sx, _] = placement.chart_spacing_m();
+    let mut turns = 0.0;
+    if let (Some(period), Some(previous)) = (placement.period_posts(), previous_x) {
+        let period_m = period * sx;
+        turns = ((previous - x) / period_m).round();
+        x += turns * period_m;
+    }
+    if turns != 0.0 {
+        longitudes.across_seam += 1;
+    }
+    // The longitude the chart point stands for, against the one written.
+    let used = longitudes.west + x / sx * placement_step(placement);
+    if ((used - lon) / 360.0).round() != 0.0 {
+        longitudes.moved += 1;
+    }
+    DVec2::new(x, y)
+}
+
+/// Degrees of longitude between a geographic grid's columns.
+fn placement_step(placement: &GridPlacement) -> f64 {
+    let (_, lon0) = placement.geodetic_of_post(0.0, 0.0);
+    let (_, lon1) = placement.geodetic_of_post(1.0, 0.0);
+    (lon1 - lon0).to_degrees()
+}
+
 fn describe_crs(crs: &Crs) -> String {
     match crs {
         Crs::Geographic => "longitude/latitude".into(),
@@ -160,8 +204,39 @@ fn describe_crs(crs: &Crs) -> String {
 struct Header {
     line: usize,
     columns: Vec<Column>,
-    /// Positions come as `lat,lon`, mapped into the local frame by this.
-    geographic: Option<Equirectangular>,
+    /// Positions come as `lat,lon`, mapped onto the chart by this.
+    geographic: Option<GridPlacement>,
+}
+
+/// What became of the rows' longitudes.
+#[derive(Default)]
+struct Longitudes {
+    /// Rows read in another turn than written (normalised to the grid's).
+    moved: usize,
+    /// Rows followed across the seam of a grid that wraps.
+    across_seam: usize,
+    /// The grid's turn, degrees: its west edge, and whether it wraps.
+    west: f64,
+    wraps: bool,
+}
+
+impl Longitudes {
+    fn note(&self, rows: usize) -> Option<String> {
+        let turn = if self.wraps {
+            format!("the grid's columns span 360 degrees from {} E, so longitudes wrap", self.west)
+        } else {
+            format!("the grid starts at {} E", self.west)
+        };
+        match (self.moved, self.across_seam) {
+            (0, 0) => None,
+            (moved, 0) => Some(format!(
+                "longitudes: {moved} of {rows} rows normalised by 360 degrees into the grid's turn ({turn})"
+            )),
+            (moved, seam) => Some(format!(
+                "longitudes: {moved} of {rows} rows normalised by 360 degrees, and the path followed across the grid's seam {seam} times ({turn})"
+            )),
+        }
+    }
 }
 
 impl FlightPath {
@@ -219,9 +294,15 @@ fn parse_lines(
     let (header_line, header_text) = lines.next().ok_or(PathProblem::NoHeader)?;
     let header = parse_header(header_line, header_text, georef, extent_samples)?;
     let mut waypoints: Vec<Waypoint> = Vec::new();
+    let mut longitudes = Longitudes {
+        west: georef.origin[0],
+        wraps: header.geographic.is_some_and(|p| p.period_posts().is_some()),
+        ..Longitudes::default()
+    };
     for (row_index, (line, row_text)) in lines.enumerate() {
         let row = row_index + 1;
-        let waypoint = parse_row(&header, row, line, row_text)?;
+        let previous_x = waypoints.last().map(|w| w.pose.position.x);
+        let waypoint = parse_row(&header, row, line, row_text, previous_x, &mut longitudes)?;
         if let Some(previous) = waypoints.last() {
             if waypoint.t <= previous.t {
                 return Err(PathProblem::TimeNotIncreasing {
@@ -237,7 +318,8 @@ fn parse_lines(
     if waypoints.is_empty() {
         return Err(PathProblem::NoRows { line: header.line });
     }
-    Ok(FlightPath::from_checked(waypoints))
+    let rows = waypoints.len();
+    Ok(FlightPath::from_checked(waypoints).with_longitude_note(longitudes.note(rows)))
 }
 
 /// Blank lines and `#` comments carry nothing.
@@ -284,7 +366,9 @@ fn parse_header(
     }
     let geographic = match (geographic, georef.crs) {
         (false, _) => None,
-        (true, Crs::Geographic) => Some(Equirectangular::new(georef, extent_samples)),
+        (true, Crs::Geographic) => {
+            Some(GridPlacement::new(georef, extent_samples, georef.spacing_m(extent_samples)))
+        }
         (true, crs) => return Err(PathProblem::LatLonNeedsGeographic { line, crs }),
     };
     Ok(Header { line, columns, geographic })
@@ -295,6 +379,8 @@ fn parse_row(
     row: usize,
     line: usize,
     text: &str,
+    previous_x: Option<f64>,
+    longitudes: &mut Longitudes,
 ) -> Result<Waypoint, PathProblem> {
     let cells: Vec<&str> = text.split(',').collect();
     let expected = header.columns.len();
@@ -316,7 +402,9 @@ fn parse_row(
     }
     let value = |column: Column| values[column as usize];
     let horizontal = match &header.geographic {
-        Some(frame) => frame.to_local(value(Column::Lat), value(Column::Lon)),
+        Some(placement) => {
+            chart_point(placement, value(Column::Lat), value(Column::Lon), previous_x, longitudes)
+        }
         None => DVec2::new(value(Column::X), value(Column::Y)),
     };
     let pose = Pose {

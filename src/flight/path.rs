@@ -21,6 +21,8 @@ pub struct Waypoint {
 #[derive(Clone, Debug, PartialEq)]
 pub struct FlightPath {
     waypoints: Vec<Waypoint>,
+    /// What the CSV reader did with the rows' longitudes, when it moved any.
+    longitude_note: Option<String>,
 }
 
 /// Why waypoints do not make a path.
@@ -76,7 +78,7 @@ impl FlightPath {
                 });
             }
         }
-        Ok(FlightPath { waypoints })
+        Ok(FlightPath { waypoints, longitude_note: None })
     }
 
     /// For readers that have checked every value themselves.
@@ -86,7 +88,18 @@ impl FlightPath {
         debug_assert!(waypoints
             .iter()
             .all(|w| waypoint_values(w).iter().all(|(_, v)| v.is_finite())));
-        FlightPath { waypoints }
+        FlightPath { waypoints, longitude_note: None }
+    }
+
+    /// This path, saying what became of its rows' longitudes.
+    pub(super) fn with_longitude_note(self, note: Option<String>) -> Self {
+        FlightPath { longitude_note: note, ..self }
+    }
+
+    /// What the CSV reader did with the rows' longitudes (normalised into
+    /// the grid's turn, followed across a wrapping grid's seam), if anything.
+    pub fn longitude_note(&self) -> Option<&str> {
+        self.longitude_note.as_deref()
     }
 
     /// The waypoints, in time order.
