@@ -437,7 +437,7 @@ mod tests {
         assert!(cell_surface(10.0, 20.0, nan, nan, 0.5, 0.25).is_nan());
         // South-east without data: the diagonal and the north-west triangle stand.
         assert_eq!(cell_surface(10.0, nan, 30.0, 50.0, 0.5, 0.5), 30.0);
-        assert_eq!(cell_surface(10.0, nan, 30.0, 50.0, 0.25, 0.5), 30.0);
+        assert_eq!(cell_surface(10.0, nan, 30.0, 50.0, 0.25, 0.5), 25.0);
         assert!(cell_surface(10.0, nan, 30.0, 50.0, 0.5, 0.25).is_nan());
         // With every corner, the full formula's bits.
         let full = 10.0 + 0.3 * (20.0 - 10.0) + 0.1 * (50.0 - 20.0);
