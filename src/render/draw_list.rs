@@ -538,9 +538,11 @@ pub fn made_delta(meshes: &[f64], grids: &[f64], node_mesh: bool, level: u8) -> 
 /// tiles near the camera (unmorphed) can open no crack wider than rounding:
 /// they hung 97 m at tau 4 when every tile was taken as fully morphed, and
 /// near a data edge those skirts stood as walls under the cut face seen
-/// from beyond it (issue 25). An edge with no tile drawn across it (past the
-/// data, culled, below the horizon) and one [`skirt_edges`] finds
-/// watertight hang none.
+/// from beyond it (issue 25). An edge [`skirt_edges`] finds watertight
+/// hangs none; one with no tile found across it hangs as if the level above
+/// were there, fully morphed (hanging none there left single pixels of sky
+/// in the default flight: `tests/render_horizon.rs`). Where the data end the
+/// skirt is dropped with the posts across it (`tiles::vertex`).
 pub fn skirt_depths(
     draw: &TileDraw,
     drawn: &[DrawnTile],
@@ -564,7 +566,14 @@ pub fn skirt_depths(
             let side = crack_side(other);
             across = Some(across.map_or(side, |a| a.max(side)));
         });
-        across.map_or(0.0, |other| crack_side(&own) + other + SKIRT_MARGIN_M)
+        // Nothing found across (culled, past the data, or drawn at a level
+        // the rings do not pair with this one): the coarser level's full
+        // error, as if its tile were there.
+        let unseen = || {
+            let coarser = DrawnTile { key: draw.key.parent(), ..own };
+            crack_side(&coarser).max(surface_error_m(&coarser, 1.0, geometry))
+        };
+        crack_side(&own) + across.unwrap_or_else(unseen) + SKIRT_MARGIN_M
     })
 }
 
@@ -586,17 +595,23 @@ pub fn surface_error_m(tile: &DrawnTile, morph: f64, geometry: &TileGeometry<'_>
 
 /// How far `tile`'s straight edges may sag below the curved earth between
 /// two of its vertices, metres (the shader drops each vertex by `d^2 / 2R`
-/// and draws straight between them): a node mesh's triangles are capped at
-/// a quarter of its error or 5 cm (`meshes::build::sag_extent`), a grid's
-/// cell spans `2^level` posts.
+/// and draws straight between them; a right triangle of legs `a` sags up
+/// to `a^2 / 4R`): a node mesh's triangles are capped at a quarter of its
+/// error or 5 cm (`meshes::build::sag_extent`) but never span less than a
+/// cell of its reference lattice (up to 5 levels finer than its source: a
+/// leaf node of a coarse base is exact on its own 9 km posts, 3.4 m); a
+/// grid's cell spans `2^level` posts.
 fn sag_m(tile: &DrawnTile, geometry: &TileGeometry<'_>) -> f64 {
+    let spacing = geometry.spacing_m[0].max(geometry.spacing_m[1]);
+    let cell_sag = |level: u8| {
+        let cell = spacing * (1u64 << level.min(40)) as f64;
+        cell * cell / (4.0 * crate::camera::EARTH_RADIUS_M)
+    };
     if tile.node_mesh {
         let delta = made_delta(geometry.delta_per_level, &[], true, tile.source_level);
-        (delta / 4.0).max(0.05)
+        (delta / 4.0).max(0.05).max(cell_sag(tile.source_level.saturating_sub(5)))
     } else {
-        let spacing = geometry.spacing_m[0].max(geometry.spacing_m[1]);
-        let cell = spacing * (1u64 << tile.source_level.min(40)) as f64;
-        cell * cell / (8.0 * crate::camera::EARTH_RADIUS_M)
+        cell_sag(tile.source_level)
     }
 }
 
@@ -804,7 +819,8 @@ mod tests {
     /// the tiles across that edge (its level, the level above, the two of
     /// the level below along it) with their morph this frame: unmorphed
     /// exact tiles hang only the margin, a tile made as a grid errs by the
-    /// grid's deltas, an edge with nothing drawn across it hangs none.
+    /// grid's deltas, an edge with nothing drawn across it hangs as if the
+    /// level above were there.
     #[test]
     fn skirts_reach_below_what_each_edge_faces_this_frame() {
         let draw = TileDraw {
@@ -845,14 +861,16 @@ mod tests {
         // quarter of its mesh's delta (at least 5 cm) of sag. The tile:
         // 2 + 0.5; source level 3: 4 + 1; level 1: 1 + 0.25.
         let unmorphed = depths(1e9, &tiles);
-        assert!(close(unmorphed, [7.6, 3.85, 0.0, 7.6]), "{unmorphed:?}");
-        // Fully morphed: the tile 4 + 0.5, the level-3 tile 8 + 1, level 1 2 + 0.25.
+        assert!(close(unmorphed, [7.6, 3.85, 10.6, 7.6]), "{unmorphed:?}");
+        // North, nothing drawn: as if the level above were, fully morphed
+        // (8). Fully morphed: the tile 4 + 0.5, the level-3 tile 8 + 1,
+        // level 1 2 + 0.25.
         let morphed = depths(1.0, &tiles);
-        assert!(close(morphed, [9.6, 6.85, 0.0, 13.6]), "{morphed:?}");
+        assert!(close(morphed, [9.6, 6.85, 13.1, 13.6]), "{morphed:?}");
         // A grid neighbour of source level 3 errs by the grid's 40 m.
         let grid = [DrawnTile { node_mesh: false, ..drawn(2, 4, 3, 3) }];
         let cell = 8.0 * 90.0;
-        let sag = cell * cell / (8.0 * crate::camera::EARTH_RADIUS_M);
+        let sag = cell * cell / (4.0 * crate::camera::EARTH_RADIUS_M);
         assert!((depths(1e9, &grid)[0] - (2.5 + 40.0 + sag + SKIRT_MARGIN_M)).abs() < 1e-9);
         // Shares round up, so no edge hangs short of its depth.
         let (deepest, shares) = skirt_shares([3.0, 0.0, 1.0, 2.9]);
