@@ -165,8 +165,27 @@ pub struct NodePoint {
 /// the cell split along its south-west to north-east diagonal: the one
 /// triangulation the pyramid's delta, the tiles, the exact heights and the
 /// shaders' meshes share.
+///
+/// A corner without data (NaN) counts only where it weighs: on a corner,
+/// along an edge or the diagonal, the posts at its ends decide alone. So a
+/// post with data next to one without reads as itself: read through the
+/// full formula (`0 * NaN` is NaN), every post with no data to its east or
+/// north-east read as none, and a ragged no-data outline lost a row of
+/// posts at every level (issue 25).
 #[inline]
 pub fn cell_surface(h00: f64, h10: f64, h01: f64, h11: f64, fu: f64, fv: f64) -> f64 {
+    let height = cell_surface_full(h00, h10, h01, h11, fu, fv);
+    if height.is_nan() {
+        cell_surface_weighed(h00, h10, h01, h11, fu, fv)
+    } else {
+        height
+    }
+}
+
+/// [`cell_surface`] through the full formula (its bits where all four
+/// corners have data).
+#[inline]
+fn cell_surface_full(h00: f64, h10: f64, h01: f64, h11: f64, fu: f64, fv: f64) -> f64 {
     if fu >= fv {
         // South-east triangle (SW, SE, NE).
         h00 + fu * (h10 - h00) + fv * (h11 - h10)
@@ -174,6 +193,17 @@ pub fn cell_surface(h00: f64, h10: f64, h01: f64, h11: f64, fu: f64, fv: f64) ->
         // North-west triangle (SW, NE, NW).
         h00 + fv * (h01 - h00) + fu * (h11 - h01)
     }
+}
+
+/// [`cell_surface`] as the sum of the corners that weigh, each times its
+/// barycentric weight: NaN only where a corner without data weighs.
+fn cell_surface_weighed(h00: f64, h10: f64, h01: f64, h11: f64, fu: f64, fv: f64) -> f64 {
+    let terms = if fu >= fv {
+        [(h00, 1.0 - fu), (h10, fu - fv), (h11, fv)]
+    } else {
+        [(h00, 1.0 - fv), (h01, fv - fu), (h11, fu)]
+    };
+    terms.iter().filter(|(_, w)| *w != 0.0).map(|(h, w)| h * w).sum()
 }
 
 /// One vertex of a node's adaptive mesh: 16 bytes.
@@ -388,4 +418,29 @@ pub enum NodeError {
         /// Metres north of the pyramid's origin.
         y_m: f64,
     },
+}
+
+#[cfg(test)]
+mod tests {
+    use super::cell_surface;
+
+    /// A post with data reads as itself whatever its neighbours, and an
+    /// edge between two posts with data as their line; a point inside a
+    /// triangle touching a post without data has none.
+    #[test]
+    fn corners_without_data_count_only_where_they_weigh() {
+        let nan = f64::NAN;
+        // North-east and north-west without data: the south edge stands.
+        assert_eq!(cell_surface(10.0, 20.0, nan, nan, 0.0, 0.0), 10.0);
+        assert_eq!(cell_surface(10.0, 20.0, nan, nan, 0.25, 0.0), 12.5);
+        assert_eq!(cell_surface(10.0, 20.0, nan, nan, 1.0, 0.0), 20.0);
+        assert!(cell_surface(10.0, 20.0, nan, nan, 0.5, 0.25).is_nan());
+        // South-east without data: the diagonal and the north-west triangle stand.
+        assert_eq!(cell_surface(10.0, nan, 30.0, 50.0, 0.5, 0.5), 30.0);
+        assert_eq!(cell_surface(10.0, nan, 30.0, 50.0, 0.25, 0.5), 25.0);
+        assert!(cell_surface(10.0, nan, 30.0, 50.0, 0.5, 0.25).is_nan());
+        // With every corner, the full formula's bits.
+        let full = 10.0 + 0.3 * (20.0 - 10.0) + 0.1 * (50.0 - 20.0);
+        assert_eq!(cell_surface(10.0, 20.0, 30.0, 50.0, 0.3, 0.1), full);
+    }
 }

@@ -18,8 +18,9 @@ uniform mat4 u_view_projection;
 // Per member tile of the draw (a cluster's up to 16, or the one tile at
 // slot 0), selected by the vertex's slot (a_grid.w):
 // [2 slot]:     south-west post numbered from the anchor (xy), level-0 posts
-//               per vertex post (z), skirt edges (w: bit k-1 for edge k);
-// [2 slot + 1]: morph start, morph end, skirt depth, unused.
+//               per vertex post (z), skirt shares (w: bits 4(k-1) to 4k-1
+//               for edge k, fifteenths of the skirt depth it hangs, 0 none);
+// [2 slot + 1]: morph start, morph end, skirt depth (the deepest), unused.
 uniform vec4 u_members[32];
 uniform vec4 u_posts;     // level-0 post spacing (xy), camera minus anchor post (zw), metres
 uniform vec4 u_frame;     // camera altitude, 1 / (2 R) or 0 for a flat earth, the data's last post numbered from the anchor (zw)
@@ -50,10 +51,10 @@ void main() {
     float morph = clamp((distance - ranges.x) / (ranges.y - ranges.x), 0.0, 1.0);
     float height = mix(own, a_height.y, morph);
     float drop = dot(position, position) * u_frame.y;
-    // Edge k hangs its skirt when bit k-1 of tile.w is set (an integer
-    // below 16, exact in any float).
-    float hangs = a_grid.z > 0.5 ? mod(floor(tile.w / exp2(a_grid.z - 1.0)), 2.0) : 0.0;
-    float z = height - hangs * ranges.z - altitude - drop;
+    // Edge k hangs its skirt its share of the depth: 4-bit field k-1 of
+    // tile.w (an integer below 2^16, exact in a highp float), fifteenths.
+    float share = a_grid.z > 0.5 ? mod(floor(tile.w / exp2(4.0 * (a_grid.z - 1.0))), 16.0) : 0.0;
+    float z = height - share / 15.0 * ranges.z - altitude - drop;
     vec2 n = mix(a_normal.xy, a_normal.zw, morph);
     v_normal = vec3(n, sqrt(max(1.0 - dot(n, n), 0.0)));
     v_relative_height = height - altitude;

@@ -13,11 +13,12 @@ use std::collections::HashMap;
 
 use glam::DVec2;
 
+use super::skirt_probe::{tiles_across, CoverageProbe, SkirtProbe, EDGE_NAMES};
 use super::tile_triangles::TileTriangles;
 use crate::camera::EARTH_RADIUS_M;
 use crate::lod::morph::{morph_factor, morphed_height};
 use crate::lod::TileKey;
-use crate::render::{DrawList, PostFrame, TileUniforms};
+use crate::render::{DrawList, DrawnTile, PostFrame, TileUniforms};
 use crate::tiles::vertex::is_no_data;
 use crate::tiles::TileBlock;
 
@@ -32,6 +33,8 @@ pub struct LodSurface {
     /// Each drawn tile's place in `drawn`.
     tiles: HashMap<TileKey, usize>,
     drawn: Vec<TileUniforms>,
+    /// The frame's tiles sorted by key, with their sources.
+    sources: Vec<DrawnTile>,
     triangles: TileTriangles,
     levels: u8,
     grid_size: u32,
@@ -76,6 +79,7 @@ impl LodSurface {
         LodSurface {
             tiles,
             drawn: list.tiles.clone(),
+            sources: list.drawn.clone(),
             triangles,
             levels,
             grid_size,
@@ -100,7 +104,10 @@ impl LodSurface {
     /// display drops such triangles), and past the data's last post (the
     /// display clips there).
     pub fn height_at(&self, staging: &[u8], x_m: f64, y_m: f64) -> Option<f64> {
-        if x_m > self.last_m[0] || y_m > self.last_m[1] {
+        // Within rounding of the last post: on it (the truth's points there
+        // come through f32 positions too).
+        let tolerance = EDGE_TOLERANCE_POSTS * self.spacing_m[0].max(self.spacing_m[1]);
+        if x_m > self.last_m[0] + tolerance || y_m > self.last_m[1] + tolerance {
             return None;
         }
         let (tile, local) = self.locate(x_m, y_m)?;
@@ -121,6 +128,75 @@ impl LodSurface {
             .is_some_and(|(_, [u, v])| u.min(g - u).min(v).min(g - v) < EDGE_TOLERANCE_POSTS)
     }
 
+    /// The skirt a LOD pixel (`pixel`, erring by `error_px`) shows, drawn
+    /// at `drawn_m` over `(x_m, y_m)`: the tile there and the edge it lies
+    /// on (see [`SkirtProbe`]); `None` off tile edges.
+    pub fn probe_skirt(
+        &self,
+        staging: &[u8],
+        (pixel, error_px): (usize, f32),
+        [x_m, y_m]: [f64; 2],
+        drawn_m: f64,
+    ) -> Option<SkirtProbe> {
+        let g = self.grid_size as f64;
+        let (k, [u, v]) = self.locate(x_m, y_m)?;
+        let distances = [v, g - u, g - v, u];
+        let edge = (0..4).min_by(|&a, &b| distances[a].total_cmp(&distances[b]))?;
+        if distances[edge] >= EDGE_TOLERANCE_POSTS {
+            return None;
+        }
+        let tile = &self.drawn[k];
+        let source = self.sources.iter().find(|d| d.key == tile.key);
+        let surface = self.tile_surface(staging, k, [u, v]).unwrap_or(f64::NAN);
+        Some(SkirtProbe {
+            pixel,
+            error_px,
+            tile: [tile.key.level as u32, tile.key.x, tile.key.y],
+            source_level: source.map_or(tile.key.level, |d| d.source_level),
+            node_mesh: source.is_some_and(|d| d.node_mesh),
+            edge: EDGE_NAMES[edge],
+            skirt_depth_m: tile.skirt_depth,
+            skirt_edges: tile.skirt_edges,
+            below_surface_m: surface - drawn_m,
+            across: tiles_across(tile.key, edge, &self.sources),
+            past_last_post_m: [x_m - self.last_m[0], y_m - self.last_m[1]],
+            partial: tile.voids,
+        })
+    }
+
+    /// What the LOD drew over the ground point `ground_m` (see
+    /// [`CoverageProbe`]), probed for pixel `pixel`.
+    pub fn probe_coverage(
+        &self,
+        staging: &[u8],
+        pixel: usize,
+        ground_m: [f64; 2],
+    ) -> CoverageProbe {
+        let located = self.locate(ground_m[0], ground_m[1]);
+        let tile = located.map(|(k, _)| &self.drawn[k]);
+        let source = tile.and_then(|t| self.sources.iter().find(|d| d.key == t.key));
+        let triangle = located.map_or(Vec::new(), |(k, local)| {
+            let block = self.drawn[k].block(staging);
+            self.triangles.at(k, &block, local).map_or(Vec::new(), |(corners, _)| {
+                corners
+                    .iter()
+                    .map(|&(post, v)| {
+                        let height = block.vertex(v).height;
+                        (post, (!is_no_data(height)).then_some(height))
+                    })
+                    .collect()
+            })
+        });
+        CoverageProbe {
+            pixel,
+            ground_m,
+            tile: tile.map(|t| [t.key.level as u32, t.key.x, t.key.y]),
+            source_level: source.map(|d| d.source_level),
+            node_mesh: source.is_some_and(|d| d.node_mesh),
+            triangle,
+        }
+    }
+
     /// The drawn tile over `(x_m, y_m)` (its place in `drawn`) and the
     /// point's position in it, in posts of the tile's level from its
     /// south-west corner.
@@ -132,9 +208,12 @@ impl LodSurface {
                 self.spacing_m[1] * (1u64 << level) as f64,
             ];
             let (u, v) = (x_m / post[0], y_m / post[1]);
-            if u < 0.0 || v < 0.0 {
+            // Within rounding of the first post (f32 positions): on it.
+            let tolerance = EDGE_TOLERANCE_POSTS / (1u64 << level) as f64;
+            if u < -tolerance || v < -tolerance {
                 return None;
             }
+            let (u, v) = (u.max(0.0), v.max(0.0));
             let (tx, ty) = ((u / g).floor() as u32, (v / g).floor() as u32);
             // A point exactly on a tile's east or north edge belongs to the
             // tile beyond, or, at the edge of the tiled area, to this one.

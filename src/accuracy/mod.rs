@@ -43,6 +43,7 @@
 //! | `tile_triangles` | the drawn tiles' surface triangles from their blocks, by cell, for `lod_surface` |
 //! | `pixel_error` | [`measure_view`]: per-pixel error and coverage of one view |
 //! | `ray_truth` | [`trace_truth`]: the full-resolution image by each pixel's ray on the CPU, where the mesh is too large to draw |
+//! | `skirt_probe` | [`SkirtProbe`]: the tile and edge whose skirt a pixel shows, and what decided it |
 //! | `summary` | [`ErrorSummary`]: percentiles over all views |
 //! | `heat_map` | the error image of a view as colours |
 //! | `earth_ground` | [`EarthGround`]: the best data on the ellipsoid, with the bounds rays skip by |
@@ -57,6 +58,7 @@ mod lod_surface;
 mod pixel_error;
 mod positions;
 mod ray_truth;
+mod skirt_probe;
 mod summary;
 mod tile_triangles;
 
@@ -68,4 +70,5 @@ pub use lod_surface::LodSurface;
 pub use pixel_error::{measure_view, ExactHeight, ViewErrors, ViewGeometry};
 pub use positions::PositionImage;
 pub use ray_truth::{trace_truth, RayGround, HIT_TOLERANCE_M};
+pub use skirt_probe::{CoverageProbe, SkirtProbe};
 pub use summary::{percentile, ErrorSummary};

@@ -148,6 +148,12 @@ pub struct ViewErrors {
     pub skirt_pixels: usize,
     /// Largest error, pixels, over terrain pixels that are not on a skirt.
     pub max_surface_px: f64,
+    /// The skirt pixel with the largest error (row-major index, error in
+    /// pixels), to probe ([`crate::accuracy::SkirtProbe`]).
+    pub worst_skirt: Option<(usize, f32)>,
+    /// A pixel where the truth shows terrain the LOD does not draw (the
+    /// last in row order: the nearest, low in the view), to probe ([`crate::accuracy::CoverageProbe`]).
+    pub truth_only_pixel: Option<usize>,
     /// Per LOD terrain pixel, |drawn height - the CPU mirror's height| in
     /// metres (NaN elsewhere): near 0 except on skirts, a check that the
     /// mirror measures what the GPU drew.
@@ -164,17 +170,27 @@ struct Counts {
     no_data: usize,
     skirt: usize,
     max_surface: f64,
+    worst_skirt: Option<(usize, f32)>,
+    truth_only_pixel: Option<usize>,
 }
 
 impl Counts {
-    /// A silhouette pixel with error `px`, written to its `error`.
-    fn silhouette(&mut self, error: &mut f32, px: f64, skirt: bool) {
+    /// A silhouette pixel `k` with error `px`, written to its `error`.
+    fn silhouette(&mut self, k: usize, error: &mut f32, px: f64, skirt: bool) {
         self.silhouette += 1;
         *error = px as f32;
+        self.terrain_error(k, *error, skirt);
+    }
+
+    /// Pixel `k`'s error, counted against skirts or the surface.
+    fn terrain_error(&mut self, k: usize, error: f32, skirt: bool) {
         if skirt {
             self.skirt += 1;
+            if self.worst_skirt.is_none_or(|(_, e)| error > e) {
+                self.worst_skirt = Some((k, error));
+            }
         } else {
-            self.max_surface = self.max_surface.max(px);
+            self.max_surface = self.max_surface.max(error as f64);
         }
     }
 }
@@ -191,6 +207,11 @@ impl std::ops::Add for Counts {
             no_data: self.no_data + o.no_data,
             skirt: self.skirt + o.skirt,
             max_surface: self.max_surface.max(o.max_surface),
+            worst_skirt: match (self.worst_skirt, o.worst_skirt) {
+                (Some(a), Some(b)) => Some(if b.1 > a.1 { b } else { a }),
+                (a, b) => a.or(b),
+            },
+            truth_only_pixel: o.truth_only_pixel.or(self.truth_only_pixel),
         }
     }
 }
@@ -239,24 +260,23 @@ pub fn measure_view(
                             }
                         };
                         *error = lod_side.error_px.max(truth_side) as f32;
-                        if lod_side.skirt {
-                            counts.skirt += 1;
-                        } else {
-                            counts.max_surface = counts.max_surface.max(*error as f64);
-                        }
+                        counts.terrain_error(k, *error, lod_side.skirt);
                     }
                     (Some(p), None) => {
                         let lod_side = pixel.at_lod_point(p);
                         *mirror = lod_side.mirror_m;
                         if lod_side.over_data {
-                            counts.silhouette(error, lod_side.error_px, lod_side.skirt);
+                            counts.silhouette(k, error, lod_side.error_px, lod_side.skirt);
                         } else {
                             counts.lod_only += 1;
                         }
                     }
                     (None, Some(t)) => match pixel.at_truth_point(t) {
-                        TruthSide::Error(px) => counts.silhouette(error, px, false),
-                        TruthSide::Hole | TruthSide::NoData => counts.truth_only += 1,
+                        TruthSide::Error(px) => counts.silhouette(k, error, px, false),
+                        TruthSide::Hole | TruthSide::NoData => {
+                            counts.truth_only += 1;
+                            counts.truth_only_pixel = Some(k);
+                        }
                     },
                     (None, None) => {}
                 }
@@ -272,6 +292,8 @@ pub fn measure_view(
     out.no_data = counts.no_data;
     out.skirt_pixels = counts.skirt;
     out.max_surface_px = counts.max_surface;
+    out.worst_skirt = counts.worst_skirt;
+    out.truth_only_pixel = counts.truth_only_pixel;
 }
 
 /// What one pixel's measurement reads.

@@ -172,6 +172,7 @@ mod tests {
             morph: [0.0; 2],
             skirt_depth: 0.0,
             skirt_edges: 0,
+            skirt_shares: [0; 4],
             byte_offset: 8,
             index_byte_offset: 8 + counts.vertex_bytes(),
             index_count: counts.indices,

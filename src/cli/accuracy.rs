@@ -3,7 +3,9 @@
 //! screen-space geometric error ([`ridgeline::accuracy`] says exactly what
 //! is measured), prints its percentiles and coverage mismatch, writes
 //! `accuracy.json` and the worst view's heat map, and fails when the
-//! measured p99.9 exceeds tau: the bound is only a promise if this confirms it.
+//! measured p99.9 exceeds tau, or when a view shows terrain in one render
+//! only over more than 0.01 % of its pixels: the bound is only a promise if
+//! this confirms it.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -34,7 +36,8 @@ pub struct AccuracyArgs {
     /// Print the report as one JSON object instead of tables.
     #[arg(long)]
     pub json: bool,
-    /// Where accuracy.json, heat_map.png and picture.png (the worst view) go.
+    /// Where accuracy.json, heat_map.png and picture.png (the worst view)
+    /// and path.csv (the views' path) go.
     #[arg(long, default_value = "target/accuracy")]
     pub out: PathBuf,
     /// Against the geodetic truth, trace every N-th pixel across and down
@@ -126,6 +129,7 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
         "mean_px": run.summary.mean_px,
         "terrain_pixels": run.summary.pixels,
         "coverage_mismatch": run.coverage_mismatch,
+        "coverage_mismatch_worst_view": run.views.iter().map(|v| v.coverage_mismatch).fold(0.0, f64::max),
         "holes": run.holes,
         "skirt_pixels": run.skirt_pixels,
         "max_surface_px": run.max_surface_px,
@@ -139,6 +143,8 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
         "per_view": run.views,
     });
     write_outputs(args, &run, &report)?;
+    // The views flown, to edit or to measure one alone (`--path`).
+    super::write_beside(&args.out.join("path.csv"), path.to_csv().as_bytes())?;
     if args.json {
         super::print(&(serde_json::to_string_pretty(&report)? + "\n"))?;
     } else {
@@ -149,6 +155,14 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
             "measured p99.9 error {:.3} px exceeds tau {} px",
             run.summary.p999_px,
             run.tau_achieved_max_px
+        );
+    }
+    if let Some((t, share)) = worst_mismatch(&run) {
+        bail!(
+            "the view at t = {t:.1} s shows terrain in one render only over {:.4} % of its \
+             pixels, above {:.2} %",
+            100.0 * share,
+            100.0 * MISMATCH_PER_VIEW
         );
     }
     Ok(())
@@ -180,6 +194,21 @@ fn earth_ground(
     let ground = EarthGround::load(source, placement, &eyes, reach_m)
         .with_context(|| format!("{}: the best data for the geodetic truth", terrain.name))?;
     Ok(Some((ground, reach_m)))
+}
+
+/// The coverage mismatch a view may show, a share of its pixels: where the
+/// data end the display draws what they hold and nothing beyond, at the
+/// truth's line within rounding.
+const MISMATCH_PER_VIEW: f64 = 1e-4;
+
+/// The view (its time and share) with the largest coverage mismatch, if
+/// above [`MISMATCH_PER_VIEW`].
+fn worst_mismatch(run: &AccuracyRun) -> Option<(f64, f64)> {
+    run.views
+        .iter()
+        .map(|v| (v.t, v.coverage_mismatch))
+        .filter(|&(_, share)| share > MISMATCH_PER_VIEW)
+        .max_by(|a, b| a.1.total_cmp(&b.1))
 }
 
 fn check_args(args: &AccuracyArgs) -> Result<()> {
@@ -340,5 +369,14 @@ fn print_tables(run: &AccuracyRun) -> Result<()> {
         let verdict = if p999 <= run.tau_achieved_max_px { "confirmed" } else { "NOT confirmed" };
         writeln!(out, "  bound on earth    p99.9 {p999:.3} px <= tau {bound} px: {verdict}")?;
     }
+
+    let worst = run.views.iter().map(|v| v.coverage_mismatch).fold(0.0, f64::max);
+    let verdict = if worst <= MISMATCH_PER_VIEW { "confirmed" } else { "NOT confirmed" };
+    writeln!(
+        out,
+        "  coverage          worst view {:.4} % <= {:.2} % of its pixels: {verdict}",
+        100.0 * worst,
+        100.0 * MISMATCH_PER_VIEW
+    )?;
     super::print(&out)
 }

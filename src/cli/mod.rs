@@ -47,8 +47,11 @@ pub struct ViewArgs {
     /// the built-in flight (`--flight`) when omitted.
     #[arg(long, conflicts_with = "flight")]
     pub path: Option<std::path::PathBuf>,
-    /// Built-in flight: `approach` (descending over the best data) or
-    /// `cruise` (level at 10 km, out to the horizon).
+    /// Built-in flight: `approach` (descending over the best data),
+    /// `cruise` (level at 10 km, out to the horizon), `edges` (16 views at
+    /// 300 m above the ground along, across and past each of the data's
+    /// four edges) or `outline` (16 views along the data's no-data outline
+    /// inside the grid); with `accuracy`, `--views 16` lands on each.
     #[arg(long, value_enum, default_value_t = Flight::Approach)]
     pub flight: Flight,
     /// Image or window size, WIDTHxHEIGHT.

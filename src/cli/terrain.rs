@@ -7,7 +7,10 @@ use std::path::Path;
 use std::sync::Arc;
 
 use anyhow::{bail, Result};
-use ridgeline::flight::{builtin_approach_over, builtin_cruise, default_flight, FlightPath};
+use ridgeline::flight::{
+    builtin_approach_over, builtin_cruise, builtin_edges, builtin_outline, default_flight,
+    FlightPath,
+};
 use ridgeline::geo::GeoRef;
 use ridgeline::meshes::{MeshOptions, MeshedSource};
 use ridgeline::node::NodeSource;
@@ -27,6 +30,12 @@ pub enum Flight {
     Approach,
     /// Level at 10 km, looking out to the horizon.
     Cruise,
+    /// Sixteen views at 300 m above the ground along, across and past each
+    /// of the best data's four edges (`flight::edges`).
+    Edges,
+    /// Sixteen views at 300 m above the ground along the data's no-data
+    /// outline inside the grid, in turn inside and past it.
+    Outline,
 }
 
 /// Where a terrain's heights come from.
@@ -106,12 +115,21 @@ impl Terrain {
             (Ground::Procedural(_), Some(_)) => {
                 bail!("--path over --dataset procedural: it has no georeference; use --flight")
             }
-            (Ground::Pyramid(pyramid), None) if flight == Flight::Approach => {
-                Ok(default_flight(pyramid))
-            }
             (Ground::Pyramid(pyramid), None) => {
                 let (origin, extent) = pyramid.finest_area_m();
-                Ok(builtin_cruise(origin, extent, &height))
+                Ok(match flight {
+                    Flight::Approach => default_flight(pyramid),
+                    Flight::Cruise => builtin_cruise(origin, extent, &height),
+                    Flight::Edges => builtin_edges(origin, extent, &height),
+                    Flight::Outline => {
+                        builtin_outline(origin, extent, &height).ok_or_else(|| {
+                            anyhow::anyhow!(
+                                "--flight outline: {} has no no-data outline inside its grid",
+                                self.name
+                            )
+                        })?
+                    }
+                })
             }
             (Ground::Procedural(earth), None) => {
                 let (origin, extent) = earth.flight_area_m();
@@ -120,6 +138,9 @@ impl Terrain {
                         builtin_approach_over(origin, extent, &|x, y| height(x, y).unwrap_or(0.0))
                     }
                     Flight::Cruise => builtin_cruise(origin, extent, &height),
+                    Flight::Edges | Flight::Outline => {
+                        bail!("--flight edges and outline: the procedural earth has no edge")
+                    }
                 })
             }
         }

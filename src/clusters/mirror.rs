@@ -4,7 +4,7 @@
 //! included, not the tile cache's blocks the clusters were made from.
 
 use crate::render::cluster::{MAX_MEMBERS, MEMBER_FLOATS};
-use crate::render::DrawList;
+use crate::render::{DrawList, TileUniforms};
 use crate::tiles::block::{write_block, MeshCounts, VERTEX_BYTES};
 use crate::tiles::TileBlock;
 use crate::tiles::TileVertex;
@@ -52,7 +52,9 @@ pub fn drawn_tiles(list: &DrawList, vertices: &[u8], indices: &[u8]) -> (DrawLis
             let tile = &mut out.tiles[member.tile as usize];
             tile.first_post = [u[0], u[1]];
             tile.vertex_step = u[2];
-            tile.skirt_edges = u[3] as u8;
+            tile.skirt_shares = TileUniforms::unpack_skirt_shares(u[3]);
+            tile.skirt_edges =
+                (0..4).filter(|&e| tile.skirt_shares[e] > 0).fold(0, |b, e| b | 1 << e);
             tile.morph = [u[4], u[5]];
             tile.skirt_depth = u[6];
             tile.byte_offset = offset;

@@ -213,6 +213,7 @@ mod tests {
             morph: [0.0, 1.0],
             skirt_depth: 1.0,
             skirt_edges: 0,
+            skirt_shares: [0; 4],
             byte_offset: 0,
             index_byte_offset: 100 * VERTEX_BYTES,
             index_count: 6,

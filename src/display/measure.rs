@@ -15,9 +15,9 @@ use image::RgbaImage;
 
 use super::{DisplayError, DisplayParts};
 use crate::accuracy::{
-    heat_map, measure_earth, measure_view, percentile, trace_earth, trace_truth, DisplayFrame,
-    EarthErrors, EarthGround, EarthImage, EarthView, ErrorSummary, ExactHeight, LodSurface,
-    PositionImage, RayGround, TrueCamera, ViewErrors, ViewGeometry,
+    heat_map, measure_earth, measure_view, percentile, trace_earth, trace_truth, CoverageProbe,
+    DisplayFrame, EarthErrors, EarthGround, EarthImage, EarthView, ErrorSummary, ExactHeight,
+    LodSurface, PositionImage, RayGround, SkirtProbe, TrueCamera, ViewErrors, ViewGeometry,
 };
 use crate::camera::Camera;
 use crate::earth::GridPlacement;
@@ -62,6 +62,11 @@ pub struct ViewRow {
     pub skirt_pixels: usize,
     /// Largest error, pixels, over terrain pixels that show no skirt.
     pub max_surface_px: f64,
+    /// The worst skirt pixel followed to the tile edge it hangs from.
+    pub worst_skirt: Option<SkirtProbe>,
+    /// A pixel where the truth shows terrain and the LOD none, followed to
+    /// the LOD tile and triangle over its ground point.
+    pub truth_only_probe: Option<CoverageProbe>,
     /// 99th percentile of |GPU-drawn height - CPU mirror| over LOD terrain
     /// pixels, metres: the measurement's own check.
     pub mirror_p99_m: f64,
@@ -399,6 +404,11 @@ fn measure_one(
         holes: errors.holes,
         skirt_pixels: errors.skirt_pixels,
         max_surface_px: errors.max_surface_px,
+        worst_skirt: probe_worst_skirt(&surface, staging, &geometry, lod, errors),
+        truth_only_probe: errors.truth_only_pixel.and_then(|pixel| {
+            let (ground, _) = geometry.ground(truth_positions.point(pixel)?.as_dvec3());
+            Some(surface.probe_coverage(staging, pixel, ground.into()))
+        }),
         mirror_p99_m: if mirror.is_empty() { 0.0 } else { percentile(&mirror, 0.99) },
         triangles_lod: surface.surface_triangles(),
         triangles_truth: truth_stats.triangles,
@@ -438,6 +448,19 @@ fn measure_view_on_earth(
         holes: errors.holes,
         truth_ms,
     }
+}
+
+/// The view's worst skirt pixel, followed to its tile edge.
+fn probe_worst_skirt(
+    surface: &LodSurface,
+    staging: &[u8],
+    geometry: &ViewGeometry,
+    lod: &PositionImage,
+    errors: &ViewErrors,
+) -> Option<SkirtProbe> {
+    let (pixel, error) = errors.worst_skirt?;
+    let (ground, drawn) = geometry.ground(lod.point(pixel)?.as_dvec3());
+    surface.probe_skirt(staging, (pixel, error), ground.into(), drawn)
 }
 
 /// The truth of one view by rays: its positions, the rays' time, and the

@@ -121,6 +121,7 @@ impl TruthPass {
                 morph: NO_MORPH,
                 skirt_depth: 0.0,
                 skirt_edges: 0,
+                skirt_shares: [0; 4],
                 byte_offset: chunk.byte_offset,
                 index_byte_offset: chunk.index_byte_offset,
                 index_count: self.index_count,

@@ -38,7 +38,7 @@ pub fn mesh_file_name(error_m: f32) -> String {
 }
 const MAGIC: [u8; 8] = *b"RIDGEMSH";
 /// 6: vertex posts in half steps, cell centres of fans at odd ones.
-const VERSION: u32 = 6;
+const VERSION: u32 = 7;
 const FIXED_LEN: usize = 40;
 const ENTRY_LEN: usize = 24;
 const ABSENT: u64 = u64::MAX;

@@ -19,11 +19,13 @@ pub fn part_bit(slice: Slice, voids: bool) -> u8 {
 impl TileUniforms {
     /// The tile's two uniform vectors, as `u_members[2 slot]` and
     /// `u_members[2 slot + 1]` take them: south-west post, vertex step and
-    /// skirt edges; morph start, end and skirt depth.
+    /// skirt shares (four bits per edge); morph start, end and the deepest
+    /// skirt's depth.
     pub fn member_uniforms(&self) -> [f32; MEMBER_FLOATS] {
         let [x, y] = self.first_post;
         let [start, end] = self.morph;
-        [x, y, self.vertex_step, self.skirt_edges as f32, start, end, self.skirt_depth, 0.0]
+        let shares = self.packed_skirt_shares();
+        [x, y, self.vertex_step, shares, start, end, self.skirt_depth, 0.0]
     }
 }
 

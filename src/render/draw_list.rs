@@ -181,11 +181,15 @@ pub struct TileUniforms {
     pub vertex_step: f32,
     /// Morph start and end distances (equal and huge for no morph).
     pub morph: [f32; 2],
-    /// How far skirt vertices hang below the edge, metres.
+    /// How far the deepest of its skirts hangs below its edge, metres.
     pub skirt_depth: f32,
     /// Which edges hang a skirt: bit 0 south, 1 east, 2 north, 3 west (the
     /// order of [`crate::tiles::grid::edge_posts`]). See [`skirt_edges`].
     pub skirt_edges: u8,
+    /// Per edge (in that order), the share of `skirt_depth` its skirt hangs,
+    /// in [`SKIRT_SHARES`]ths, rounded up; 0 where it hangs none. See
+    /// [`skirt_depths`].
+    pub skirt_shares: [u8; 4],
     /// Where the tile's block (its vertices) starts in the GPU buffer, bytes.
     pub byte_offset: u32,
     /// Where the tile's indices start in the same buffer, bytes.
@@ -217,6 +221,24 @@ impl TileUniforms {
         let at =
             |k: usize, n: f32| (self.first_post[k] + n * step) * posts.spacing[k] - posts.offset[k];
         [at(0, i), at(1, j)]
+    }
+
+    /// How far edge `edge`'s skirt hangs below it, metres (0 for none).
+    pub fn edge_skirt_m(&self, edge: usize) -> f32 {
+        self.skirt_depth * self.skirt_shares[edge] as f32 / SKIRT_SHARES as f32
+    }
+
+    /// The skirt shares as `terrain.vert` takes them: four bits per edge,
+    /// south lowest (an integer below 2^16, exact in any float).
+    pub fn packed_skirt_shares(&self) -> f32 {
+        let word = self.skirt_shares.iter().rev().fold(0u32, |w, &s| (w << 4) | s as u32);
+        word as f32
+    }
+
+    /// The shares [`Self::packed_skirt_shares`] packed.
+    pub fn unpack_skirt_shares(packed: f32) -> [u8; 4] {
+        let word = packed as u32;
+        std::array::from_fn(|edge| ((word >> (4 * edge)) & 0xf) as u8)
     }
 
     /// Triangles the tile's draw call draws, skirts included.
@@ -366,7 +388,7 @@ impl DrawList {
         }));
         self.drawn.sort_unstable_by_key(|d| d.key);
         for draw in draws {
-            let tile = tile_uniforms(draw, &frame.posts, rings, &geometry, &self.drawn);
+            let tile = tile_uniforms(draw, &frame, rings, &geometry, &self.drawn);
             self.tiles.push(tile);
         }
         self.sort_front_to_back(geometry.grid_size);
@@ -392,32 +414,54 @@ impl DrawList {
 /// which edges hang a skirt and how deep.
 fn tile_uniforms(
     draw: &TileDraw,
-    posts: &PostFrame,
+    frame: &FrameUniforms,
     rings: &LevelRings,
     geometry: &TileGeometry<'_>,
     drawn: &[DrawnTile],
 ) -> TileUniforms {
-    let node_tiles = (geometry.node_size / geometry.grid_size).max(1);
     let key = draw.key;
     let step = 1i64 << key.level;
     let span = geometry.grid_size as i64 * step;
-    let first_post = posts.number([key.x as i64 * span, key.y as i64 * span]);
+    let first_post = frame.posts.number([key.x as i64 * span, key.y as i64 * span]);
     let (start, end) = rings.morph(key.level);
     let morph = if start.is_finite() { [start as f32, end as f32] } else { [f32::MAX, f32::MAX] };
+    let ranges = |level: u8| rings.morph(level);
+    let reach = MorphReach { frame, ranges: &ranges, grid_size: geometry.grid_size };
+    let depths = skirt_depths(draw, drawn, geometry, &reach);
+    let (skirt_depth, skirt_shares) = skirt_shares(depths);
     TileUniforms {
         key,
         first_post,
         post_step: step as f32,
         vertex_step: draw.vertex_step,
         morph,
-        skirt_depth: skirt_depth(draw, drawn, geometry),
-        skirt_edges: skirt_edges(draw, drawn, node_tiles),
+        skirt_depth,
+        skirt_edges: (0..4).filter(|&e| skirt_shares[e] > 0).fold(0, |bits, e| bits | 1 << e),
+        skirt_shares,
         byte_offset: draw.byte_offset,
         index_byte_offset: draw.index_byte_offset,
         index_count: draw.index_count,
         voids: draw.coverage != TileCoverage::Full,
     }
 }
+
+/// The deepest of `depths` (metres per edge, 0 for none) and each edge's
+/// share of it in [`SKIRT_SHARES`]ths, rounded up so no skirt hangs short.
+fn skirt_shares(depths: [f64; 4]) -> (f32, [u8; 4]) {
+    let deepest = depths.iter().copied().fold(0.0f64, f64::max) as f32;
+    let shares = depths.map(|d| {
+        if d > 0.0 && deepest > 0.0 {
+            ((d as f32 / deepest * SKIRT_SHARES as f32).ceil() as u8).clamp(1, SKIRT_SHARES)
+        } else {
+            0
+        }
+    });
+    (deepest, shares)
+}
+
+/// A skirt's depth is sent as a share of its tile's deepest, in this many
+/// steps (four bits per edge).
+pub const SKIRT_SHARES: u8 = 15;
 
 /// Every edge hangs a skirt.
 pub const ALL_EDGES: u8 = 0b1111;
@@ -471,22 +515,6 @@ fn same_node(draw: &TileDraw, key: TileKey, node_tiles: u32) -> bool {
     draw.key.x / per_node == key.x / per_node && draw.key.y / per_node == key.y / per_node
 }
 
-/// How far the surface a tile shows may lie from the data, metres: the
-/// error of its source, or of the level above its own toward which it
-/// morphs, whichever is larger; of the node meshes for a tile cut from one,
-/// of the regular grid of posts for a tile made as a grid (99.5 m at level 1
-/// of the built-in terrain, against 12 m for its meshes).
-pub fn tile_error_m(
-    key_level: u8,
-    source_level: u8,
-    node_mesh: bool,
-    geometry: &TileGeometry<'_>,
-) -> f64 {
-    let (meshes, grids) = (geometry.delta_per_level, geometry.grid_delta_per_level);
-    let at = |level: u8| made_delta(meshes, grids, node_mesh, level);
-    at(source_level).max(at(key_level.saturating_add(1)))
-}
-
 /// The delta of `level` for a tile made as it was: from `meshes` for a
 /// tile cut from a node mesh, from `grids` for one made as a grid of posts
 /// (levels past the tables take the coarsest; an empty table gives 0).
@@ -495,29 +523,157 @@ pub fn made_delta(meshes: &[f64], grids: &[f64], node_mesh: bool, level: u8) -> 
     table.get(level as usize).or(table.last()).copied().unwrap_or(0.0)
 }
 
-/// Skirts must reach below any surface a neighbour may show along the edge.
-/// Either side lies within its own error of the data ([`tile_error_m`]), so
-/// the depth is twice the largest error of the tile and the tiles along its
-/// edges (of its level, the level above, or the level below), plus a metre
-/// for rounding. A small memory budget draws neighbours from sources levels
-/// apart, and from grids of posts where the source's mesh is coarser than
-/// the tile: a depth from the tile's own source alone, or from the meshes'
-/// errors alone, left pinholes at 16 MB.
-pub fn skirt_depth(draw: &TileDraw, drawn: &[DrawnTile], geometry: &TileGeometry<'_>) -> f32 {
-    let mut error = tile_error_m(draw.key.level, draw.source_level, draw.node_mesh, geometry);
-    for_each_neighbour(draw.key, drawn, |other| {
-        let other = tile_error_m(other.key.level, other.source_level, other.node_mesh, geometry);
-        error = error.max(other);
-    });
-    (2.0 * error + 1.0) as f32
+/// How deep each edge of `draw` hangs its skirt this frame, metres (south,
+/// east, north, west; 0 for none). A skirt fills the crack between the
+/// tile's edge and the surface drawn across it (a neighbour of its level,
+/// the level above or the two of the level below along the edge), and a
+/// crack is at most the two sides' errors there. A small memory budget
+/// draws neighbours from sources levels apart and from grids of posts,
+/// which err by the grid's deltas ([`made_delta`]): a depth from the tile's
+/// own source alone, or from the meshes' errors alone, left pinholes at
+/// 16 MB. Each side's error here is each side's own source's delta, plus the way
+/// its morph has gone toward its parent level's surface at the far end of
+/// the edge ([`MorphReach`]), plus the sag of its straight edges below the
+/// curved earth, plus rounding ([`SKIRT_MARGIN_M`]). Two exact level-0
+/// tiles near the camera (unmorphed) can open no crack wider than rounding:
+/// they hung 97 m at tau 4 when every tile was taken as fully morphed, and
+/// near a data edge those skirts stood as walls under the cut face seen
+/// from beyond it (issue 25). An edge [`skirt_edges`] finds watertight
+/// hangs none; one with no tile found across it hangs as if the level above
+/// were there, fully morphed (hanging none there left single pixels of sky
+/// in the default flight: `tests/render_horizon.rs`). Where the data end the
+/// skirt is dropped with the posts across it (`tiles::vertex`).
+pub fn skirt_depths(
+    draw: &TileDraw,
+    drawn: &[DrawnTile],
+    geometry: &TileGeometry<'_>,
+    reach: &MorphReach<'_>,
+) -> [f64; 4] {
+    let node_tiles = (geometry.node_size / geometry.grid_size).max(1);
+    let hangs = skirt_edges(draw, drawn, node_tiles);
+    let own =
+        DrawnTile { key: draw.key, source_level: draw.source_level, node_mesh: draw.node_mesh };
+    std::array::from_fn(|edge| {
+        if hangs & (1 << edge) == 0 {
+            return 0.0;
+        }
+        let crack_side = |tile: &DrawnTile| {
+            let morph = reach.along(draw.key, edge, tile.key.level);
+            surface_error_m(tile, morph, geometry) + sag_m(tile, geometry)
+        };
+        let mut across: Option<f64> = None;
+        for_each_across(draw.key, edge, drawn, |other| {
+            let side = crack_side(other);
+            across = Some(across.map_or(side, |a| a.max(side)));
+        });
+        // Nothing found across (culled, past the data, or drawn at a level
+        // the rings do not pair with this one): the coarser level's full
+        // error, as if its tile were there.
+        let unseen = || {
+            let coarser = DrawnTile { key: draw.key.parent(), ..own };
+            crack_side(&coarser).max(surface_error_m(&coarser, 1.0, geometry))
+        };
+        crack_side(&own) + across.unwrap_or_else(unseen) + SKIRT_MARGIN_M
+    })
+}
+
+/// Rounding a skirt covers beyond the two sides' errors, metres: f32
+/// positions and heights, and the rasteriser at a vertex of one side that
+/// the other side's straight edge passes (a T-junction).
+pub const SKIRT_MARGIN_M: f64 = 0.1;
+
+/// How far `tile`'s surface may lie from the data where its morph factor
+/// is at most `morph`: its source's delta, moved toward the delta of the
+/// level above its own (whose surface it morphs to) by that factor.
+pub fn surface_error_m(tile: &DrawnTile, morph: f64, geometry: &TileGeometry<'_>) -> f64 {
+    let (meshes, grids) = (geometry.delta_per_level, geometry.grid_delta_per_level);
+    let at = |level: u8| made_delta(meshes, grids, tile.node_mesh, level);
+    let own = at(tile.source_level);
+    let toward = at(tile.key.level.saturating_add(1));
+    own + morph.clamp(0.0, 1.0) * (toward - own).max(0.0)
+}
+
+/// How far `tile`'s straight edges may sag below the curved earth between
+/// two of its vertices, metres (the shader drops each vertex by `d^2 / 2R`
+/// and draws straight between them; a right triangle of legs `a` sags up
+/// to `a^2 / 4R`): a node mesh's triangles are capped at a quarter of its
+/// error or 5 cm (`meshes::build::sag_extent`) but never span less than a
+/// cell of its reference lattice (up to 5 levels finer than its source: a
+/// leaf node of a coarse base is exact on its own 9 km posts, 3.4 m); a
+/// grid's cell spans `2^level` posts.
+fn sag_m(tile: &DrawnTile, geometry: &TileGeometry<'_>) -> f64 {
+    let spacing = geometry.spacing_m[0].max(geometry.spacing_m[1]);
+    let cell_sag = |level: u8| {
+        let cell = spacing * (1u64 << level.min(40)) as f64;
+        cell * cell / (4.0 * crate::camera::EARTH_RADIUS_M)
+    };
+    if tile.node_mesh {
+        let delta = made_delta(geometry.delta_per_level, &[], true, tile.source_level);
+        (delta / 4.0).max(0.05).max(cell_sag(tile.source_level.saturating_sub(5)))
+    } else {
+        cell_sag(tile.source_level)
+    }
+}
+
+/// Where the frame's morph has taken tiles along an edge: the shader's
+/// morph factor grows with a vertex's distance from the camera, so along an
+/// edge it is at most its value at the edge's far end, with the data's
+/// largest height difference to the camera.
+pub struct MorphReach<'a> {
+    /// The frame: the camera's post numbering and the heights' reach.
+    pub frame: &'a FrameUniforms,
+    /// Each level's morph start and end distance, metres (infinite for
+    /// none): [`LevelRings::morph`].
+    pub ranges: &'a dyn Fn(u8) -> (f64, f64),
+    /// Cells per tile side.
+    pub grid_size: u32,
+}
+
+impl MorphReach<'_> {
+    /// The largest morph factor a tile of `level` reaches along edge
+    /// `edge` of tile `key`: 0 where the edge ends nearer than the level's
+    /// morph start, 1 past its end.
+    pub fn along(&self, key: TileKey, edge: usize, level: u8) -> f64 {
+        let (start, end) = (self.ranges)(level);
+        if !start.is_finite() {
+            return 0.0;
+        }
+        let posts = &self.frame.posts;
+        let g = self.grid_size as i64;
+        let step = 1i64 << key.level;
+        let corner = |i: i64, j: i64| {
+            let post = [(key.x as i64 * g + i) * step, (key.y as i64 * g + j) * step];
+            let [x, y] = posts.number(post);
+            let at = |k: usize, n: f32| (n * posts.spacing[k] - posts.offset[k]) as f64;
+            at(0, x).hypot(at(1, y))
+        };
+        let ends = [[(0, 0), (g, 0)], [(g, 0), (g, g)], [(g, g), (0, g)], [(0, g), (0, 0)]][edge];
+        let far = ends.iter().map(|&(i, j)| corner(i, j)).fold(0.0, f64::max);
+        let distance = far.hypot(self.frame.slices.max_drop_m as f64);
+        ((distance - start) / (end - start)).clamp(0.0, 1.0)
+    }
 }
 
 /// Calls `f` with each tile of `drawn` (sorted by key) along `key`'s edges:
 /// of its level, the level above, or the level below (the neighbours a
 /// tile can have).
 pub fn for_each_neighbour(key: TileKey, drawn: &[DrawnTile], mut f: impl FnMut(&DrawnTile)) {
-    let TileKey { level, x, y } = key;
-    let (x, y) = (x as i64, y as i64);
+    for edge in 0..4 {
+        for_each_across(key, edge, drawn, &mut f);
+    }
+}
+
+/// Calls `f` with each tile of `drawn` (sorted by key) across edge `edge`
+/// of `key` (0 south, 1 east, 2 north, 3 west): of its level, the level
+/// above, or the two of the level below along the edge.
+pub fn for_each_across(
+    key: TileKey,
+    edge: usize,
+    drawn: &[DrawnTile],
+    mut f: impl FnMut(&DrawnTile),
+) {
+    let (dx, dy) = OUTWARD[edge];
+    let (x, y) = (key.x as i64, key.y as i64);
     let mut look = |level: i64, x: i64, y: i64| {
         // Keys off the lattice (below 0, past u32) name no tile.
         let (Ok(level), Ok(x), Ok(y)) = (u8::try_from(level), u32::try_from(x), u32::try_from(y))
@@ -529,18 +685,20 @@ pub fn for_each_neighbour(key: TileKey, drawn: &[DrawnTile], mut f: impl FnMut(&
             f(&drawn[at]);
         }
     };
-    let level = level as i64;
-    for (dx, dy) in [(0, -1), (1, 0), (0, 1), (-1, 0)] {
-        let (nx, ny) = (x + dx, y + dy);
-        look(level, nx, ny);
-        look(level + 1, nx.div_euclid(2), ny.div_euclid(2));
-        // The two finer tiles along the shared edge.
-        let (cx, cy) = (2 * nx + (dx < 0) as i64, 2 * ny + (dy < 0) as i64);
-        let (ax, ay) = if dx == 0 { (1, 0) } else { (0, 1) };
-        look(level - 1, cx, cy);
-        look(level - 1, cx + ax, cy + ay);
-    }
+    let level = key.level as i64;
+    let (nx, ny) = (x + dx, y + dy);
+    look(level, nx, ny);
+    look(level + 1, nx.div_euclid(2), ny.div_euclid(2));
+    // The two finer tiles along the shared edge.
+    let (cx, cy) = (2 * nx + (dx < 0) as i64, 2 * ny + (dy < 0) as i64);
+    let (ax, ay) = if dx == 0 { (1, 0) } else { (0, 1) };
+    look(level - 1, cx, cy);
+    look(level - 1, cx + ax, cy + ay);
 }
+
+/// The step to the tile across each edge, in skirt-bit order (south, east,
+/// north, west).
+const OUTWARD: [(i64, i64); 4] = [(0, -1), (1, 0), (0, 1), (-1, 0)];
 
 #[cfg(test)]
 mod tests {
@@ -556,6 +714,7 @@ mod tests {
             morph: [0.0, 1.0],
             skirt_depth: 1.0,
             skirt_edges: ALL_EDGES,
+            skirt_shares: [15; 4],
             byte_offset: 0,
             index_byte_offset: 0,
             index_count: 0,
@@ -656,12 +815,14 @@ mod tests {
         DrawnTile { key: TileKey::new(level, x, y), source_level, node_mesh: true }
     }
 
-    /// A tile's skirts reach as deep as the largest error on either side of
-    /// its edges: a neighbour of its level, the level above or the level
-    /// below (only the two finer tiles along the shared edge count); a
-    /// tile made as a grid errs by the grid's deltas.
+    /// Each edge's skirt reaches as deep as the errors of the tile and of
+    /// the tiles across that edge (its level, the level above, the two of
+    /// the level below along it) with their morph this frame: unmorphed
+    /// exact tiles hang only the margin, a tile made as a grid errs by the
+    /// grid's deltas, an edge with nothing drawn across it hangs as if the
+    /// level above were there.
     #[test]
-    fn skirts_reach_below_the_coarsest_neighbour() {
+    fn skirts_reach_below_what_each_edge_faces_this_frame() {
         let draw = TileDraw {
             key: TileKey::new(2, 4, 4),
             byte_offset: 0,
@@ -681,18 +842,41 @@ mod tests {
             delta_per_level: &deltas,
             grid_delta_per_level: &grid_deltas,
         };
-        let mut tiles = vec![drawn(2, 4, 4, 2), drawn(2, 5, 4, 3), drawn(1, 8, 10, 4)];
-        // Diagonal and far tiles are no neighbours.
-        tiles.extend([drawn(2, 5, 5, 6), drawn(1, 7, 7, 6), drawn(3, 3, 3, 6)]);
+        // Morph ranges so far out that nothing morphs, then so near that
+        // everything has.
+        let posts = PostFrame { anchor: [0, 0], spacing: [90.0, 90.0], offset: [0.0, 0.0] };
+        let frame = FrameUniforms { posts, ..frame(posts) };
+        // South: the same level, another source; east: two finer tiles;
+        // north: nothing; west: the level above.
+        let mut tiles =
+            vec![drawn(2, 4, 3, 3), drawn(1, 10, 8, 1), drawn(1, 10, 9, 1), drawn(3, 1, 2, 3)];
         tiles.sort_unstable_by_key(|d| d.key);
-        // West of the tile, the finer tiles (1, 7, 8) and (1, 7, 9) touch it.
-        assert_eq!(skirt_depth(&draw, &tiles, &geometry), 2.0 * 8.0 + 1.0, "(1, 8, 10) is north");
-        tiles.push(drawn(1, 7, 9, 5));
-        tiles.sort_unstable_by_key(|d| d.key);
-        assert_eq!(skirt_depth(&draw, &tiles, &geometry), 2.0 * 16.0 + 1.0);
-        assert_eq!(skirt_depth(&draw, &[], &geometry), 2.0 * 4.0 + 1.0, "level 3 at least");
+        let depths = |start: f64, tiles: &[DrawnTile]| {
+            let ranges = move |_: u8| (start, 2.0 * start);
+            let reach = MorphReach { frame: &frame, ranges: &ranges, grid_size: 32 };
+            skirt_depths(&draw, tiles, &geometry, &reach)
+        };
+        let close = |a: [f64; 4], b: [f64; 4]| a.iter().zip(b).all(|(a, b)| (a - b).abs() < 1e-9);
+        // Each side: its delta (morphed: toward the level above's), plus a
+        // quarter of its mesh's delta (at least 5 cm) of sag. The tile:
+        // 2 + 0.5; source level 3: 4 + 1; level 1: 1 + 0.25.
+        let unmorphed = depths(1e9, &tiles);
+        assert!(close(unmorphed, [7.6, 3.85, 10.6, 7.6]), "{unmorphed:?}");
+        // North, nothing drawn: as if the level above were, fully morphed
+        // (8). Fully morphed: the tile 4 + 0.5, the level-3 tile 8 + 1,
+        // level 1 2 + 0.25.
+        let morphed = depths(1.0, &tiles);
+        assert!(close(morphed, [9.6, 6.85, 13.1, 13.6]), "{morphed:?}");
         // A grid neighbour of source level 3 errs by the grid's 40 m.
-        let grid = DrawnTile { node_mesh: false, ..drawn(2, 4, 3, 3) };
-        assert_eq!(skirt_depth(&draw, &[grid], &geometry), 2.0 * 40.0 + 1.0);
+        let grid = [DrawnTile { node_mesh: false, ..drawn(2, 4, 3, 3) }];
+        let cell = 8.0 * 90.0;
+        let sag = cell * cell / (4.0 * crate::camera::EARTH_RADIUS_M);
+        assert!((depths(1e9, &grid)[0] - (2.5 + 40.0 + sag + SKIRT_MARGIN_M)).abs() < 1e-9);
+        // Shares round up, so no edge hangs short of its depth.
+        let (deepest, shares) = skirt_shares([3.0, 0.0, 1.0, 2.9]);
+        assert_eq!((deepest, shares), (3.0, [15, 0, 5, 15]));
+        let tile = TileUniforms { skirt_depth: deepest, skirt_shares: shares, ..tile(0, [0.0; 2]) };
+        assert_eq!(TileUniforms::unpack_skirt_shares(tile.packed_skirt_shares()), shares);
+        assert!(tile.edge_skirt_m(2) >= 1.0 && tile.edge_skirt_m(3) >= 2.9);
     }
 }

@@ -107,20 +107,24 @@ pub fn summary_of(source: &MeshedSource) -> TerrainSummary {
 /// whose data end at its edges (built once under [`target_tmp`]).
 pub fn srtm_tile_pyramid() -> Arc<Pyramid> {
     static PYRAMID: OnceLock<Arc<Pyramid>> = OnceLock::new();
-    let pyramid = PYRAMID.get_or_init(|| {
-        let dir = target_tmp().join("srtm-tile");
-        if let Ok(pyramid) = Pyramid::open(&dir) {
-            return Arc::new(pyramid);
-        }
-        std::fs::create_dir_all(&dir).expect("srtm-tile cache directory");
-        let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/dem/srtm3_n39e040_1000.tif");
-        let grid = ridgeline::dem::import_file(&source).expect("the SRTM asset imports");
-        let built = ridgeline::pyramid::build(&grid, &Default::default(), &Silent).expect("build");
-        ridgeline::pyramid::write_atomic(&built, &dir.join(ridgeline::pyramid::FILE_NAME), &Silent)
-            .expect("write");
-        Arc::new(Pyramid::open(&dir).expect("open the srtm-tile pyramid"))
-    });
-    Arc::clone(pyramid)
+    Arc::clone(PYRAMID.get_or_init(|| asset_pyramid("srtm-tile", "srtm3_n39e040_1000.tif")))
+}
+
+/// The pyramid of `assets/dem/<file>` alone, built once into
+/// `<target_tmp>/<name>` (and opened from there by later runs).
+pub fn asset_pyramid(name: &str, file: &str) -> Arc<Pyramid> {
+    let dir = target_tmp().join(name);
+    if let Ok(pyramid) = Pyramid::open(&dir) {
+        return Arc::new(pyramid);
+    }
+    std::fs::create_dir_all(&dir).expect("pyramid cache directory");
+    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/dem").join(file);
+    let grid = ridgeline::dem::import_file(&source)
+        .unwrap_or_else(|e| panic!("{} imports: {e}", source.display()));
+    let built = ridgeline::pyramid::build(&grid, &Default::default(), &Silent).expect("build");
+    ridgeline::pyramid::write_atomic(&built, &dir.join(ridgeline::pyramid::FILE_NAME), &Silent)
+        .expect("write");
+    Arc::new(Pyramid::open(&dir).unwrap_or_else(|e| panic!("open the {name} pyramid: {e}")))
 }
 
 /// The built-in terrain's SRTM tile's south-west post in the pyramid's local

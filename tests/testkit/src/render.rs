@@ -201,10 +201,29 @@ pub fn measure_accuracy_of(
     tau_px: f64,
     meshed: bool,
 ) -> ridgeline::display::measure::AccuracyRun {
+    measure_accuracy_budgeted(pyramid, views, tau_px, meshed, None)
+}
+
+/// [`measure_accuracy_of`] holding `triangle_budget` triangles a frame
+/// (`--triangle-budget`) by raising tau above `tau_px` where it must.
+pub fn measure_accuracy_budgeted(
+    pyramid: Arc<Pyramid>,
+    views: &[(f64, Camera)],
+    tau_px: f64,
+    meshed: bool,
+    triangle_budget: Option<u64>,
+) -> ridgeline::display::measure::AccuracyRun {
     use ridgeline::gl::{TruthMesh, TruthPass, TruthRegion};
+    use ridgeline::lod::budget::{BudgetConfig, BudgetTarget};
     let mut config = config(GlBackend::Egl, GlesVersion::Es3);
     config.scene.lod.tau_px = tau_px;
-    config.scene.lod.view_distance = 1.0;
+    // Under a budget the display's own view distance: at one tile, the
+    // rings sit at the floor that keeps neighbours within a level at this
+    // size, and no tau above 1 draws fewer triangles.
+    if triangle_budget.is_none() {
+        config.scene.lod.view_distance = 1.0;
+    }
+    config.budget = triangle_budget.map(|n| BudgetConfig::new(BudgetTarget::Triangles(n)));
     let mut display = if meshed {
         let terrain = Arc::new(crate::meshed(pyramid.clone(), tau_px));
         let summary = crate::summary_of(&terrain);

@@ -146,7 +146,7 @@ pub fn edge_heights(
                 if a.is_nan() || b.is_nan() {
                     continue;
                 }
-                let skirt_m = if tile.skirt_edges & (1 << edge) != 0 { tile.skirt_depth as f64 } else { 0.0 };
+                let skirt_m = tile.edge_skirt_m(edge) as f64;
                 // Samples on the segment, both ends included.
                 let axis = if pa[0] == pb[0] { 1 } else { 0 };
                 let (lo, hi) = (pa[axis].min(pb[axis]), pa[axis].max(pb[axis]));
