@@ -62,10 +62,10 @@ impl Terrain {
     /// The node source a pipeline pages from, and its summary (the meshes'
     /// deltas when meshes are drawn).
     fn source(&self) -> (Arc<dyn NodeSource>, TerrainSummary) {
-        let mut summary = TerrainSummary::from_pyramid(self.pyramid.info());
+        let summary = TerrainSummary::from_pyramid(self.pyramid.info());
         match &self.meshed {
             Some(meshed) => {
-                summary.delta_per_level = meshed.delta_per_level();
+                let summary = TerrainSummary::of_maps(self.pyramid.info(), meshed.info());
                 (meshed.clone(), summary)
             }
             None => (self.pyramid.clone(), summary),
@@ -313,7 +313,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         true => None,
         false => Some(Arc::new(MeshedSource::open_or_build(
             pyramid.clone(),
-            MeshOptions::for_tau(tau),
+            MeshOptions::default(),
             &Silent,
         )?)),
     };

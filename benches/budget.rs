@@ -129,7 +129,7 @@ fn main() {
     };
     let pyramid =
         Arc::new(dataset::open(None, Path::new("cache"), &Silent).expect("the built-in terrain"));
-    let meshed = MeshedSource::open_or_build(pyramid.clone(), MeshOptions::for_tau(1.0), &Silent)
+    let meshed = MeshedSource::open_or_build(pyramid.clone(), MeshOptions::default(), &Silent)
         .expect("the built-in terrain's node meshes");
     let approach = Approach::new(pyramid, Arc::new(meshed), view_count);
     let cruise = Cruise::new(view_count);
@@ -184,8 +184,7 @@ impl Approach {
     /// which upload nothing and draw the same list: p50 and p99 from frame
     /// 30 on. On a shared machine the flights' spread is measured against it.
     fn still(&self, frames: u32) -> Spread {
-        let mut summary = TerrainSummary::from_pyramid(self.pyramid.info());
-        summary.delta_per_level = self.meshed.delta_per_level();
+        let summary = TerrainSummary::of_maps(self.pyramid.info(), self.meshed.info());
         let pose = self.path.sample(self.path.start_time());
         let at = |t: f64| ridgeline::flight::path::Waypoint { t, pose };
         let still = FlightPath::new(vec![at(0.0), at(self.path.duration())]).expect("a path");
@@ -204,7 +203,7 @@ impl Approach {
     fn measure(&self, meshes: bool, frames: u32, budget: Option<u64>) -> Row {
         let mut summary = TerrainSummary::from_pyramid(self.pyramid.info());
         let source: Arc<dyn NodeSource> = if meshes {
-            summary.delta_per_level = self.meshed.delta_per_level();
+            summary = TerrainSummary::of_maps(self.pyramid.info(), self.meshed.info());
             self.meshed.clone()
         } else {
             self.pyramid.clone()

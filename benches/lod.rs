@@ -1,7 +1,12 @@
-//! Run time against measured error (issue 5): the built-in approach over the
-//! built-in terrain at 1280x720, headless EGL, for a sweep of the error bound
-//! tau (0.5 to 8 px) and of the tile parameters (grid size, morph range,
-//! Kühnert's view distance). Every point records, in one run:
+//! Run time against measured error (issues 5 and 22): the built-in approach
+//! over the built-in terrain, headless EGL.
+//!
+//! - `--quick`: the display sizes (issue 22): node meshes at 480x272,
+//!   800x480, 1280x720 and 1920x1080, tau 1 and 4, each against the RTIN
+//!   floor of its own viewport, with the measured p99.9 and max;
+//! - the full run adds, at 1280x720, a sweep of the error bound tau (0.5 to
+//!   8 px) and of the tile parameters (grid size, morph range, Kühnert's
+//!   view distance). Every point of the sweep records, in one run:
 //! - at N views along the approach (16, or 4 with `--quick`): the measured
 //!   per-pixel error of `ridgeline accuracy` (p99, p99.9), surface triangles,
 //!   and the frame time of the LOD display and of the brute-force
@@ -32,7 +37,6 @@ use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
-use glam::UVec2;
 use ridgeline::camera::Camera;
 use ridgeline::clipmap::LoaderMode;
 use ridgeline::dataset;
@@ -53,7 +57,11 @@ use serde_json::json;
 use support::rtin_floor::{FloorCount, FloorGrid, FloorView};
 use support::{print_table, write_json, write_svg, BenchArgs, Panel, Series};
 
-const SIZE: UVec2 = UVec2::new(1280, 720);
+/// The sweep's viewport.
+const SIZE: [u32; 2] = [1280, 720];
+/// The display sizes of the quick run (issue 22): embedded cockpit
+/// displays to a full-HD one.
+const SIZES: [[u32; 2]; 4] = [[480, 272], [800, 480], [1280, 720], [1920, 1080]];
 const FOV_X_DEG: f64 = 60.0;
 /// Frames of the flight part are this often: a low-power board's rate.
 const FLIGHT_RATE_HZ: f64 = 10.0;
@@ -73,6 +81,11 @@ struct Point {
     baseline: bool,
     /// Also count the RTIN floor and full resolution in the frustum.
     floors: bool,
+    /// The viewport, pixels.
+    viewport: [u32; 2],
+    /// Also fly consecutive frames (the sweep; the sizes table only
+    /// measures its views).
+    flight: bool,
 }
 
 /// What the tiles are drawn from: the node meshes (`fly`'s default) or the
@@ -93,16 +106,15 @@ struct Terrain {
 }
 
 impl Terrain {
-    fn meshed(&self, tau_px: f64) -> Arc<MeshedSource> {
-        let key = tau_px.to_bits();
+    fn meshed(&self) -> Arc<MeshedSource> {
         let mut all = self.meshed.borrow_mut();
-        if let Some((_, source)) = all.iter().find(|(k, _)| *k == key) {
+        if let Some((_, source)) = all.first() {
             return Arc::clone(source);
         }
-        let options = MeshOptions::for_tau(tau_px);
+        let options = MeshOptions::default();
         let source = MeshedSource::open_or_build(Arc::clone(&self.pyramid), options, &Silent)
-            .expect("the built-in terrain's node meshes");
-        all.push((key, Arc::new(source)));
+            .expect("the built-in terrain's error maps");
+        all.push((0, Arc::new(source)));
         Arc::clone(&all.last().expect("just pushed").1)
     }
 }
@@ -130,7 +142,8 @@ impl Point {
             morph_range: lod.morph_range,
             view_distance: lod.view_distance,
         };
-        Point { name, lod: row, tiles: Tiles::NodeMeshes, baseline, floors: baseline }
+        let (tiles, viewport) = (Tiles::NodeMeshes, SIZE);
+        Point { name, lod: row, tiles, baseline, floors: baseline, viewport, flight: true }
     }
 
     fn regular(self) -> Point {
@@ -143,6 +156,19 @@ impl Point {
         lod.morph_range = self.lod.morph_range;
         lod.view_distance = self.lod.view_distance;
     }
+}
+
+/// The display sizes at tau 1 and 4, node meshes, against their floors.
+fn size_points() -> Vec<Point> {
+    let keep = |_: &mut LodConfig| {};
+    let mut points = Vec::new();
+    for viewport in SIZES {
+        for tau in [1.0, 4.0] {
+            let point = Point::new("display size", tau, keep, false);
+            points.push(Point { viewport, floors: true, flight: false, ..point });
+        }
+    }
+    points
 }
 
 fn points() -> Vec<Point> {
@@ -283,8 +309,10 @@ fn main() {
     let terrain = Terrain { pyramid: Arc::clone(&pyramid), meshed: Default::default() };
     let layout = *pyramid.layout();
     let path = default_flight(&pyramid);
-    let views: Vec<(f64, Camera)> =
-        path.frame_times(view_count).map(|t| (t, camera_at(&path, t))).collect();
+    let views_at = |viewport: [u32; 2]| -> Vec<(f64, Camera)> {
+        path.frame_times(view_count).map(|t| (t, camera_at(&path, t, viewport))).collect()
+    };
+    let views = views_at(SIZE);
     let source: Arc<dyn NodeSource> = pyramid.clone();
     // As `ridgeline accuracy`: a window of level 0 around the views (a
     // layered pyramid's level 0 spans its whole base).
@@ -292,12 +320,19 @@ fn main() {
     let region = TruthRegion::around_positions(&layout, LodConfig::default().grid_size, positions);
     let mesh = TruthMesh::load(source.as_ref(), region).expect("truth mesh");
     let floors = Floors::load(&pyramid, region, &views);
+    let mut all = size_points();
+    if !args.quick {
+        all.extend(points());
+    }
     let mut results = Vec::new();
-    for point in points() {
+    for point in all {
+        let views = views_at(point.viewport);
         let result = measure_point(&point, &terrain, &mesh, &floors, &path, &views, flight_frames);
         println!(
-            "  {:<16} tau {:>3}: p99.9 {:.3} px, {:.0} triangles, {:.1} ms (truth {:.1} ms)",
+            "  {:<16} {}x{} tau {:>3}: p99.9 {:.3} px, {:.0} triangles, {:.1} ms (truth {:.1} ms)",
             point.name,
+            point.viewport[0],
+            point.viewport[1],
             point.lod.tau_px,
             result.p999_px,
             result.triangles_lod,
@@ -309,12 +344,12 @@ fn main() {
     report(&args, &results, view_count, &floors);
 }
 
-fn camera_at(path: &FlightPath, t: f64) -> Camera {
-    path.sample(t).camera(FOV_X_DEG, [SIZE.x, SIZE.y])
+fn camera_at(path: &FlightPath, t: f64, viewport: [u32; 2]) -> Camera {
+    path.sample(t).camera(FOV_X_DEG, viewport)
 }
 
 fn display_for(point: &Point, terrain: &Terrain) -> DisplayParts {
-    let mut config = DisplayConfig::new(GlBackend::Egl, SIZE);
+    let mut config = DisplayConfig::new(GlBackend::Egl, point.viewport.into());
     point.apply(&mut config.scene.lod);
     config.fov_x_deg = FOV_X_DEG;
     config.loader = LoaderMode::Inline;
@@ -322,8 +357,8 @@ fn display_for(point: &Point, terrain: &Terrain) -> DisplayParts {
     let mut summary = TerrainSummary::from_pyramid(terrain.pyramid.info());
     let source: Arc<dyn NodeSource> = match point.tiles {
         Tiles::NodeMeshes => {
-            let meshed = terrain.meshed(point.lod.tau_px);
-            summary.delta_per_level = meshed.delta_per_level();
+            let meshed = terrain.meshed();
+            summary = TerrainSummary::of_maps(terrain.pyramid.info(), meshed.info());
             meshed
         }
         Tiles::RegularGrid => terrain.pyramid.clone(),
@@ -347,7 +382,10 @@ fn measure_point(
     let run = measure_flight(&mut display, &truth, &exact, pyramid.layout().spacing_m, views)
         .expect("accuracy views");
     let floor_row = point.floors.then(|| floors.measure(&mut display, point, views, &run));
-    let (flight, _) = fly(&mut display, None, path, flight_frames);
+    let (flight, _) = match point.flight {
+        true => fly(&mut display, None, path, flight_frames, point.viewport),
+        false => Default::default(),
+    };
     let sky_only_ms = sky_only(&mut display, &views[0].1);
     drop(truth);
     drop(display);
@@ -355,7 +393,8 @@ fn measure_point(
         let mut display = display_for(point, terrain);
         let mut baseline =
             ChunkedBaseline::new(display.context.gl(), point.lod.grid_size).expect("baseline");
-        let (frames, transfers) = fly(&mut display, Some(&mut baseline), path, flight_frames);
+        let (frames, transfers) =
+            fly(&mut display, Some(&mut baseline), path, flight_frames, point.viewport);
         let n = transfers.len().max(1) as f64;
         let uploads = transfers.iter().map(|t| t.uploads as f64).sum::<f64>() / n;
         // The scene's own upload figures are what the batched renderer
@@ -614,9 +653,10 @@ fn fly(
     mut baseline: Option<&mut ChunkedBaseline>,
     path: &FlightPath,
     frames: u32,
+    viewport: [u32; 2],
 ) -> (Vec<FrameStats>, Vec<BaselineFrameStats>) {
     let start = path.start_time() + path.duration() / 2.0;
-    let camera = |k: u32| camera_at(path, start + k as f64 / FLIGHT_RATE_HZ);
+    let camera = |k: u32| camera_at(path, start + k as f64 / FLIGHT_RATE_HZ, viewport);
     display.pipeline.settle(&camera(0), 10_000).expect("settle");
     let mut stats = Vec::with_capacity(frames as usize);
     let mut transfers = Vec::with_capacity(frames as usize);
@@ -670,7 +710,65 @@ fn summarise(
     }
 }
 
+/// The display-size rows (issue 22): one per size and tau.
+fn size_rows(results: &[PointResult]) -> Vec<serde_json::Value> {
+    results
+        .iter()
+        .filter(|r| r.point.name == "display size")
+        .filter_map(|r| r.floors.as_ref().map(|f| (r, f)))
+        .map(|(r, f)| {
+            json!({
+                "viewport": r.point.viewport,
+                "tau_px": r.point.lod.tau_px,
+                "tiles": "meshes",
+                "triangles": f.triangles_lod_square.round(),
+                "rtin_floor": f.rtin_floor.round(),
+                "ratio": f.lod_over_rtin,
+                "p999_px": r.p999_px,
+                "max_px": r.max_px,
+                "triangles_drawn": r.triangles_lod.round(),
+            })
+        })
+        .collect()
+}
+
+/// Prints the display-size table.
+fn report_sizes(results: &[PointResult]) {
+    let header = [
+        "viewport",
+        "tau",
+        "LOD tri on square",
+        "RTIN floor",
+        "LOD/RTIN",
+        "p99.9 px",
+        "max px",
+        "drawn tri",
+    ];
+    let rows: Vec<Vec<String>> = size_rows(results)
+        .iter()
+        .map(|r| {
+            let v = &r["viewport"];
+            vec![
+                format!("{}x{}", v[0], v[1]),
+                format!("{}", r["tau_px"]),
+                format!("{}", r["triangles"]),
+                format!("{}", r["rtin_floor"]),
+                format!("{:.2}", r["ratio"].as_f64().unwrap_or(f64::NAN)),
+                format!("{:.3}", r["p999_px"].as_f64().unwrap_or(f64::NAN)),
+                format!("{:.2}", r["max_px"].as_f64().unwrap_or(f64::NAN)),
+                format!("{}", r["triangles_drawn"]),
+            ]
+        })
+        .collect();
+    print_table(
+        "Display sizes (issue 22): node meshes against the view-dependent RTIN floor of the same viewport, tau and views",
+        &header,
+        &rows,
+    );
+}
+
 fn report(args: &BenchArgs, results: &[PointResult], views: u32, floors: &Floors) {
+    report_sizes(results);
     let header = [
         "point",
         "tau",
@@ -728,7 +826,15 @@ fn report(args: &BenchArgs, results: &[PointResult], views: u32, floors: &Floors
     let square = floors.report(results);
     let json_path = write_json(
         "lod",
-        &json!({ "quick": args.quick, "views": views, "size": [SIZE.x, SIZE.y], "brute_force_frame_ms": brute, "floor_square": square, "points": results }),
+        &json!({
+            "quick": args.quick,
+            "views": views,
+            "size": SIZE,
+            "brute_force_frame_ms": brute,
+            "floor_square": square,
+            "sizes": size_rows(results),
+            "points": results,
+        }),
     );
     let sweep: Vec<&PointResult> = results.iter().filter(|r| r.point.baseline).collect();
     let errors = results.iter().map(|r| r.p99_px.max(1e-4));

@@ -258,6 +258,171 @@ impl NodeMesh {
     }
 }
 
+/// A node's error map (issues 21 and 22): the right-triangulated
+/// irregular network of the best data under the node, each split's error
+/// as a code (see [`crate::mesh::code`]), from which a mesh of any error at
+/// or above `floor_m` is extracted when a tile is made. One map serves
+/// every tau and every viewport.
+///
+/// *Dense* maps keep a code for every post of the node's own lattice (the
+/// best data there: level 0, or a node no finer node lies under), whose
+/// heights are [`NodeData::heights`]. *Sparse* maps are on a finer
+/// reference lattice and keep only the posts whose code is above the
+/// floor's, or that every mesh has (the corners of the squares tiles may
+/// cut), with their heights and normals.
+///
+/// Invariant: `keys` ascend and are below `(cells + 1)^2`; `codes`,
+/// `heights` and `normals` have one entry per key (dense: `codes` one per
+/// post, the rest empty); `above` has 4 x 256 entries, each quadrant's
+/// non-increasing.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ErrorMap {
+    /// The level whose lattice the map's posts are on.
+    pub post_level: u8,
+    /// Reference-lattice cells per node side, a power of two.
+    pub cells: u32,
+    /// The smallest error a mesh may be extracted at, metres (0: any).
+    pub floor_m: f32,
+    /// How far the reference lattice's surface may lie from the best data,
+    /// metres (0 on the data's own lattice): added to any mesh's error.
+    pub reference_delta: f32,
+    /// Half cells are drawn as the hierarchy makes them (a reference
+    /// lattice coarser than the data), never along the data's diagonal.
+    pub hierarchy_leaves: bool,
+    /// Dense: a code per post, row-major. Sparse: a code per key.
+    pub codes: Vec<u8>,
+    /// Sparse: the posts kept, `j * (cells + 1) + i`, ascending.
+    pub keys: Vec<u32>,
+    /// Sparse: each kept post's height, metres (NaN: no data).
+    pub heights: Vec<f32>,
+    /// Sparse: each kept post's data normal, x and y scaled to -127..127.
+    pub normals: Vec<[i8; 2]>,
+    /// `above[256 q + c]`: posts of quadrant `q` (`x + 2 y`, south-west
+    /// first; posts on a quadrant's north or east edge belong to the next)
+    /// whose code is above `c`: what a frame budget estimates a tile's
+    /// triangles at another error from.
+    pub above: Vec<u32>,
+    /// Sparse: where each row's keys start (`side + 1` entries), so a
+    /// lookup searches one row.
+    pub rows: Vec<u32>,
+}
+
+impl ErrorMap {
+    /// Whether the map keeps every post of its lattice.
+    pub fn is_dense(&self) -> bool {
+        self.keys.is_empty() && !self.codes.is_empty()
+    }
+
+    /// Whether the node has no map (a source without meshes).
+    pub fn is_empty(&self) -> bool {
+        self.codes.is_empty()
+    }
+
+    /// Posts a side of the reference lattice.
+    pub fn side(&self) -> u32 {
+        self.cells + 1
+    }
+
+    /// Where post `(i, j)` is kept in a sparse map.
+    pub fn find(&self, i: u32, j: u32) -> Option<usize> {
+        let key = j * self.side() + i;
+        let (start, end) = match (self.rows.get(j as usize), self.rows.get(j as usize + 1)) {
+            (Some(&a), Some(&b)) => (a as usize, b as usize),
+            _ => (0, self.keys.len()),
+        };
+        self.keys[start..end].binary_search(&key).ok().map(|k| start + k)
+    }
+
+    /// The code of the split at post `(i, j)`: 0 where a sparse map keeps
+    /// none (its split is never needed above the floor).
+    pub fn code(&self, i: u32, j: u32) -> u8 {
+        debug_assert!(i <= self.cells && j <= self.cells);
+        if self.is_dense() {
+            return self.codes[(j * self.side() + i) as usize];
+        }
+        self.find(i, j).map_or(0, |k| self.codes[k])
+    }
+
+    /// Fills `rows` from `keys` (sparse maps; dense ones need none).
+    pub fn index_rows(&mut self) {
+        self.rows.clear();
+        if self.keys.is_empty() {
+            return;
+        }
+        let side = self.side();
+        self.rows.reserve_exact(side as usize + 1);
+        let mut k = 0;
+        for j in 0..=side {
+            while k < self.keys.len() && self.keys[k] < j * side {
+                k += 1;
+            }
+            self.rows.push(k as u32);
+        }
+    }
+
+    /// Fills `above` from `codes`.
+    pub fn count_codes(&mut self) {
+        let mut counts = [[0u32; 256]; 4];
+        let (side, half) = (self.side(), self.cells / 2);
+        let quadrant = |key: u32| {
+            let (i, j) = (key % side, key / side);
+            (i >= half) as usize + 2 * (j >= half) as usize
+        };
+        for (k, &c) in self.codes.iter().enumerate() {
+            let key = if self.keys.is_empty() { k as u32 } else { self.keys[k] };
+            counts[quadrant(key)][c as usize] += 1;
+        }
+        self.above.clear();
+        self.above.resize(4 * 256, 0);
+        for (q, counts) in counts.iter().enumerate() {
+            let mut running = 0;
+            for c in (0..256).rev() {
+                self.above[256 * q + c] = running;
+                running += counts[c];
+            }
+        }
+    }
+
+    /// Posts of quadrants `quadrants` (a bit each) whose code is above `code`.
+    pub fn above_in(&self, quadrants: u8, code: u8) -> u32 {
+        (0..4)
+            .filter(|q| quadrants & (1 << q) != 0)
+            .map(|q| self.above.get(256 * q + code as usize).copied().unwrap_or(0))
+            .sum()
+    }
+
+    /// Heap the map's buffers take, bytes (their capacities).
+    pub fn heap_bytes(&self) -> u64 {
+        (self.codes.capacity()
+            + 4 * self.keys.capacity()
+            + 4 * self.heights.capacity()
+            + 2 * self.normals.capacity()
+            + 4 * self.above.capacity()
+            + 4 * self.rows.capacity()) as u64
+    }
+
+    /// Gives back the buffers' room beyond their lengths.
+    pub fn fit(&mut self) {
+        self.codes.shrink_to_fit();
+        self.keys.shrink_to_fit();
+        self.heights.shrink_to_fit();
+        self.normals.shrink_to_fit();
+        self.above.shrink_to_fit();
+        self.rows.shrink_to_fit();
+    }
+
+    /// Checks the invariant (debug builds).
+    pub fn debug_check(&self) {
+        debug_assert!(self.keys.windows(2).all(|w| w[0] < w[1]), "keys ascend");
+        debug_assert!(self.keys.last().is_none_or(|&k| k < self.side() * self.side()));
+        if !self.keys.is_empty() {
+            debug_assert_eq!(self.codes.len(), self.keys.len());
+            debug_assert_eq!(self.heights.len(), self.keys.len());
+            debug_assert_eq!(self.normals.len(), self.keys.len());
+        }
+    }
+}
+
 /// A node's stored content.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct NodeData {
@@ -275,8 +440,9 @@ pub struct NodeData {
     /// The same for the node's posts as a regular grid, whether or not it
     /// has a mesh: what a tile made as a grid of its posts errs by.
     pub grid_delta: f32,
-    /// The node's adaptive mesh, if its source keeps one.
-    pub mesh: NodeMesh,
+    /// The node's error map, if its source keeps one: tiles extract their
+    /// meshes from it.
+    pub map: ErrorMap,
 }
 
 impl NodeData {
@@ -290,10 +456,7 @@ impl NodeData {
     /// Heap the buffers take, bytes: their capacities, not their lengths,
     /// because a buffer keeps what the largest node read into it needed.
     pub fn heap_bytes(&self) -> u64 {
-        let vertex = std::mem::size_of::<MeshVertex>() as u64;
-        self.heights.capacity() as u64 * std::mem::size_of::<f32>() as u64
-            + self.mesh.vertices.capacity() as u64 * vertex
-            + self.mesh.indices.capacity() as u64 * std::mem::size_of::<u16>() as u64
+        self.heights.capacity() as u64 * std::mem::size_of::<f32>() as u64 + self.map.heap_bytes()
     }
 
     /// Gives back the buffers' room beyond their lengths, so that a
@@ -304,8 +467,7 @@ impl NodeData {
     /// calls it after a read, never a frame.
     pub fn fit(&mut self) {
         self.heights.shrink_to_fit();
-        self.mesh.vertices.shrink_to_fit();
-        self.mesh.indices.shrink_to_fit();
+        self.map.fit();
     }
 
     /// Height of centre post `(i, j)` (`0..=node_size` each, border excluded).

@@ -1,19 +1,22 @@
-//! Ulrich's chunks (issue 11): each node's adaptive mesh against brute
-//! force on a small synthetic pyramid: the stored delta is the exact
-//! distance to the best data, a child refines its parent, morph targets lie
-//! on the parent's mesh (so a fully morphed child draws its parent's
-//! surface), triangles stay inside their tile squares, and the mesh file
-//! refuses damage.
+//! Error maps and the meshes tiles extract from them (issues 11, 21, 22),
+//! against brute force on a small synthetic pyramid: a mesh extracted at
+//! any error errs by at most that error (plus its reference lattice's), a
+//! child's mesh refines its parent's and morphs onto its surface, the map
+//! file reads back, refuses damage, and shards merge into the very file
+//! one process writes.
 
 use std::path::Path;
 use std::sync::Arc;
 
 use ridgeline::meshes::file::pyramid_identity;
-use ridgeline::meshes::{build_meshes, BuiltMeshes, MeshFile, MeshOptions, MeshedSource};
-use ridgeline::node::{NodeError, NodeId, NodeLayout, NodeMesh, NodeSource};
+use ridgeline::meshes::{build_map, build_store, merge_stores, MapFile, MeshOptions, MeshedSource};
+use ridgeline::node::{NodeData, NodeError, NodeId, NodeLayout, NodeMesh, NodeSource};
 use ridgeline::pyramid::{self, BuildOptions, Pyramid, Silent};
+use ridgeline::scene::PreloadedTerrain;
+use ridgeline::tiles::extract::{forced_step, Extraction, Extractor, PlacedMap, TargetMesh};
+use ridgeline::tiles::ResidentNodes;
 
-const OPTIONS: MeshOptions = MeshOptions { error_m: 3.0, depth: 2, tile_cells: 4 };
+const OPTIONS: MeshOptions = MeshOptions { depth: 2, tile_cells: 4, finest_view_px: 400.0 };
 
 fn pyramid_in(dir: &Path) -> Arc<Pyramid> {
     let grid = pyramid::synthetic_grid(150).expect("a synthetic grid");
@@ -23,16 +26,28 @@ fn pyramid_in(dir: &Path) -> Arc<Pyramid> {
     Arc::new(Pyramid::open(dir).expect("open"))
 }
 
-/// Level-0 post of a node mesh's vertex post `p`.
+fn terrain_in(dir: &Path) -> (Arc<Pyramid>, PreloadedTerrain) {
+    let pyramid = pyramid_in(dir);
+    let source = MeshedSource::open_or_build(Arc::clone(&pyramid), OPTIONS, &Silent).expect("maps");
+    let terrain = PreloadedTerrain::load(&source).expect("every node reads");
+    (pyramid, terrain)
+}
+
+/// Level-0 post of a mesh vertex's post `p` (half steps of the map's lattice).
 fn level0(layout: &NodeLayout, id: NodeId, mesh: &NodeMesh, p: [u16; 2]) -> [f64; 2] {
     let origin = [id.x, id.y].map(|v| (v as u64 * layout.node_size as u64) << id.level);
-    // Mesh posts count half steps of the mesh's lattice.
     [0, 1].map(|k| origin[k] as f64 + p[k] as f64 * (1u64 << mesh.post_level) as f64 / 2.0)
 }
 
-/// The mesh's height at level-0 place `q` by testing every triangle (NaN
-/// where its triangle there has no data, `None` outside the mesh).
-fn brute_height(layout: &NodeLayout, id: NodeId, mesh: &NodeMesh, q: [f64; 2]) -> Option<f64> {
+/// The mesh's height (or target) at level-0 place `q` by testing every
+/// triangle; `None` outside it.
+fn brute(
+    layout: &NodeLayout,
+    id: NodeId,
+    mesh: &NodeMesh,
+    q: [f64; 2],
+    target: bool,
+) -> Option<f64> {
     for tri in mesh.indices.chunks_exact(3) {
         let v = [0, 1, 2].map(|k| mesh.vertices[tri[k] as usize]);
         let p = v.map(|v| level0(layout, id, mesh, v.post));
@@ -42,142 +57,161 @@ fn brute_height(layout: &NodeLayout, id: NodeId, mesh: &NodeMesh, q: [f64; 2]) -
         let w = [area(p[1], p[2], q), area(p[2], p[0], q), area(p[0], p[1], q)];
         if w.iter().all(|&w| w >= -1e-9) {
             let sum = w[0] + w[1] + w[2];
-            return Some((0..3).map(|k| w[k] * v[k].height as f64).sum::<f64>() / sum);
+            let h = |k: usize| if target { v[k].target } else { v[k].height } as f64;
+            return Some((0..3).map(|k| w[k] * h(k)).sum::<f64>() / sum);
         }
     }
     None
 }
 
-fn built(source: &dyn NodeSource) -> BuiltMeshes {
-    build_meshes(source, OPTIONS, &Silent).expect("meshes build")
-}
-
-fn present(layout: &NodeLayout, level: u8) -> impl Iterator<Item = NodeId> {
+fn stored(layout: &NodeLayout, level: u8) -> impl Iterator<Item = NodeId> {
     let [nx, ny] = layout.nodes_at(level);
     (0..ny).flat_map(move |y| (0..nx).map(move |x| NodeId::new(level, x, y)))
 }
 
+fn place<'a>(
+    layout: &'a NodeLayout,
+    id: NodeId,
+    data: &'a NodeData,
+    error_m: f64,
+) -> PlacedMap<'a> {
+    let map = &data.map;
+    let tile = OPTIONS.tile_cells << (id.level - map.post_level);
+    let forced = forced_step(layout, map.post_level, map.cells, tile, error_m);
+    PlacedMap::new(layout, id, data, error_m, forced)
+}
+
+/// Node `id`'s whole mesh at `error(level)` per level, keeping its
+/// ancestors' vertices (at their levels' errors) when `nested`, and
+/// morphing toward the parent's mesh when `nested` too.
+fn node_mesh(
+    terrain: &PreloadedTerrain,
+    id: NodeId,
+    error: &dyn Fn(u8) -> f64,
+    nested: bool,
+) -> NodeMesh {
+    let layout = terrain.layout();
+    let data = terrain.resident(id).expect("preloaded");
+    let own = place(layout, id, data, error(id.level));
+    let mut chain = Vec::new();
+    let mut up = id;
+    while let Some(parent) = up.parent().filter(|p| p.level < layout.levels && nested) {
+        chain.push(place(
+            layout,
+            parent,
+            terrain.resident(parent).expect("stored"),
+            error(parent.level),
+        ));
+        up = parent;
+    }
+    let target = if chain.is_empty() { TargetMesh::None } else { TargetMesh::Parent };
+    let job =
+        Extraction { own: &own, ancestors: &chain, target, origin: [0, 0], width: data.map.cells };
+    let mut extractor = Extractor::default();
+    extractor.extract(&job).expect("extracts");
+    extractor.mesh.clone()
+}
+
 #[test]
-fn the_stored_delta_is_the_largest_distance_to_the_data() {
-    let dir = testkit::fresh_dir("meshes-delta");
-    let pyramid = pyramid_in(&dir);
+fn an_extracted_mesh_errs_by_at_most_its_error() {
+    let dir = testkit::fresh_dir("meshes-error");
+    let (pyramid, terrain) = terrain_in(&dir);
     let layout = *pyramid.layout();
-    let meshes = built(pyramid.as_ref());
     let last = layout.posts.map(|p| (p - 1) as f64);
-    for level in 0..layout.levels {
-        let mut level_worst = 0.0f64;
-        for id in present(&layout, level) {
-            let chunk = meshes.mesh(&layout, id).expect("every node of a single grid is stored");
-            let span = (layout.node_size as u64) << level;
-            let origin = [id.x as u64 * span, id.y as u64 * span];
-            let mut worst = 0.0f64;
-            // Level-0 posts and cell centres under the node, inside the data.
-            for j2 in 0..=2 * span {
-                for i2 in 0..=2 * span {
-                    let q = [(origin[0] * 2 + i2) as f64 / 2.0, (origin[1] * 2 + j2) as f64 / 2.0];
-                    let centre = i2 % 2 == 1 && j2 % 2 == 1;
-                    if q[0] > last[0] || q[1] > last[1] || (i2 % 2 != j2 % 2) && !centre {
-                        continue;
+    for scale in [1.0, 2.0, 8.0] {
+        for level in 0..layout.levels {
+            let mut worst_ratio = 0.0f64;
+            for id in stored(&layout, level) {
+                let data = terrain.resident(id).expect("every node of one grid");
+                let error_m = (data.map.floor_m as f64).max(0.5) * scale;
+                let mesh = node_mesh(&terrain, id, &|_| error_m, false);
+                let span = (layout.node_size as u64) << level;
+                let origin = [id.x as u64 * span, id.y as u64 * span];
+                let mut worst = 0.0f64;
+                // Level-0 posts and cell centres under the node, inside the data.
+                for j2 in 0..=2 * span {
+                    for i2 in 0..=2 * span {
+                        let q =
+                            [(origin[0] * 2 + i2) as f64 / 2.0, (origin[1] * 2 + j2) as f64 / 2.0];
+                        let centre = i2 % 2 == 1 && j2 % 2 == 1;
+                        if q[0] > last[0] || q[1] > last[1] || (i2 % 2 != j2 % 2) && !centre {
+                            continue;
+                        }
+                        let [sx, sy] = layout.spacing_m;
+                        let exact =
+                            pyramid.exact_height(q[0] * sx, q[1] * sy).expect("inside") as f64;
+                        let drawn =
+                            brute(&layout, id, &mesh, q, false).expect("the mesh covers its node");
+                        worst = worst.max((drawn - exact).abs());
                     }
-                    let [sx, sy] = layout.spacing_m;
-                    let data = pyramid.exact_height(q[0] * sx, q[1] * sy).expect("inside") as f64;
-                    let mesh = brute_height(&layout, id, &chunk.mesh, q).expect("mesh covers node");
-                    worst = worst.max((mesh - data).abs());
                 }
-            }
-            assert!(
-                worst <= chunk.delta as f64 + 1e-3,
-                "{id:?}: brute {worst} > delta {}",
-                chunk.delta
-            );
-            let fully_inside = (0..2).all(|k| (origin[k] + span) as f64 <= last[k]);
-            if level <= OPTIONS.depth && fully_inside {
+                let bound = error_m.max(data.map.floor_m as f64) + data.map.reference_delta as f64;
                 assert!(
-                    chunk.delta as f64 <= worst + 1e-3,
-                    "{id:?}: delta {} > brute {worst}",
-                    chunk.delta
+                    worst <= bound + 1e-3,
+                    "{id:?} at {error_m} m: brute {worst} > bound {bound}"
                 );
+                worst_ratio = worst_ratio.max(worst / bound);
             }
-            assert!(chunk.delta <= OPTIONS.level_error(level) + 1e-3 || level > OPTIONS.depth);
-            level_worst = level_worst.max(worst);
+            println!(
+                "level {level}, {scale} x the floor: worst error {worst_ratio:.3} of the bound"
+            );
         }
-        println!("level {level}: brute-force delta {level_worst:.3} m");
     }
 }
 
 #[test]
 fn a_child_refines_its_parent_and_morphs_onto_its_surface() {
     let dir = testkit::fresh_dir("meshes-morph");
-    let pyramid = pyramid_in(&dir);
+    let (pyramid, terrain) = terrain_in(&dir);
     let layout = *pyramid.layout();
-    let meshes = built(pyramid.as_ref());
+    // Each level's error twice the finer one's, as the rings make them.
+    let error = |level: u8| 0.8 * (1u64 << level) as f64;
     for level in 0..layout.levels - 1 {
-        for id in present(&layout, level) {
-            let child = &meshes.mesh(&layout, id).expect("stored").mesh;
+        for id in stored(&layout, level) {
+            let child = node_mesh(&terrain, id, &error, true);
             let pid = id.parent().expect("below the root");
-            let parent = &meshes.mesh(&layout, pid).expect("stored").mesh;
-            // Every parent vertex inside the child's square is a child
-            // vertex, but a fan's centre (odd half steps): a fan draws its
-            // cell's own diagonal, which the child's cells follow.
+            let parent = node_mesh(&terrain, pid, &error, true);
             let span = ((layout.node_size as u64) << level) as f64;
             let origin = [id.x as f64 * span, id.y as f64 * span];
             let inside =
                 |p: [f64; 2]| (0..2).all(|k| p[k] >= origin[k] && p[k] <= origin[k] + span);
             let child_posts: Vec<[f64; 2]> =
-                child.vertices.iter().map(|v| level0(&layout, id, child, v.post)).collect();
+                child.vertices.iter().map(|v| level0(&layout, id, &child, v.post)).collect();
             for v in &parent.vertices {
-                let p = level0(&layout, pid, parent, v.post);
+                let p = level0(&layout, pid, &parent, v.post);
                 let centre = v.post.iter().all(|c| c % 2 == 1);
                 if inside(p) && !centre {
                     assert!(child_posts.contains(&p), "{id:?}: parent vertex {p:?} missing");
                 }
             }
-            // Targets lie on the parent's mesh; so, child triangles refining
-            // the parent's, the fully morphed child is the parent's surface.
+            // Targets lie on the parent's mesh, so the fully morphed child
+            // (its triangles refining the parent's) is the parent's surface.
             for (v, p) in child.vertices.iter().zip(&child_posts) {
-                if v.height.is_nan() {
+                let on_parent =
+                    brute(&layout, pid, &parent, *p, false).expect("parent covers child");
+                if v.height.is_nan() || on_parent.is_nan() {
                     continue;
                 }
-                let on_parent =
-                    brute_height(&layout, pid, parent, *p).expect("parent covers child");
-                // Where the parent draws nothing (its triangle there has a
-                // post without data) the vertex does not morph.
-                let expected = if on_parent.is_nan() { v.height as f64 } else { on_parent };
                 assert!(
-                    (v.target as f64 - expected).abs() < 1e-2,
-                    "{id:?} {p:?}: {} vs {expected}",
+                    (v.target as f64 - on_parent).abs() < 1e-2,
+                    "{id:?} {p:?}: {} vs {on_parent}",
                     v.target
                 );
             }
+            let last = layout.posts.map(|p| p as f64 - 2.0);
             for tri in child.indices.chunks_exact(3) {
-                // At the data's last post the parent's triangles reach past
-                // it (clipped there when drawn): left to the render tests.
-                let last = layout.posts.map(|p| p as f64 - 2.0);
-                let unmorphed = tri.iter().any(|&k| {
-                    let p = child_posts[k as usize];
-                    p[0] > last[0] || p[1] > last[1]
-                });
-                if unmorphed {
-                    continue;
+                let ps: [[f64; 2]; 3] = [0, 1, 2].map(|k| child_posts[tri[k] as usize]);
+                if ps.iter().any(|p| p[0] > last[0] || p[1] > last[1]) {
+                    continue; // clipped at the data's last post when drawn
                 }
-                let c = tri.iter().fold([0.0; 2], |a, &k| {
-                    let p = child_posts[k as usize];
-                    [a[0] + p[0] / 3.0, a[1] + p[1] / 3.0]
-                });
-                // A cell drawn along the data's diagonal where the parent
-                // folds the other way is a fan (meshes::fan): no twist left.
-                let tolerance = 1e-2;
-                let morphed = {
-                    let mut m = child.clone();
-                    m.vertices.iter_mut().for_each(|v| v.height = v.target);
-                    brute_height(&layout, id, &m, c).expect("centroid inside")
-                };
-                let on_parent = brute_height(&layout, pid, parent, c).expect("parent covers");
-                if on_parent.is_nan() || morphed.is_nan() {
+                let c = [0, 1].map(|k| ps.iter().map(|p| p[k]).sum::<f64>() / 3.0);
+                let morphed = brute(&layout, id, &child, c, true).expect("centroid inside");
+                let on_parent = brute(&layout, pid, &parent, c, false).expect("parent covers");
+                if morphed.is_nan() || on_parent.is_nan() {
                     continue;
                 }
                 assert!(
-                    (morphed - on_parent).abs() <= tolerance,
+                    (morphed - on_parent).abs() <= 1e-2,
                     "{id:?} at {c:?}: {morphed} vs {on_parent}"
                 );
             }
@@ -186,49 +220,20 @@ fn a_child_refines_its_parent_and_morphs_onto_its_surface() {
 }
 
 #[test]
-fn every_triangle_lies_in_one_tile_square() {
-    let dir = testkit::fresh_dir("meshes-squares");
-    let pyramid = pyramid_in(&dir);
-    let layout = *pyramid.layout();
-    let meshes = built(pyramid.as_ref());
-    for level in 0..layout.levels {
-        for id in present(&layout, level) {
-            let mesh = &meshes.mesh(&layout, id).expect("stored").mesh;
-            // Half steps: a square is twice its posts.
-            let square = ((2 * OPTIONS.tile_cells) << (level - mesh.post_level)) as u16;
-            for tri in mesh.indices.chunks_exact(3) {
-                let p = [0, 1, 2].map(|k| mesh.vertices[tri[k] as usize].post);
-                for k in 0..2 {
-                    let lo = p.iter().map(|q| q[k]).min().unwrap();
-                    let hi = p.iter().map(|q| q[k]).max().unwrap();
-                    assert!(
-                        hi - lo <= square && lo / square == (hi - 1).max(lo) / square,
-                        "{id:?} {p:?}"
-                    );
-                }
-            }
-        }
-    }
-}
-
-#[test]
-fn the_mesh_file_reads_back_and_refuses_damage() {
+fn the_map_file_reads_back_and_refuses_damage() {
     let dir = testkit::fresh_dir("meshes-file");
     let pyramid = pyramid_in(&dir);
     let layout = *pyramid.layout();
     let source =
         MeshedSource::open_or_build(Arc::clone(&pyramid), OPTIONS, &Silent).expect("build");
-    let meshes = built(pyramid.as_ref());
     let root = NodeId::new(layout.levels - 1, 0, 0);
-    let mut data = ridgeline::node::NodeData::default();
+    let mut data = NodeData::default();
     source.read_node(root, &mut data).expect("read");
-    let expected = meshes.mesh(&layout, root).expect("stored");
-    let bytes_of = |mesh: &NodeMesh| {
-        let v: &[u8] = bytemuck::cast_slice(&mesh.vertices);
-        (mesh.post_level, v.to_vec(), mesh.indices.clone())
-    };
-    assert_eq!(bytes_of(&data.mesh), bytes_of(&expected.mesh), "NaN heights compare by bits");
-    assert_eq!(data.delta, expected.delta);
+    let mut expected = build_map(pyramid.as_ref(), root, &OPTIONS).expect("builds");
+    expected.fit();
+    let bits = |h: &[f32]| h.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    assert_eq!((&data.map.keys, &data.map.codes), (&expected.keys, &expected.codes));
+    assert_eq!(bits(&data.map.heights), bits(&expected.heights), "NaN heights compare by bits");
     // Flip a byte of the root's record (the last one written).
     let path = source.file().path().to_path_buf();
     let mut bytes = std::fs::read(&path).expect("read the file");
@@ -236,19 +241,54 @@ fn the_mesh_file_reads_back_and_refuses_damage() {
     bytes[n - 8] ^= 0x40;
     std::fs::write(&path, &bytes).expect("write");
     let identity = pyramid_identity(pyramid.path()).expect("identity");
-    let damaged = MeshFile::open(&path, &layout, identity).expect("the header is intact");
-    let error = damaged.read(&layout, root, &mut data.mesh).expect_err("damage is found");
+    let damaged = MapFile::open(&path, &layout, identity).expect("the header is intact");
+    let before = (data.map.keys.clone(), bits(&data.map.heights));
+    let error = damaged.read(&layout, root, &mut data.map).expect_err("damage is found");
     assert!(matches!(error, NodeError::Corrupt { .. }), "{error}");
     assert!(error.to_string().contains(".rlm"), "{error}");
+    let after = (data.map.keys.clone(), bits(&data.map.heights));
+    assert!(after == before, "a refused record leaves the buffers as they were");
     // A damaged header is refused; opening the source rebuilds the file.
     bytes[20] ^= 1;
     std::fs::write(&path, &bytes).expect("write");
-    let refused = MeshFile::open(&path, &layout, identity).err().expect("refused");
+    let refused = MapFile::open(&path, &layout, identity).err().expect("refused");
     assert!(refused.to_string().contains(".rlm"), "{refused}");
-    let rebuilt = MeshedSource::open_or_build(pyramid, OPTIONS, &Silent).expect("rebuilt");
+    let rebuilt =
+        MeshedSource::open_or_build(Arc::clone(&pyramid), OPTIONS, &Silent).expect("rebuilt");
     rebuilt.read_node(root, &mut data).expect("read after the rebuild");
-    assert_eq!(bytes_of(&data.mesh), bytes_of(&expected.mesh));
+    assert_eq!(data.map.keys, expected.keys);
     // Truncated: refused, never a panic.
     std::fs::write(&path, &bytes[..30]).expect("write");
-    assert!(MeshFile::open(&path, &layout, identity).is_err());
+    assert!(MapFile::open(&path, &layout, identity).is_err());
+}
+
+#[test]
+fn shards_merge_into_the_file_one_process_writes() {
+    let dir = testkit::fresh_dir("meshes-shards");
+    let pyramid = pyramid_in(&dir);
+    let layout = *pyramid.layout();
+    let identity = pyramid_identity(pyramid.path()).expect("identity");
+    let nodes = ridgeline::meshes::source::stored_nodes(pyramid.as_ref());
+    let whole = dir.join("whole.rlm");
+    build_store(pyramid.as_ref(), identity, &nodes, OPTIONS, &whole, &Silent).expect("one process");
+    let parts: Vec<_> = (0..4)
+        .map(|k| {
+            let part = dir.join(format!("part-{k}.rlm"));
+            let mine: Vec<NodeId> = nodes.iter().copied().skip(k).step_by(4).collect();
+            build_store(pyramid.as_ref(), identity, &mine, OPTIONS, &part, &Silent)
+                .expect("a shard");
+            assert!(!MapFile::open(&part, &layout, identity).expect("opens").is_complete());
+            part
+        })
+        .collect();
+    let merged = dir.join("merged.rlm");
+    merge_stores(&parts, &layout, &merged).expect("merges");
+    assert_eq!(std::fs::read(&merged).unwrap(), std::fs::read(&whole).unwrap(), "byte for byte");
+    // A part missing, or one given twice, is an error naming a file.
+    let missing = merge_stores(&parts[..3], &layout, &dir.join("short.rlm"))
+        .expect_err("a node lacks its map");
+    assert!(missing.to_string().contains(".rlm"), "{missing}");
+    let twice =
+        [parts[0].clone(), parts[0].clone(), parts[1].clone(), parts[2].clone(), parts[3].clone()];
+    assert!(merge_stores(&twice, &layout, &dir.join("twice.rlm")).is_err());
 }

@@ -28,7 +28,7 @@ fn info_json_describes_an_imported_cache() {
         serde_json::from_slice(&info.stdout).expect("info --json prints JSON");
     assert_eq!(json["levels"], 4, "256 cells need 32 << 3");
     assert_eq!(json["node_size"], 32);
-    assert_eq!(json["samples"], serde_json::json!([257, 257]));
+    assert_eq!(json["posts"], serde_json::json!([257, 257]));
     assert_eq!(json["extent"]["east_m"], 256.0 * 90.0);
     assert!(json["georef"]["west"].is_null(), "a local grid has no degrees");
     let deltas = json["delta_per_level"].as_array().expect("deltas");
@@ -81,7 +81,7 @@ fn importing_the_shipped_srtm_tile_records_where_it_is() {
     let info = ridgeline(&["info", "--json"], &cache);
     let json: serde_json::Value =
         serde_json::from_slice(&info.stdout).expect("info --json prints JSON");
-    assert_eq!(json["samples"], serde_json::json!([1000, 1000]));
+    assert_eq!(json["posts"], serde_json::json!([1000, 1000]));
     assert_eq!(json["levels"], 5, "999 cells need 64 << 4");
     let degrees = |key: &str| json["georef"][key].as_f64().expect("geographic bounds");
     // Posts from 40 E + half a 3" cell to 40.8333 E - half a cell (see assets/dem/README.md).

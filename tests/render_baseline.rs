@@ -12,7 +12,7 @@ use testkit::render::{config, open, render, VIEWS};
 /// A second pipeline over the built-in terrain (its node meshes, as the
 /// display's), for the baseline backend.
 fn baseline_pipeline(config: &ridgeline::display::DisplayConfig) -> FramePipeline {
-    let terrain = testkit::builtin_terrain_for(config.scene.lod.tau_px);
+    let terrain = testkit::builtin_terrain();
     let summary = testkit::summary_of(&terrain);
     FramePipeline::new(&config.pipeline(), terrain, summary).expect("baseline pipeline")
 }

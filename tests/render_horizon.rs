@@ -81,7 +81,7 @@ fn a_16_mb_budget_flies_the_default_flight_within_it_and_without_holes() {
     const BUDGET: u64 = 16 << 20;
     let _turn = take_turn();
     let pyramid = builtin_pyramid();
-    let source = testkit::builtin_terrain_for(1.0);
+    let source = testkit::builtin_terrain();
     let summary = testkit::summary_of(&source);
     let path = default_flight(&pyramid);
     let config = DisplayConfig {

@@ -186,7 +186,7 @@ fn the_null_backend_counts_the_symbol_pass_and_the_withdrawn_frame() {
         let mut config = config(GlBackend::Egl, version);
         config.vertex_arrays = vertex_arrays;
         let mut gl = open(&config).expect("EGL display");
-        let terrain = testkit::builtin_terrain_for(config.scene.lod.tau_px);
+        let terrain = testkit::builtin_terrain();
         let summary = testkit::summary_of(&terrain);
         let mut pipeline =
             FramePipeline::new(&config.pipeline(), terrain, summary).expect("pipeline");

@@ -31,10 +31,6 @@ pub struct ImportArgs {
     /// Posts repeated from the neighbours on each side of a node.
     #[arg(long, default_value_t = BuildOptions::default().border)]
     pub border: u32,
-    /// The node meshes' error at level 1, metres (see `fly --mesh-error`;
-    /// default: those of tau 1 px, 12 m).
-    #[arg(long, default_value_t = MeshOptions::default().error_m)]
-    pub mesh_error: f32,
     /// Build from a deterministic synthetic SIZE x SIZE grid instead of
     /// files (scale tests and benchmarks).
     #[arg(long, hide = true, conflicts_with = "files")]
@@ -60,8 +56,8 @@ pub fn run(args: &ImportArgs) -> Result<()> {
     let path = args.out.join(FILE_NAME);
     pyramid::write_atomic(&built, &path, &bar)?;
     let opened = std::sync::Arc::new(Pyramid::open(&args.out)?);
-    let options = MeshOptions { error_m: args.mesh_error, ..MeshOptions::default() };
-    MeshedSource::open_or_build(opened, options, &bar).context("building the adaptive meshes")?;
+    MeshedSource::open_or_build(opened, MeshOptions::default(), &bar)
+        .context("building the error maps")?;
     bar.finish();
     let layout = built.layout();
     let present: u64 = built.info.levels.iter().map(|l| l.present).sum();

@@ -30,10 +30,10 @@ struct Summary<'a> {
     nodes_present: u64,
     /// Layers (files of one spacing) the pyramid was built from.
     layers: u32,
-    /// Level-0 samples, east and north.
-    samples: [u32; 2],
+    /// Level-0 posts, east and north.
+    posts: [u32; 2],
     spacing_m: [f64; 2],
-    /// Distance from the first to the last sample, east and north.
+    /// Distance from the first to the last post, east and north.
     extent: Extent,
     georef: Georef,
     delta_per_level: Vec<f32>,
@@ -92,7 +92,7 @@ fn summarise(pyramid: &Pyramid) -> Summary<'_> {
         node_count: layout.node_count(),
         nodes_present: info.levels.iter().map(|l| l.present).sum(),
         layers: info.layers,
-        samples: layout.posts,
+        posts: layout.posts,
         spacing_m: layout.spacing_m,
         extent: Extent { east_m: extent(0), north_m: extent(1) },
         georef: Georef {
@@ -134,9 +134,9 @@ fn table(s: &Summary) -> String {
     );
     line!(
         out,
-        "samples   {} x {}, {:.2} x {:.2} m apart, extent {:.2} x {:.2} km",
-        s.samples[0],
-        s.samples[1],
+        "posts     {} x {}, {:.2} x {:.2} m apart, extent {:.2} x {:.2} km",
+        s.posts[0],
+        s.posts[1],
         s.spacing_m[0],
         s.spacing_m[1],
         s.extent.east_m / 1e3,

@@ -63,14 +63,10 @@ pub struct ViewArgs {
     /// Horizontal field of view in degrees.
     #[arg(long, default_value_t = 60.0)]
     pub fov: f64,
-    /// The node meshes' error at level 1, metres (level l: this times
-    /// 2^(l-1), level 0 exact); 12 m per pixel of tau when omitted. Built
-    /// beside the pyramid on first use of each error.
-    #[arg(long)]
-    pub mesh_error: Option<f32>,
     /// Draw each level's posts as a regular grid instead of the node
-    /// meshes (Ulrich's chunks: each node's mesh simplified to its level's
-    /// error), which draw 4 times fewer triangles for the same bound.
+    /// meshes (Ulrich's chunks: each tile's mesh extracted from its node's
+    /// error map at the error its ring allows), which draw many times
+    /// fewer triangles for the same bound.
     #[arg(long)]
     pub regular_grid: bool,
     /// Triangles a frame to hold by raising tau above --tau (never below);
@@ -96,9 +92,6 @@ impl ViewArgs {
         }
         if !(self.fov.is_finite() && self.fov > 0.0 && self.fov < 179.0) {
             anyhow::bail!("--fov {} must be between 0 and 179 degrees", self.fov);
-        }
-        if let Some(error) = self.mesh_error.filter(|e| !(e.is_finite() && *e > 0.0)) {
-            anyhow::bail!("--mesh-error {error} must be a number of metres above 0");
         }
         if self.triangle_budget == Some(0) {
             anyhow::bail!("--triangle-budget 0: a frame needs at least 1 triangle");

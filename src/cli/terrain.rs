@@ -61,7 +61,7 @@ impl Terrain {
     /// Opens what `view` names (see the module doc).
     pub fn open(view: &ViewArgs, progress: &dyn Progress) -> Result<Terrain> {
         if view.dataset.as_deref() == Some(PROCEDURAL) {
-            return open_procedural(view);
+            return open_procedural();
         }
         let cache = Path::new("cache");
         let pyramid = Arc::new(ridgeline::dataset::open(view.dataset.as_deref(), cache, progress)?);
@@ -71,12 +71,9 @@ impl Terrain {
         let source: Arc<dyn NodeSource> = if view.regular_grid {
             pyramid.clone()
         } else {
-            let options = match view.mesh_error {
-                Some(error_m) => MeshOptions { error_m, ..MeshOptions::default() },
-                None => MeshOptions::for_tau(view.tau),
-            };
+            let options = MeshOptions::default();
             let meshed = MeshedSource::open_or_build(Arc::clone(&pyramid), options, progress)?;
-            summary.delta_per_level = meshed.delta_per_level();
+            summary = TerrainSummary::of_maps(pyramid.info(), meshed.info());
             Arc::new(meshed)
         };
         Ok(Terrain { ground: Ground::Pyramid(pyramid), source, summary, name, gapless })
@@ -148,10 +145,7 @@ impl Terrain {
 }
 
 /// The procedural earth of [`EarthParams::display_earth`], drawn as regular grids.
-fn open_procedural(view: &ViewArgs) -> Result<Terrain> {
-    if view.mesh_error.is_some() {
-        bail!("--mesh-error: --dataset procedural has no node meshes (it draws regular grids)");
-    }
+fn open_procedural() -> Result<Terrain> {
     let earth = Arc::new(ProceduralEarth::new(EarthParams::display_earth())?);
     let summary = TerrainSummary::from_procedural(&earth);
     let source: Arc<dyn NodeSource> = earth.clone();

@@ -23,6 +23,11 @@ pub(crate) struct SlotList {
 }
 
 impl SlotList {
+    /// Heap bytes a slot takes in the list.
+    pub(crate) fn bytes_per_slot() -> u64 {
+        std::mem::size_of::<Link>() as u64
+    }
+
     pub fn new(slots: u32) -> Self {
         let unlinked = Link { prev: NIL, next: NIL, linked: false };
         SlotList { links: vec![unlinked; slots as usize], head: NIL, tail: NIL, len: 0 }

@@ -42,7 +42,11 @@ pub fn drawn_tiles(list: &DrawList, vertices: &[u8], indices: &[u8]) -> (DrawLis
             );
             let own: Vec<TileVertex> = block.vertices().collect();
             let local: Vec<u16> = numbers.iter().map(|&n| (n - first) as u16).collect();
-            let counts = MeshCounts { vertices: own.len() as u32, indices: local.len() as u32 };
+            let counts = MeshCounts {
+                vertices: own.len() as u32,
+                indices: local.len() as u32,
+                skirt_indices: 0,
+            };
             let offset = staging.len() as u32;
             staging.resize(staging.len() + counts.block_bytes() as usize, 0);
             write_block(&mut staging[offset as usize..], &own, &local);

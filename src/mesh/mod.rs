@@ -18,9 +18,11 @@
 //! | [`mod@view_refine`] | RTIN refinement for a camera: split while error > tau D / K |
 //! | [`error`] | [`MeshError`]: why a grid or a mesh is refused |
 
+pub mod code;
 pub mod delta;
 pub mod error;
 pub mod rtin;
+mod scan;
 pub mod view_refine;
 
 pub use delta::{max_post_distance, max_surface_distance, MeshSampler};

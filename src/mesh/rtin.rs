@@ -16,6 +16,7 @@
 //! errors add up down the hierarchy and its meshes exceed their threshold.
 
 use super::error::MeshError;
+use super::scan::scan_triangle;
 use super::{cross, HeightGrid, Mesh, MAX_VERTICES};
 
 /// One triangle of the hierarchy: hypotenuse `a`-`b`, right angle at `c`, in
@@ -456,22 +457,11 @@ impl Rtin {
     fn record(&mut self, grid: &HeightGrid, t: Triangle, options: RtinOptions) {
         let corners = t.ccw();
         let h = corners.map(|[i, j]| grid.at(i, j) as f64);
-        let mut worst = 0.0f64;
-        let mut z = [f32::INFINITY, f32::NEG_INFINITY];
         // Posts without data (NaN, see `HeightGrid::with_voids`): a triangle
         // with none needs no vertex; one with some but not all is split down
         // to half cells, so that the mesh has data exactly where the grid has.
-        let (mut with_data, mut without) = (0u32, 0u32);
-        for_each_post(corners, |i, j, w| {
-            let post = grid.at(i, j);
-            if post.is_nan() {
-                without += 1;
-                return;
-            }
-            with_data += 1;
-            worst = worst.max((post as f64 - on_plane(h, w)).abs());
-            z = [z[0].min(post), z[1].max(post)];
-        });
+        let scan = scan_triangle(grid, corners, h);
+        let (mut worst, with_data, without, z) = (scan.worst, scan.with_data, scan.without, scan.z);
         if options.metric == Metric::Surface && without == 0 {
             for (p, q) in [(0, 1), (1, 2), (2, 0)] {
                 let crossing = anti_diagonal_crossings(grid, corners[p], h[p], corners[q], h[q]);
@@ -636,5 +626,46 @@ mod tests {
         let rtin = Rtin::new(&grid, RtinOptions::default()).unwrap();
         assert_eq!(rtin.extract(0.1), Err(MeshError::TooManyVertices { count: 257 * 257 }));
         assert!(rtin.extract(1.0).is_ok());
+    }
+
+    /// The scan against the plain per-post loop, on every triangle of a
+    /// small hierarchy over rough heights with a few posts without data.
+    #[test]
+    fn the_scan_matches_the_post_by_post_loop() {
+        let side = 33u32;
+        let heights: Vec<f32> = (0..side * side)
+            .map(|k| {
+                let (i, j) = ((k % side) as f32, (k / side) as f32);
+                if k % 97 == 13 {
+                    f32::NAN
+                } else {
+                    (i * 0.7).sin() * 40.0 + (j * 1.3).cos() * 25.0 + i * j * 0.05
+                }
+            })
+            .collect();
+        let grid = HeightGrid::with_voids(side, &heights).unwrap();
+        for depth in 0..10 {
+            for root in Triangle::roots(side - 1) {
+                root.for_each_at_depth(depth, &mut |t| {
+                    let corners = t.ccw();
+                    let h = corners.map(|[i, j]| grid.at(i, j) as f64);
+                    let scan = scan_triangle(&grid, corners, h);
+                    let (mut worst, mut with, mut without) = (0.0f64, 0u32, 0u32);
+                    for_each_post(corners, |i, j, w| {
+                        let post = grid.at(i, j);
+                        if post.is_nan() {
+                            without += 1;
+                        } else {
+                            with += 1;
+                            worst = worst.max((post as f64 - on_plane(h, w)).abs());
+                        }
+                    });
+                    assert_eq!((scan.with_data, scan.without), (with, without), "{t:?}");
+                    if h.iter().all(|v| v.is_finite()) {
+                        assert!((scan.worst - worst).abs() < 1e-9, "{t:?}: {} {worst}", scan.worst);
+                    }
+                });
+            }
+        }
     }
 }

@@ -1,59 +1,105 @@
-//! A mesh file, `meshes-12m.rlm` beside the pyramid (one per error): little-endian, versioned,
-//! checksummed per record, memory-mapped, written atomically.
+//! The map file, `meshes.rlm` beside the pyramid: every stored node's
+//! error map, one file for every tau and viewport. Little-endian,
+//! versioned, checksummed per record, memory-mapped, written atomically
+//! and streaming (records are written as nodes finish; memory does not
+//! grow with the pyramid), in one process or in shards merged afterwards.
 //!
 //! ```text
-//! header  magic "RIDGEMSH", version u32, levels u32, nodes u64,
-//!         error_m f32, depth u32, tile_cells u32, pyramid u32 (see below),
-//!         per level: delta_max f32, then crc32 of all of the above
+//! header  magic "RIDGEMAP", version u32, levels u32, nodes u64,
+//!         pyramid u32 (see below), depth u32, tile_cells u32,
+//!         finest_view_px f64, per level: floor_m f32,
+//!         reference_delta_max f32, error_max f32 (the coarsest mesh's
+//!         error); then crc32 of all of the above
 //! table   per node of the pyramid's layout, in its node order (24 bytes):
-//!         offset u64 (u64::MAX: absent), vertices u32, indices u32,
-//!         delta f32, crc32 of (node index, record)
-//! records post_level u32, the vertices (16 bytes each, [`MeshVertex`]),
-//!         the indices (u16), zero padding to 4 bytes
+//!         offset u64 (u64::MAX: absent from the pyramid, u64::MAX - 1:
+//!         not built by this shard), len u32, count u32, shape u32 (the
+//!         record's kind, plus twice its cells), crc32
+//!         of (node index, record)
+//! records kind u8 (0 dense, 1 sparse), post_level u8,
+//!         hierarchy_leaves u8, 0, cells u32, floor_m f32,
+//!         reference_delta f32, count u32; dense: count codes (u8);
+//!         sparse: count keys (u32), heights (f32), codes (u8), normals
+//!         ([i8; 2]); zero padding to 4 bytes
 //! ```
 //!
 //! `pyramid` is the CRC-32 of the first 64 KiB of the pyramid file (its
-//! header and node table, or all of it): a mesh file built for another
+//! header and node table, or all of it): a map file built for another
 //! pyramid, or for an earlier import of this one, is refused at open and
 //! rebuilt by the caller.
 
 use std::fs::File;
-use std::io::{BufWriter, Read, Write};
+use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use memmap2::Mmap;
+use rayon::prelude::*;
 
-use super::build::BuiltMeshes;
-use super::MeshesError;
-use crate::node::{MeshVertex, NodeError, NodeId, NodeLayout, NodeMesh};
-use crate::pyramid::replace_file;
+use super::build::build_map;
+use super::{MeshOptions, MeshesError};
+use crate::mesh::code::{code_error, ALWAYS};
+use crate::node::{ErrorMap, NodeError, NodeId, NodeLayout, NodeSource};
+use crate::pyramid::{replace_file, Progress};
 
 #[cfg(target_endian = "big")]
-compile_error!("the mesh file is read by casting little-endian bytes");
+compile_error!("the map file is read by casting little-endian bytes");
 
-/// The mesh file's name in a pyramid's cache directory, for meshes of
-/// `error_m` at level 1 (files of several errors live side by side).
-pub fn mesh_file_name(error_m: f32) -> String {
-    format!("meshes-{error_m}m.rlm")
-}
-const MAGIC: [u8; 8] = *b"RIDGEMSH";
-/// 6: vertex posts in half steps, cell centres of fans at odd ones.
-const VERSION: u32 = 7;
-const FIXED_LEN: usize = 40;
+/// The map file's name in a pyramid's cache directory.
+pub const MAP_FILE_NAME: &str = "meshes.rlm";
+
+const MAGIC: [u8; 8] = *b"RIDGEMAP";
+const VERSION: u32 = 1;
+const FIXED_LEN: usize = 48;
+/// Bytes of one level's summary in the header.
+const LEVEL_LEN: usize = 12;
 const ENTRY_LEN: usize = 24;
+const RECORD_HEAD: usize = 20;
 const ABSENT: u64 = u64::MAX;
+const NOT_BUILT: u64 = u64::MAX - 1;
+const DENSE: u32 = 0;
+const SPARSE: u32 = 1;
 /// Bytes of the pyramid file its identity covers.
 const PYRAMID_ID_BYTES: u64 = 64 * 1024;
+/// Bytes a decoded map takes beside its arrays: `above`'s 4 x 256 counts.
+const ABOVE_BYTES: u64 = 4 * 256 * 4;
 
 /// What the header says.
-#[derive(Clone, Debug, PartialEq)]
-pub struct MeshHeader {
-    /// The options the meshes were built with.
-    pub options: super::MeshOptions,
-    /// Largest mesh delta of each level, finest first.
-    pub delta_per_level: Vec<f32>,
-    /// Identity of the pyramid file the meshes belong to.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct StoreInfo {
+    /// The options the maps were built with.
+    pub options: MeshOptions,
+    /// Per level, the smallest error its sparse maps serve (0 where every
+    /// node of the level is dense), metres.
+    pub floor_per_level: Vec<f32>,
+    /// Per level, the largest reference delta of its maps, metres.
+    pub reference_delta_per_level: Vec<f32>,
+    /// Per level, the error of its coarsest meshes (the largest split
+    /// error its maps keep), metres: past it a larger error draws nothing
+    /// coarser.
+    pub max_error_per_level: Vec<f32>,
+    /// Identity of the pyramid file the maps belong to.
     pub pyramid: u32,
+}
+
+impl StoreInfo {
+    /// What each level's maps can do, for the tiles' errors.
+    pub fn map_errors(&self) -> crate::tiles::errors::MapErrors {
+        let f64s = |v: &[f32]| v.iter().map(|&x| x as f64).collect();
+        crate::tiles::errors::MapErrors {
+            floor: f64s(&self.floor_per_level),
+            reference: f64s(&self.reference_delta_per_level),
+            max: f64s(&self.max_error_per_level),
+        }
+    }
+
+    /// The error of level `l`'s finest mesh, metres: its floor and its
+    /// reference lattice's delta (what the rings' Ulrich rule needs).
+    pub fn finest_error_per_level(&self) -> Vec<f64> {
+        self.floor_per_level
+            .iter()
+            .zip(&self.reference_delta_per_level)
+            .map(|(&f, &r)| f as f64 + r as f64)
+            .collect()
+    }
 }
 
 /// The identity of the pyramid file at `path` (see the module notes).
@@ -63,93 +109,62 @@ pub fn pyramid_identity(path: &Path) -> std::io::Result<u32> {
     Ok(crc32fast::hash(&bytes))
 }
 
-/// Writes `meshes` (built for `layout`, the pyramid of identity `pyramid`)
-/// to `path` atomically.
-pub fn write_meshes(
-    meshes: &BuiltMeshes,
-    layout: &NodeLayout,
-    pyramid: u32,
-    path: &Path,
-) -> Result<(), MeshesError> {
-    let io = |path: &Path, source| MeshesError::Io { path: path.to_path_buf(), source };
-    replace_file(
-        path,
-        |temporary| {
-            let file = File::create(temporary).map_err(|e| io(temporary, e))?;
-            let mut out = BufWriter::new(file);
-            encode(meshes, layout, pyramid, &mut out).map_err(|e| io(temporary, e))?;
-            let file = out.into_inner().map_err(|e| io(temporary, e.into_error()))?;
-            file.sync_all().map_err(|e| io(temporary, e))
-        },
-        io,
-    )
+/// One node's table entry.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Entry {
+    offset: u64,
+    len: u32,
+    count: u32,
+    /// The record's kind (bit 0) and twice its cells.
+    shape: u32,
+    crc: u32,
 }
 
-fn encode(
-    meshes: &BuiltMeshes,
-    layout: &NodeLayout,
-    pyramid: u32,
-    out: &mut impl Write,
-) -> std::io::Result<()> {
-    let deltas = meshes.delta_per_level();
-    let mut header = Vec::with_capacity(FIXED_LEN + 4 * deltas.len() + 4);
-    header.extend_from_slice(&MAGIC);
-    header.extend_from_slice(&VERSION.to_le_bytes());
-    header.extend_from_slice(&(layout.levels as u32).to_le_bytes());
-    header.extend_from_slice(&layout.node_count().to_le_bytes());
-    header.extend_from_slice(&meshes.options.error_m.to_le_bytes());
-    header.extend_from_slice(&(meshes.options.depth as u32).to_le_bytes());
-    header.extend_from_slice(&meshes.options.tile_cells.to_le_bytes());
-    header.extend_from_slice(&pyramid.to_le_bytes());
-    for delta in &deltas {
-        header.extend_from_slice(&delta.to_le_bytes());
+impl Entry {
+    const ABSENT: Entry = Entry { offset: ABSENT, len: 0, count: 0, shape: 0, crc: 0 };
+    const NOT_BUILT: Entry = Entry { offset: NOT_BUILT, ..Entry::ABSENT };
+
+    fn encode(&self) -> [u8; ENTRY_LEN] {
+        let mut out = [0u8; ENTRY_LEN];
+        out[0..8].copy_from_slice(&self.offset.to_le_bytes());
+        out[8..12].copy_from_slice(&self.len.to_le_bytes());
+        out[12..16].copy_from_slice(&self.count.to_le_bytes());
+        out[16..20].copy_from_slice(&self.shape.to_le_bytes());
+        out[20..24].copy_from_slice(&self.crc.to_le_bytes());
+        out
     }
-    header.extend_from_slice(&crc32fast::hash(&header).to_le_bytes());
-    out.write_all(&header)?;
-    let table_end = header.len() + ENTRY_LEN * layout.node_count() as usize;
-    let mut offset = table_end as u64;
-    let mut index = 0u64;
-    let mut records = Vec::new();
-    for level in 0..layout.levels {
-        let [nx, ny] = layout.nodes_at(level);
-        for y in 0..ny {
-            for x in 0..nx {
-                let id = NodeId::new(level, x, y);
-                let entry = match meshes.mesh(layout, id) {
-                    Some(built) => {
-                        let record = record_bytes(&built.mesh);
-                        let crc = record_crc(index, &record);
-                        let entry = Entry {
-                            offset,
-                            vertices: built.mesh.vertices.len() as u32,
-                            indices: built.mesh.indices.len() as u32,
-                            delta: built.delta,
-                            crc,
-                        };
-                        offset += record.len() as u64;
-                        records.push(record);
-                        entry
-                    }
-                    None => Entry { offset: ABSENT, vertices: 0, indices: 0, delta: 0.0, crc: 0 },
-                };
-                out.write_all(&entry.encode())?;
-                index += 1;
-            }
+
+    fn decode(bytes: &[u8]) -> Entry {
+        let u32_at = |k: usize| u32::from_le_bytes(bytes[k..k + 4].try_into().expect("4 bytes"));
+        Entry {
+            offset: u64::from_le_bytes(bytes[0..8].try_into().expect("8 bytes")),
+            len: u32_at(8),
+            count: u32_at(12),
+            shape: u32_at(16),
+            crc: u32_at(20),
         }
     }
-    for record in records {
-        out.write_all(&record)?;
-    }
-    Ok(())
-}
 
-fn record_bytes(mesh: &NodeMesh) -> Vec<u8> {
-    let mut bytes = Vec::with_capacity(4 + 16 * mesh.vertices.len() + 2 * mesh.indices.len() + 2);
-    bytes.extend_from_slice(&(mesh.post_level as u32).to_le_bytes());
-    bytes.extend_from_slice(bytemuck::cast_slice(&mesh.vertices));
-    bytes.extend_from_slice(bytemuck::cast_slice(&mesh.indices));
-    bytes.resize(bytes.len().next_multiple_of(4), 0);
-    bytes
+    fn is_record(&self) -> bool {
+        self.offset < NOT_BUILT
+    }
+
+    fn kind(&self) -> u32 {
+        self.shape & 1
+    }
+
+    /// The heap a decoded map of this record takes, bytes: its arrays,
+    /// `above`, and for a sparse map its row index.
+    fn heap_bytes(&self) -> u64 {
+        if !self.is_record() {
+            return 0;
+        }
+        let cells = (self.shape >> 1) as u64;
+        match self.kind() {
+            DENSE => self.count as u64 + ABOVE_BYTES,
+            _ => 11 * self.count as u64 + ABOVE_BYTES + 4 * (cells + 2),
+        }
+    }
 }
 
 fn record_crc(index: u64, record: &[u8]) -> u32 {
@@ -159,65 +174,319 @@ fn record_crc(index: u64, record: &[u8]) -> u32 {
     hasher.finalize()
 }
 
-/// One node's table entry.
-#[derive(Clone, Copy, Debug)]
-struct Entry {
-    offset: u64,
-    vertices: u32,
-    indices: u32,
-    delta: f32,
-    crc: u32,
+/// A node's record and its entry (offset still to be set).
+fn encode_record(index: u64, map: &ErrorMap) -> (Vec<u8>, Entry) {
+    let dense = map.is_dense();
+    let count = if dense { map.codes.len() } else { map.keys.len() };
+    let mut bytes = Vec::with_capacity(RECORD_HEAD + 11 * count + 3);
+    bytes.extend_from_slice(&[u8::from(!dense), map.post_level, map.hierarchy_leaves as u8, 0]);
+    bytes.extend_from_slice(&map.cells.to_le_bytes());
+    bytes.extend_from_slice(&map.floor_m.to_le_bytes());
+    bytes.extend_from_slice(&map.reference_delta.to_le_bytes());
+    bytes.extend_from_slice(&(count as u32).to_le_bytes());
+    if !dense {
+        bytes.extend_from_slice(bytemuck::cast_slice(&map.keys));
+        bytes.extend_from_slice(bytemuck::cast_slice(&map.heights));
+    }
+    bytes.extend_from_slice(&map.codes);
+    if !dense {
+        bytes.extend_from_slice(bytemuck::cast_slice(&map.normals));
+    }
+    bytes.resize(bytes.len().next_multiple_of(4), 0);
+    let kind = if dense { DENSE } else { SPARSE };
+    let entry = Entry {
+        offset: 0,
+        len: bytes.len() as u32,
+        count: count as u32,
+        shape: kind | map.cells << 1,
+        crc: record_crc(index, &bytes),
+    };
+    (bytes, entry)
 }
 
-impl Entry {
-    fn encode(&self) -> [u8; ENTRY_LEN] {
-        let mut out = [0u8; ENTRY_LEN];
-        out[0..8].copy_from_slice(&self.offset.to_le_bytes());
-        out[8..12].copy_from_slice(&self.vertices.to_le_bytes());
-        out[12..16].copy_from_slice(&self.indices.to_le_bytes());
-        out[16..20].copy_from_slice(&self.delta.to_le_bytes());
-        out[20..24].copy_from_slice(&self.crc.to_le_bytes());
-        out
+/// Decodes a record into `out`, reusing its buffers and reserving exactly
+/// (a buffer is counted at what the node needs, as the memory budget plans).
+fn decode_record(record: &[u8], entry: &Entry, out: &mut ErrorMap) -> Result<(), String> {
+    let u32_at = |k: usize| u32::from_le_bytes(record[k..k + 4].try_into().expect("4 bytes"));
+    let (kind, post_level, leaves) = (record[0] as u32, record[1], record[2] != 0);
+    let (cells, count) = (u32_at(4), u32_at(16) as usize);
+    let side = cells as u64 + 1;
+    let per_post = if kind == DENSE { 1 } else { 11 };
+    let fits = RECORD_HEAD + per_post * count <= record.len();
+    let shape = kind | cells << 1 == entry.shape
+        && count == entry.count as usize
+        && cells.is_power_of_two()
+        && cells <= 1 << 15
+        && (kind == SPARSE || count as u64 == side * side);
+    if !(fits && shape) {
+        return Err(format!("map record does not fit its entry ({entry:?})"));
     }
-
-    fn decode(bytes: &[u8]) -> Entry {
-        let u32_at = |k: usize| u32::from_le_bytes(bytes[k..k + 4].try_into().expect("4 bytes"));
-        Entry {
-            offset: u64::from_le_bytes(bytes[0..8].try_into().expect("8 bytes")),
-            vertices: u32_at(8),
-            indices: u32_at(12),
-            delta: f32::from_bits(u32_at(16)),
-            crc: u32_at(20),
+    out.post_level = post_level;
+    out.cells = cells;
+    out.hierarchy_leaves = leaves;
+    out.floor_m = f32::from_bits(u32_at(8));
+    out.reference_delta = f32::from_bits(u32_at(12));
+    if !(out.floor_m >= 0.0 && out.reference_delta >= 0.0) {
+        return Err("map record's floor or reference delta is not a distance".into());
+    }
+    let body = &record[RECORD_HEAD..];
+    if kind == DENSE {
+        out.codes = body[..count].to_vec();
+    } else {
+        let (keys, rest) = body.split_at(4 * count);
+        let (heights, rest) = rest.split_at(4 * count);
+        let (codes, rest) = rest.split_at(count);
+        out.keys = bytemuck::pod_collect_to_vec(keys);
+        out.heights = bytemuck::pod_collect_to_vec(heights);
+        out.codes = codes.to_vec();
+        out.normals = bytemuck::pod_collect_to_vec(&rest[..2 * count]);
+        let ascending = out.keys.windows(2).all(|w| w[0] < w[1]);
+        if !ascending || out.keys.last().is_some_and(|&k| k as u64 >= side * side) {
+            return Err("map record's posts are not ascending inside the node".into());
+        }
+        if out.heights.iter().any(|h| h.is_infinite()) {
+            return Err("map record has an infinite height".into());
         }
     }
+    out.count_codes();
+    out.index_rows();
+    Ok(())
+}
 
-    /// Bytes of the record the entry describes.
-    fn record_len(&self) -> u64 {
-        (4 + 16 * self.vertices as u64 + 2 * self.indices as u64).next_multiple_of(4)
+/// Builds the maps of `nodes` (stored nodes of `source`, ascending in the
+/// layout's node order) and writes them to `out` atomically, streaming: a
+/// few nodes per core are held at a time. Nodes of the layout not in
+/// `nodes` are marked absent (not stored) or not built (a shard's part).
+/// `pyramid` is the pyramid file's identity.
+pub fn build_store(
+    source: &dyn NodeSource,
+    pyramid: u32,
+    nodes: &[NodeId],
+    options: MeshOptions,
+    out: &Path,
+    progress: &dyn Progress,
+) -> Result<StoreInfo, MeshesError> {
+    options.validate(source.layout())?;
+    let layout = *source.layout();
+    let io = |path: &Path, source| MeshesError::Io { path: path.to_path_buf(), source };
+    let mut info = StoreInfo {
+        options,
+        floor_per_level: vec![0.0; layout.levels as usize],
+        reference_delta_per_level: vec![0.0; layout.levels as usize],
+        max_error_per_level: vec![0.0; layout.levels as usize],
+        pyramid,
+    };
+    progress.phase("meshes", nodes.len() as u64);
+    replace_file(
+        out,
+        |temporary| {
+            let file = File::create(temporary).map_err(|e| io(temporary, e))?;
+            let mut writer = StoreWriter::new(file, &layout);
+            writer.start(&info).map_err(|e| io(temporary, e))?;
+            let mut table = initial_table(source, &layout);
+            let chunk = 4 * rayon::current_num_threads().max(1);
+            for ids in nodes.chunks(chunk) {
+                let built: Vec<Result<(u64, ErrorMap), MeshesError>> = ids
+                    .par_iter()
+                    .map(|&id| {
+                        let map = build_map(source, id, &options)?;
+                        progress.advance(1);
+                        Ok((layout.node_index(id).expect("a node of the layout"), map))
+                    })
+                    .collect();
+                for result in built {
+                    let (index, map) = result?;
+                    note_level(&mut info, nodes_level(&layout, index), &map);
+                    let entry = writer.append(index, &map).map_err(|e| io(temporary, e))?;
+                    table[index as usize] = entry;
+                }
+            }
+            writer.finish(&info, &table).map_err(|e| io(temporary, e))
+        },
+        io,
+    )?;
+    Ok(info)
+}
+
+/// The table before any record: absent where the pyramid stores no node,
+/// not built elsewhere.
+fn initial_table(source: &dyn NodeSource, layout: &NodeLayout) -> Vec<Entry> {
+    let mut table = Vec::with_capacity(layout.node_count() as usize);
+    for level in 0..layout.levels {
+        let [nx, ny] = layout.nodes_at(level);
+        for y in 0..ny {
+            for x in 0..nx {
+                let stored = source.has_node(NodeId::new(level, x, y));
+                table.push(if stored { Entry::NOT_BUILT } else { Entry::ABSENT });
+            }
+        }
+    }
+    table
+}
+
+fn nodes_level(layout: &NodeLayout, index: u64) -> u8 {
+    let mut before = 0;
+    for level in 0..layout.levels {
+        before += layout.nodes_at_count(level);
+        if index < before {
+            return level;
+        }
+    }
+    layout.levels - 1
+}
+
+fn note_level(info: &mut StoreInfo, level: u8, map: &ErrorMap) {
+    let l = level as usize;
+    info.floor_per_level[l] = info.floor_per_level[l].max(map.floor_m);
+    info.reference_delta_per_level[l] = info.reference_delta_per_level[l].max(map.reference_delta);
+    let coarsest = map.codes.iter().filter(|&&c| c < ALWAYS).max().map_or(0.0, |&c| code_error(c));
+    info.max_error_per_level[l] = info.max_error_per_level[l].max(coarsest as f32);
+}
+
+/// Writes a map file: the header and table reserved first, records
+/// appended, then the table and the header filled in.
+struct StoreWriter {
+    out: BufWriter<File>,
+    offset: u64,
+    header_len: usize,
+    table_len: usize,
+}
+
+impl StoreWriter {
+    fn new(file: File, layout: &NodeLayout) -> StoreWriter {
+        let header_len = FIXED_LEN + LEVEL_LEN * layout.levels as usize + 4;
+        let table_len = ENTRY_LEN * layout.node_count() as usize;
+        let offset = (header_len + table_len) as u64;
+        StoreWriter { out: BufWriter::new(file), offset, header_len, table_len }
+    }
+
+    fn start(&mut self, info: &StoreInfo) -> std::io::Result<()> {
+        // Placeholders: a file killed before `finish` has a bad header
+        // checksum, and is never renamed into place anyway.
+        let zeros = vec![0u8; self.header_len + self.table_len];
+        debug_assert!(!info.floor_per_level.is_empty());
+        self.out.write_all(&zeros)
+    }
+
+    fn append(&mut self, index: u64, map: &ErrorMap) -> std::io::Result<Entry> {
+        let (bytes, entry) = encode_record(index, map);
+        self.append_bytes(&bytes, entry)
+    }
+
+    fn append_bytes(&mut self, bytes: &[u8], entry: Entry) -> std::io::Result<Entry> {
+        self.out.write_all(bytes)?;
+        let placed = Entry { offset: self.offset, ..entry };
+        self.offset += bytes.len() as u64;
+        Ok(placed)
+    }
+
+    fn finish(mut self, info: &StoreInfo, table: &[Entry]) -> std::io::Result<()> {
+        self.out.seek(SeekFrom::Start(0))?;
+        self.out.write_all(&encode_header(info, table.len() as u64))?;
+        for entry in table {
+            self.out.write_all(&entry.encode())?;
+        }
+        let file = self.out.into_inner().map_err(|e| e.into_error())?;
+        file.sync_all()
     }
 }
 
-/// An open mesh file.
-pub struct MeshFile {
+fn encode_header(info: &StoreInfo, nodes: u64) -> Vec<u8> {
+    let levels = info.floor_per_level.len();
+    let mut header = Vec::with_capacity(FIXED_LEN + LEVEL_LEN * levels + 4);
+    header.extend_from_slice(&MAGIC);
+    header.extend_from_slice(&VERSION.to_le_bytes());
+    header.extend_from_slice(&(levels as u32).to_le_bytes());
+    header.extend_from_slice(&nodes.to_le_bytes());
+    header.extend_from_slice(&info.pyramid.to_le_bytes());
+    header.extend_from_slice(&(info.options.depth as u32).to_le_bytes());
+    header.extend_from_slice(&info.options.tile_cells.to_le_bytes());
+    header.extend_from_slice(&info.options.finest_view_px.to_le_bytes());
+    header.resize(FIXED_LEN, 0);
+    for l in 0..levels {
+        header.extend_from_slice(&info.floor_per_level[l].to_le_bytes());
+        header.extend_from_slice(&info.reference_delta_per_level[l].to_le_bytes());
+        header.extend_from_slice(&info.max_error_per_level[l].to_le_bytes());
+    }
+    header.extend_from_slice(&crc32fast::hash(&header).to_le_bytes());
+    header
+}
+
+fn decode_header(bytes: &[u8], layout: &NodeLayout) -> Result<(StoreInfo, usize), String> {
+    if bytes.len() < FIXED_LEN || bytes[0..8] != MAGIC {
+        return Err("not a Ridgeline map file".into());
+    }
+    let u32_at = |k: usize| u32::from_le_bytes(bytes[k..k + 4].try_into().expect("4 bytes"));
+    let version = u32_at(8);
+    if version != VERSION {
+        return Err(format!("map file version {version}, this build reads {VERSION}"));
+    }
+    let levels = u32_at(12) as usize;
+    let nodes = u64::from_le_bytes(bytes[16..24].try_into().expect("8 bytes"));
+    if levels != layout.levels as usize || nodes != layout.node_count() {
+        return Err(format!("{levels} levels and {nodes} nodes, the pyramid has other"));
+    }
+    let crc_at = FIXED_LEN + LEVEL_LEN * levels;
+    if bytes.len() < crc_at + 4 {
+        return Err("truncated header".into());
+    }
+    if crc32fast::hash(&bytes[..crc_at]) != u32_at(crc_at) {
+        return Err("header checksum mismatch".into());
+    }
+    let options = MeshOptions {
+        depth: u32_at(28).min(255) as u8,
+        tile_cells: u32_at(32),
+        finest_view_px: f64::from_le_bytes(bytes[36..44].try_into().expect("8 bytes")),
+    };
+    options.validate(layout).map_err(|e| e.to_string())?;
+    let level_value =
+        |l: usize, k: usize| f32::from_bits(u32_at(FIXED_LEN + LEVEL_LEN * l + 4 * k));
+    let floor_per_level: Vec<f32> = (0..levels).map(|l| level_value(l, 0)).collect();
+    let reference_delta_per_level: Vec<f32> = (0..levels).map(|l| level_value(l, 1)).collect();
+    let max_error_per_level: Vec<f32> = (0..levels).map(|l| level_value(l, 2)).collect();
+    let mut distances =
+        floor_per_level.iter().chain(&reference_delta_per_level).chain(&max_error_per_level);
+    if distances.any(|d| !(d.is_finite() && *d >= 0.0)) {
+        return Err("level floors or reference deltas are not distances".into());
+    }
+    let info = StoreInfo {
+        options,
+        floor_per_level,
+        reference_delta_per_level,
+        max_error_per_level,
+        pyramid: u32_at(24),
+    };
+    Ok((info, crc_at + 4))
+}
+
+/// An open map file.
+pub struct MapFile {
     path: PathBuf,
     map: Mmap,
-    header: MeshHeader,
+    info: StoreInfo,
     table: usize,
     nodes: u64,
 }
 
-impl MeshFile {
-    /// Opens and checks the header of the mesh file at `path`, which must
+impl MapFile {
+    /// Opens and checks the header of the map file at `path`, which must
     /// belong to the pyramid of `layout` and identity `pyramid`.
-    pub fn open(path: &Path, layout: &NodeLayout, pyramid: u32) -> Result<MeshFile, MeshesError> {
+    pub fn open(path: &Path, layout: &NodeLayout, pyramid: u32) -> Result<MapFile, MeshesError> {
+        let file = MapFile::open_part(path, layout)?;
+        if file.info.pyramid != pyramid {
+            let problem = "built for another pyramid (or an earlier import)".into();
+            return Err(MeshesError::Corrupt { path: path.to_path_buf(), problem });
+        }
+        Ok(file)
+    }
+
+    /// Opens a map file or a shard's part of one, whatever its pyramid.
+    fn open_part(path: &Path, layout: &NodeLayout) -> Result<MapFile, MeshesError> {
         let io = |source| MeshesError::Io { path: path.to_path_buf(), source };
         let file = File::open(path).map_err(io)?;
         let map = map_file(&file).map_err(io)?;
         let corrupt = |problem: String| MeshesError::Corrupt { path: path.to_path_buf(), problem };
-        let (header, table) = decode_header(&map, layout).map_err(corrupt)?;
-        if header.pyramid != pyramid {
-            return Err(corrupt("built for another pyramid (or an earlier import)".into()));
-        }
+        let (info, table) = decode_header(&map, layout).map_err(corrupt)?;
         let nodes = layout.node_count();
         let end = table as u64 + nodes * ENTRY_LEN as u64;
         if (map.len() as u64) < end {
@@ -226,37 +495,40 @@ impl MeshFile {
                 map.len()
             )));
         }
-        Ok(MeshFile { path: path.to_path_buf(), map, header, table, nodes })
+        Ok(MapFile { path: path.to_path_buf(), map, info, table, nodes })
     }
 
-    /// The heap, bytes, the largest mesh of the file takes once read
-    /// (its vertices and indices; [`MeshFile::read`] reserves exactly).
-    pub fn largest_mesh_bytes(&self) -> u64 {
-        (0..self.nodes as usize).map(|index| self.entry_bytes(index)).max().unwrap_or(0)
+    fn entry(&self, index: u64) -> Entry {
+        let at = self.table + index as usize * ENTRY_LEN;
+        Entry::decode(&self.map[at..at + ENTRY_LEN])
     }
 
-    /// The heap, bytes, node `id`'s mesh takes once read; 0 when the file
-    /// has none for it.
-    pub fn mesh_bytes(&self, layout: &NodeLayout, id: NodeId) -> u64 {
+    /// The heap, bytes, the largest map of the file takes once read.
+    pub fn largest_map_bytes(&self) -> u64 {
+        (0..self.nodes).map(|index| self.entry(index).heap_bytes()).max().unwrap_or(0)
+    }
+
+    /// The heap, bytes, node `id`'s map takes once read (0: none).
+    pub fn map_bytes(&self, layout: &NodeLayout, id: NodeId) -> u64 {
         match layout.node_index(id) {
-            Some(index) if index < self.nodes => self.entry_bytes(index as usize),
+            Some(index) if index < self.nodes => self.entry(index).heap_bytes(),
             _ => 0,
         }
     }
 
-    fn entry_bytes(&self, index: usize) -> u64 {
-        let at = self.table + index * ENTRY_LEN;
-        let entry = Entry::decode(&self.map[at..at + ENTRY_LEN]);
-        if entry.offset == ABSENT {
-            return 0;
-        }
-        let vertex = std::mem::size_of::<MeshVertex>() as u64;
-        vertex * entry.vertices as u64 + 2 * entry.indices as u64
+    /// Bytes of the file.
+    pub fn len(&self) -> u64 {
+        self.map.len() as u64
+    }
+
+    /// Whether the file is empty (never: a header is there).
+    pub fn is_empty(&self) -> bool {
+        self.map.is_empty()
     }
 
     /// What the header says.
-    pub fn header(&self) -> &MeshHeader {
-        &self.header
+    pub fn info(&self) -> &StoreInfo {
+        &self.info
     }
 
     /// The path the file was opened from.
@@ -264,95 +536,152 @@ impl MeshFile {
         &self.path
     }
 
-    /// Reads node `id`'s mesh into `out`, reusing its buffers, and returns
-    /// its delta; a damaged record is [`NodeError::Corrupt`] and leaves
-    /// `out` as it was. An absent node has an empty mesh.
+    /// Whether every stored node has its map (not a shard's part).
+    pub fn is_complete(&self) -> bool {
+        (0..self.nodes).all(|index| self.entry(index).offset != NOT_BUILT)
+    }
+
+    /// Reads node `id`'s map into `out`, reusing its buffers; a damaged
+    /// record is [`NodeError::Corrupt`] and leaves `out` as it was. A node
+    /// absent from the pyramid is [`NodeError::Absent`].
     pub fn read(
         &self,
         layout: &NodeLayout,
         id: NodeId,
-        out: &mut NodeMesh,
-    ) -> Result<f32, NodeError> {
+        out: &mut ErrorMap,
+    ) -> Result<(), NodeError> {
         let index = layout.node_index(id).ok_or(NodeError::OutOfRange { id })?;
         let corrupt = |problem: String| NodeError::Corrupt { path: self.path.clone(), id, problem };
-        debug_assert!(index < self.nodes);
-        let at = self.table + index as usize * ENTRY_LEN;
-        let entry = Entry::decode(&self.map[at..at + ENTRY_LEN]);
-        if entry.offset == ABSENT {
-            return Err(NodeError::Absent { id });
+        let entry = self.entry(index);
+        match entry.offset {
+            ABSENT => return Err(NodeError::Absent { id }),
+            NOT_BUILT => {
+                return Err(corrupt("the map file lacks this node (a shard's part)".into()))
+            }
+            _ => {}
         }
+        let record = self.record(index, &entry).map_err(corrupt)?;
+        // Decoded apart, so a damaged record leaves `out` as it was; the
+        // buffers are exactly the node's size (what the budget plans).
+        let mut decoded = ErrorMap::default();
+        decode_record(record, &entry, &mut decoded).map_err(corrupt)?;
+        *out = decoded;
+        Ok(())
+    }
+
+    /// Record `index`'s bytes, checked against its entry.
+    fn record(&self, index: u64, entry: &Entry) -> Result<&[u8], String> {
         let end =
-            entry.offset.checked_add(entry.record_len()).filter(|&e| e <= self.map.len() as u64);
+            entry.offset.checked_add(entry.len as u64).filter(|&e| e <= self.map.len() as u64);
         let Some(end) = end else {
-            return Err(corrupt(format!("mesh record past the end of the file ({entry:?})")));
+            return Err(format!("map record past the end of the file ({entry:?})"));
         };
         let record = &self.map[entry.offset as usize..end as usize];
-        if record_crc(index, record) != entry.crc {
-            return Err(corrupt("mesh record checksum mismatch".into()));
+        if record.len() < RECORD_HEAD || record_crc(index, record) != entry.crc {
+            return Err("map record checksum mismatch".into());
         }
-        decode_record(record, &entry, out).map_err(corrupt)?;
-        Ok(entry.delta)
+        Ok(record)
     }
 }
 
-fn decode_record(record: &[u8], entry: &Entry, out: &mut NodeMesh) -> Result<(), String> {
-    let post_level = u32::from_le_bytes(record[0..4].try_into().expect("4 bytes"));
-    let vertex_end = 4 + 16 * entry.vertices as usize;
-    let vertices: &[MeshVertex] = bytemuck::try_cast_slice(&record[4..vertex_end])
-        .map_err(|e| format!("mesh vertices: {e}"))?;
-    let index_bytes = &record[vertex_end..vertex_end + 2 * entry.indices as usize];
-    let indices: &[u16] =
-        bytemuck::try_cast_slice(index_bytes).map_err(|e| format!("mesh indices: {e}"))?;
-    let bad_index = indices.iter().any(|&i| i as u32 >= entry.vertices);
-    if post_level > 255 || entry.indices % 3 != 0 || bad_index || entry.vertices > 65_536 {
-        return Err(format!("mesh record is not a mesh ({entry:?})"));
-    }
-    out.post_level = post_level as u8;
-    // Exactly: a buffer grows to the largest mesh read into it, no further
-    // (what a memory budget counts a slot at).
-    out.vertices.clear();
-    out.vertices.reserve_exact(vertices.len());
-    out.vertices.extend_from_slice(vertices);
-    out.indices.clear();
-    out.indices.reserve_exact(indices.len());
-    out.indices.extend_from_slice(indices);
-    Ok(())
-}
-
-fn decode_header(bytes: &[u8], layout: &NodeLayout) -> Result<(MeshHeader, usize), String> {
-    if bytes.len() < FIXED_LEN || bytes[0..8] != MAGIC {
-        return Err("not a Ridgeline mesh file".into());
-    }
-    let u32_at = |k: usize| u32::from_le_bytes(bytes[k..k + 4].try_into().expect("4 bytes"));
-    let version = u32_at(8);
-    if version != VERSION {
-        return Err(format!("mesh file version {version}, this build reads {VERSION}"));
-    }
-    let levels = u32_at(12) as usize;
-    let nodes = u64::from_le_bytes(bytes[16..24].try_into().expect("8 bytes"));
-    if levels != layout.levels as usize || nodes != layout.node_count() {
-        return Err(format!("{levels} levels and {nodes} nodes, the pyramid has other"));
-    }
-    let crc_at = FIXED_LEN + 4 * levels;
-    if bytes.len() < crc_at + 4 {
-        return Err("truncated header".into());
-    }
-    if crc32fast::hash(&bytes[..crc_at]) != u32_at(crc_at) {
-        return Err("header checksum mismatch".into());
-    }
-    let options = super::MeshOptions {
-        error_m: f32::from_bits(u32_at(24)),
-        depth: u32_at(28).min(255) as u8,
-        tile_cells: u32_at(32),
+/// Merges shards' parts of one map file (built for the same pyramid, each
+/// node by exactly one part) into `out`, atomically: the same bytes a
+/// single process writes for the same nodes.
+pub fn merge_stores(
+    parts: &[PathBuf],
+    layout: &NodeLayout,
+    out: &Path,
+) -> Result<StoreInfo, MeshesError> {
+    let files: Vec<MapFile> =
+        parts.iter().map(|p| MapFile::open_part(p, layout)).collect::<Result<_, _>>()?;
+    let Some(first) = files.first() else {
+        return Err(MeshesError::Options("no map file parts to merge".into()));
     };
-    options.validate(layout).map_err(|e| e.to_string())?;
-    let delta_per_level: Vec<f32> =
-        (0..levels).map(|l| f32::from_bits(u32_at(FIXED_LEN + 4 * l))).collect();
-    if delta_per_level.iter().any(|d| !(d.is_finite() && *d >= 0.0)) {
-        return Err(format!("level deltas {delta_per_level:?} are not distances"));
+    let mut info = first.info.clone();
+    for file in &files[1..] {
+        let same = file.info.pyramid == info.pyramid && file.info.options == info.options;
+        if !same {
+            let problem =
+                format!("built for another pyramid or options than {}", parts[0].display());
+            return Err(MeshesError::Corrupt { path: file.path.clone(), problem });
+        }
+        for l in 0..info.floor_per_level.len() {
+            info.floor_per_level[l] = info.floor_per_level[l].max(file.info.floor_per_level[l]);
+            info.reference_delta_per_level[l] =
+                info.reference_delta_per_level[l].max(file.info.reference_delta_per_level[l]);
+            info.max_error_per_level[l] =
+                info.max_error_per_level[l].max(file.info.max_error_per_level[l]);
+        }
     }
-    let header = MeshHeader { options, delta_per_level, pyramid: u32_at(36) };
-    Ok((header, crc_at + 4))
+    let io = |path: &Path, source| MeshesError::Io { path: path.to_path_buf(), source };
+    replace_file(
+        out,
+        |temporary| {
+            let file = File::create(temporary).map_err(|e| io(temporary, e))?;
+            let mut writer = StoreWriter::new(file, layout);
+            writer.start(&info).map_err(|e| io(temporary, e))?;
+            let mut table = Vec::with_capacity(layout.node_count() as usize);
+            for index in 0..layout.node_count() {
+                let entry = merged_entry(&files, index, &mut writer)
+                    .map_err(|e| e.into_meshes_error(temporary))?;
+                table.push(entry);
+            }
+            writer.finish(&info, &table).map_err(|e| io(temporary, e))
+        },
+        io,
+    )?;
+    Ok(info)
+}
+
+/// Why a merge failed at one node.
+enum MergeError {
+    Io(std::io::Error),
+    Part { path: PathBuf, problem: String },
+}
+
+impl MergeError {
+    fn into_meshes_error(self, temporary: &Path) -> MeshesError {
+        match self {
+            MergeError::Io(source) => MeshesError::Io { path: temporary.to_path_buf(), source },
+            MergeError::Part { path, problem } => MeshesError::Corrupt { path, problem },
+        }
+    }
+}
+
+/// Node `index`'s entry in the merge: copied from the one part that built
+/// it (its record checked on the way), absent if the pyramid lacks it.
+fn merged_entry(
+    files: &[MapFile],
+    index: u64,
+    writer: &mut StoreWriter,
+) -> Result<Entry, MergeError> {
+    let mut found: Option<(&MapFile, Entry)> = None;
+    let mut absent = false;
+    for file in files {
+        let entry = file.entry(index);
+        match entry.offset {
+            ABSENT => absent = true,
+            NOT_BUILT => {}
+            _ if found.is_some() => {
+                let problem = format!("node {index} is built by two parts");
+                return Err(MergeError::Part { path: file.path.clone(), problem });
+            }
+            _ => found = Some((file, entry)),
+        }
+    }
+    match found {
+        Some((file, entry)) => {
+            let bytes = file
+                .record(index, &entry)
+                .map_err(|problem| MergeError::Part { path: file.path.clone(), problem })?;
+            writer.append_bytes(bytes, entry).map_err(MergeError::Io)
+        }
+        None if absent => Ok(Entry::ABSENT),
+        None => {
+            let path = files[0].path.clone();
+            Err(MergeError::Part { path, problem: format!("no part built node {index}") })
+        }
+    }
 }
 
 #[allow(unsafe_code)]

@@ -1,88 +1,78 @@
-//! Node meshes (Ulrich's chunks on Polok's buffers, issue 11): every node a pyramid
-//! stores gets an adaptive mesh of the best data under it, simplified to its
-//! level's error, instead of the regular grid of its own posts. Built once
-//! per error beside the pyramid (`meshes-12m.rlm`), read with each node by the loader, and
-//! drawn by the tiles from vertex buffers (no texture reads).
+//! Node meshes for every tau and viewport (Ulrich's chunks on Polok's
+//! buffers; issues 11, 21 and 22): every node a pyramid stores gets the
+//! error map of the best data under it, built once beside the pyramid
+//! (`meshes.rlm`), read with the node by the loader, and cut into tiles'
+//! meshes at the error the tile's ring allows for the viewport and tau
+//! (`crate::tiles::extract`), drawn from vertex buffers (no texture reads).
 //!
 //! Why: a regular grid of level `l` subsamples every `2^l`-th post, and on
 //! rugged data its error is large from the first coarse level on (99.5 m
 //! at level 1 on the built-in SRTM tile), so the error bound keeps level 0
 //! out to 157 km at tau 1 px. A mesh may take any post of the data under
 //! the node, and needs 3 to 19 times fewer triangles for the same error.
+//! One map serves any error: no file per tau, and the same triangles a
+//! 1920-pixel display needs are not drawn on a 320-pixel one.
 //!
 //! | module | owns |
 //! |---|---|
 //! | [`mod@reference`] | the best data under a node on a finer level's lattice |
-//! | [`mod@build`] | per node: RTIN mesh, exact delta, morph targets, normals |
-//! | [`mod@fan`] | cells split four ways so a mesh, fully morphed, is its parent's surface |
-//! | [`mod@file`] | the mesh file: versioned, checksummed, memory-mapped, written atomically |
-//! | [`mod@source`] | [`MeshedSource`]: a pyramid whose nodes come with their meshes |
+//! | [`mod@build`] | one node's error map |
+//! | [`mod@file`] | the map file: versioned, checksummed, memory-mapped, written atomically, built streaming and in shards |
+//! | [`mod@source`] | [`MeshedSource`]: a pyramid whose nodes come with their maps |
 
 pub mod build;
-pub mod fan;
 pub mod file;
 pub mod reference;
 pub mod source;
 
-pub use build::{build_meshes, BuiltMeshes};
-pub use file::{mesh_file_name, write_meshes, MeshFile};
+pub use build::build_map;
+pub use file::{build_store, merge_stores, MapFile, StoreInfo, MAP_FILE_NAME};
 pub use source::MeshedSource;
 
 use crate::mesh::MeshError;
 use crate::node::{NodeError, NodeId, NodeLayout};
 
-/// How the meshes are built.
+/// How the maps are built.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct MeshOptions {
-    /// The error of level 1, metres; level `l` gets `error_m * 2^(l-1)`
-    /// (Ulrich's halving toward the fine levels) and level 0 none: it
-    /// draws the data exactly wherever the error bound lets it be seen.
-    pub error_m: f32,
     /// How many levels finer than the node its reference lattice may be:
-    /// the mesh of a node of level `l` takes posts of level
+    /// the map of a node of level `l` takes posts of level
     /// `l - min(l, depth)`. With 64-cell nodes, 5 gives at most 2049^2 posts.
     pub depth: u8,
-    /// Every triangle lies inside one square of this many node posts, so
-    /// tiles of that size (or any larger power of two) take whole triangles.
+    /// Every mesh of a node splits at least to squares of this many node
+    /// posts, so tiles of that size or larger cut whole triangles.
     pub tile_cells: u32,
+    /// The largest K / tau (pixels) the maps serve at the rings' floor:
+    /// a sparse map keeps the splits a mesh of level `l` needs down to
+    /// [`MeshOptions::floor_m`]; a finer view widens its rings instead.
+    pub finest_view_px: f64,
 }
 
 impl Default for MeshOptions {
     fn default() -> Self {
-        MeshOptions { error_m: ERROR_PER_PIXEL_M, depth: 5, tile_cells: 8 }
+        MeshOptions { depth: 5, tile_cells: 8, finest_view_px: FINEST_VIEW_PX }
     }
 }
 
-/// Level 1's mesh error per pixel of tau, metres: meshes are built for the
-/// display's tau (see [`MeshOptions::for_tau`]).
-pub const ERROR_PER_PIXEL_M: f32 = 12.0;
+/// The K / tau the maps are built for: 2000 pixels (a 1920-pixel display
+/// over 51 degrees at tau 1, or 1280 pixels over 60 degrees at tau 0.55).
+pub const FINEST_VIEW_PX: f64 = 2000.0;
 
 impl MeshOptions {
-    /// The meshes for a display of screen-space error bound `tau_px`:
-    /// level 1's error `ERROR_PER_PIXEL_M * tau_px`. Ulrich's rings are
-    /// `delta K / tau`, so every level then appears at the same distance
-    /// whatever tau is, and a larger tau draws coarser meshes there. With
-    /// one fixed set of meshes the rings soon fall below the floor that
-    /// keeps neighbours within one level, and tau stops mattering.
-    pub fn for_tau(tau_px: f64) -> MeshOptions {
-        let error_m = (ERROR_PER_PIXEL_M as f64 * tau_px) as f32;
-        MeshOptions { error_m, ..MeshOptions::default() }
-    }
-
-    /// The error level `level`'s meshes are simplified to, metres.
-    pub fn level_error(&self, level: u8) -> f32 {
-        if level == 0 {
-            0.0
-        } else {
-            self.error_m * (1u64 << (level - 1).min(60)) as f32
-        }
+    /// The smallest error a sparse map of `level` serves, metres: a tile
+    /// (half a node) at three tile sizes, the nearest its ring puts it,
+    /// with the morph's 30 % kept back, seen with K / tau
+    /// `finest_view_px`: `0.7 * 3 * node / 2 / finest_view_px`.
+    pub fn floor_m(&self, layout: &NodeLayout, level: u8) -> f64 {
+        let [x, y] = layout.node_size_m(level);
+        0.7 * 3.0 * x.max(y) / 2.0 / self.finest_view_px
     }
 
     /// Checks the options against a pyramid's layout.
     pub fn validate(&self, layout: &NodeLayout) -> Result<(), MeshesError> {
         let fail = |why: String| Err(MeshesError::Options(why));
-        if !(self.error_m.is_finite() && self.error_m > 0.0) {
-            return fail(format!("mesh error {} m must be a finite number above 0", self.error_m));
+        if !(self.finest_view_px.is_finite() && self.finest_view_px > 0.0) {
+            return fail(format!("finest view {} px must be above 0", self.finest_view_px));
         }
         let posts = (layout.node_size as u64) << self.depth;
         if self.depth > 10 || posts > 1 << 15 {

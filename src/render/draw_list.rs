@@ -12,6 +12,7 @@
 use crate::camera::Camera;
 use crate::lod::{LevelRings, TileKey};
 use crate::tiles::block::{BLOCK_ALIGNMENT, INDEX_BYTES};
+use crate::tiles::errors::MeshErrors;
 use crate::tiles::{TileBlock, TileCoverage, TileDraw};
 use glam::{DVec2, Mat4, Vec3};
 
@@ -284,7 +285,7 @@ pub struct DrawList {
 }
 
 /// What [`skirt_edges`] needs of a neighbour.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DrawnTile {
     /// The tile.
     pub key: TileKey,
@@ -292,6 +293,14 @@ pub struct DrawnTile {
     pub source_level: u8,
     /// Cut from its source node's mesh (else a regular grid of its posts).
     pub node_mesh: bool,
+    /// How far its surface may lie from the data, metres (NaN: its
+    /// level's table, for a grid), fully morphed.
+    pub error_m: f32,
+    /// The same where it has not morphed.
+    pub own_error_m: f32,
+    /// Its sub-level: tiles of one node share their edges only at the
+    /// same one (the same error and morph target).
+    pub sub_level: u8,
 }
 
 /// One of a frame's depth slices ([`DepthSlices`]).
@@ -318,6 +327,9 @@ pub struct TileGeometry<'a> {
     /// Largest error per level of the regular grid of posts, metres: what
     /// a tile made as a grid errs by.
     pub grid_delta_per_level: &'a [f64],
+    /// The errors the frame's tiles were extracted at, with the leaf
+    /// tiles' sub-level rings (their morphs).
+    pub mesh_errors: &'a MeshErrors,
 }
 
 impl DrawList {
@@ -385,6 +397,9 @@ impl DrawList {
             key: draw.key,
             source_level: draw.source_level,
             node_mesh: draw.node_mesh,
+            error_m: draw.error_m,
+            own_error_m: draw.own_error_m,
+            sub_level: draw.sub_level,
         }));
         self.drawn.sort_unstable_by_key(|d| d.key);
         for draw in draws {
@@ -423,9 +438,15 @@ fn tile_uniforms(
     let step = 1i64 << key.level;
     let span = geometry.grid_size as i64 * step;
     let first_post = frame.posts.number([key.x as i64 * span, key.y as i64 * span]);
-    let (start, end) = rings.morph(key.level);
+    let (start, end) = match draw.sub_level {
+        0 => rings.morph(key.level),
+        k => geometry.mesh_errors.sub_level_morph(key.level, k),
+    };
     let morph = if start.is_finite() { [start as f32, end as f32] } else { [f32::MAX, f32::MAX] };
-    let ranges = |level: u8| rings.morph(level);
+    let ranges = |level: u8, sub_level: u8| match sub_level {
+        0 => rings.morph(level),
+        k => geometry.mesh_errors.sub_level_morph(level, k),
+    };
     let reach = MorphReach { frame, ranges: &ranges, grid_size: geometry.grid_size };
     let depths = skirt_depths(draw, drawn, geometry, &reach);
     let (skirt_depth, skirt_shares) = skirt_shares(depths);
@@ -495,9 +516,10 @@ pub fn skirt_edges(draw: &TileDraw, drawn: &[DrawnTile], node_tiles: u32) -> u8 
             let Ok(at) = drawn.binary_search_by_key(&key, |d| d.key) else { return false };
             let other = drawn[at];
             // Node meshes share their edge vertices only inside one node
-            // mesh, and with no regular grid.
+            // mesh at one error (sub-level), and with no regular grid.
             other.source_level == draw.source_level
                 && other.node_mesh == draw.node_mesh
+                && other.sub_level == draw.sub_level
                 && (!draw.node_mesh || same_node(draw, key, node_tiles))
         });
         if !watertight {
@@ -513,6 +535,13 @@ fn same_node(draw: &TileDraw, key: TileKey, node_tiles: u32) -> bool {
     let shift = draw.source_level.saturating_sub(key.level).min(31);
     let per_node = node_tiles << shift;
     draw.key.x / per_node == key.x / per_node && draw.key.y / per_node == key.y / per_node
+}
+
+/// How far a drawn tile's surface may lie from the data, metres, fully
+/// morphed: its own extraction's error where known (it includes the mesh it
+/// morphs toward), else its levels' tables.
+pub fn drawn_error_m(tile: &DrawnTile, geometry: &TileGeometry<'_>) -> f64 {
+    surface_error_m(tile, 1.0, geometry)
 }
 
 /// The delta of `level` for a tile made as it was: from `meshes` for a
@@ -551,14 +580,20 @@ pub fn skirt_depths(
 ) -> [f64; 4] {
     let node_tiles = (geometry.node_size / geometry.grid_size).max(1);
     let hangs = skirt_edges(draw, drawn, node_tiles);
-    let own =
-        DrawnTile { key: draw.key, source_level: draw.source_level, node_mesh: draw.node_mesh };
+    let own = DrawnTile {
+        key: draw.key,
+        source_level: draw.source_level,
+        node_mesh: draw.node_mesh,
+        error_m: draw.error_m,
+        own_error_m: draw.own_error_m,
+        sub_level: draw.sub_level,
+    };
     std::array::from_fn(|edge| {
         if hangs & (1 << edge) == 0 {
             return 0.0;
         }
         let crack_side = |tile: &DrawnTile| {
-            let morph = reach.along(draw.key, edge, tile.key.level);
+            let morph = reach.along(draw.key, edge, tile.key.level, tile.sub_level);
             surface_error_m(tile, morph, geometry) + sag_m(tile, geometry)
         };
         let mut across: Option<f64> = None;
@@ -584,12 +619,16 @@ pub const SKIRT_MARGIN_M: f64 = 0.1;
 
 /// How far `tile`'s surface may lie from the data where its morph factor
 /// is at most `morph`: its source's delta, moved toward the delta of the
-/// level above its own (whose surface it morphs to) by that factor.
+/// level above its own (whose surface it morphs to) by that factor. A tile
+/// extracted from an error map knows its errors unmorphed and fully morphed.
 pub fn surface_error_m(tile: &DrawnTile, morph: f64, geometry: &TileGeometry<'_>) -> f64 {
     let (meshes, grids) = (geometry.delta_per_level, geometry.grid_delta_per_level);
     let at = |level: u8| made_delta(meshes, grids, tile.node_mesh, level);
-    let own = at(tile.source_level);
-    let toward = at(tile.key.level.saturating_add(1));
+    let (own, toward) = if tile.error_m.is_finite() {
+        (tile.own_error_m as f64, tile.error_m as f64)
+    } else {
+        (at(tile.source_level), at(tile.key.level.saturating_add(1)))
+    };
     own + morph.clamp(0.0, 1.0) * (toward - own).max(0.0)
 }
 
@@ -622,19 +661,19 @@ fn sag_m(tile: &DrawnTile, geometry: &TileGeometry<'_>) -> f64 {
 pub struct MorphReach<'a> {
     /// The frame: the camera's post numbering and the heights' reach.
     pub frame: &'a FrameUniforms,
-    /// Each level's morph start and end distance, metres (infinite for
-    /// none): [`LevelRings::morph`].
-    pub ranges: &'a dyn Fn(u8) -> (f64, f64),
+    /// Each level's and sub-level's morph start and end distance, metres
+    /// (infinite for none): [`LevelRings::morph`], `sub_level_morph`.
+    pub ranges: &'a dyn Fn(u8, u8) -> (f64, f64),
     /// Cells per tile side.
     pub grid_size: u32,
 }
 
 impl MorphReach<'_> {
-    /// The largest morph factor a tile of `level` reaches along edge
-    /// `edge` of tile `key`: 0 where the edge ends nearer than the level's
-    /// morph start, 1 past its end.
-    pub fn along(&self, key: TileKey, edge: usize, level: u8) -> f64 {
-        let (start, end) = (self.ranges)(level);
+    /// The largest morph factor a tile of `level` and `sub_level` reaches
+    /// along edge `edge` of tile `key`: 0 where the edge ends nearer than
+    /// its morph start, 1 past its end.
+    pub fn along(&self, key: TileKey, edge: usize, level: u8, sub_level: u8) -> f64 {
+        let (start, end) = (self.ranges)(level, sub_level);
         if !start.is_finite() {
             return 0.0;
         }
@@ -812,7 +851,14 @@ mod tests {
     }
 
     fn drawn(level: u8, x: u32, y: u32, source_level: u8) -> DrawnTile {
-        DrawnTile { key: TileKey::new(level, x, y), source_level, node_mesh: true }
+        DrawnTile {
+            key: TileKey::new(level, x, y),
+            source_level,
+            node_mesh: true,
+            error_m: f32::NAN,
+            own_error_m: f32::NAN,
+            sub_level: 0,
+        }
     }
 
     /// Each edge's skirt reaches as deep as the errors of the tile and of
@@ -832,6 +878,9 @@ mod tests {
             node_mesh: true,
             source_level: 2,
             coverage: crate::tiles::TileCoverage::Full,
+            sub_level: 0,
+            error_m: f32::NAN,
+            own_error_m: f32::NAN,
         };
         let deltas = [0.0, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0];
         let grid_deltas = deltas.map(|d| 10.0 * d);
@@ -841,6 +890,7 @@ mod tests {
             spacing_m: [90.0, 90.0],
             delta_per_level: &deltas,
             grid_delta_per_level: &grid_deltas,
+            mesh_errors: &MeshErrors::default(),
         };
         // Morph ranges so far out that nothing morphs, then so near that
         // everything has.
@@ -852,7 +902,7 @@ mod tests {
             vec![drawn(2, 4, 3, 3), drawn(1, 10, 8, 1), drawn(1, 10, 9, 1), drawn(3, 1, 2, 3)];
         tiles.sort_unstable_by_key(|d| d.key);
         let depths = |start: f64, tiles: &[DrawnTile]| {
-            let ranges = move |_: u8| (start, 2.0 * start);
+            let ranges = move |_: u8, _: u8| (start, 2.0 * start);
             let reach = MorphReach { frame: &frame, ranges: &ranges, grid_size: 32 };
             skirt_depths(&draw, tiles, &geometry, &reach)
         };

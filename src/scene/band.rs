@@ -35,22 +35,89 @@ pub struct TriangleBand {
 const LEVELS: usize = 32;
 
 /// The band and what the last frame's tiles drew.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug)]
 pub(super) struct BandState {
     pub band: Option<TriangleBand>,
     /// Mean triangles per tile of the last frame, and per level (0: none).
     per_tile: f64,
     per_level: [f64; LEVELS],
+    /// The mean error the level's tiles were extracted at when learnt
+    /// (NaN for grids, whose triangles do not follow tau).
+    error_per_level: [f64; LEVELS],
+    /// What the frames drew over what their selections were estimated at,
+    /// smoothed: the estimate's own bias, taken out of the next ones.
+    bias: f64,
+    /// The last selection's estimate, unbiased.
+    last_estimate: f64,
+}
+
+impl Default for BandState {
+    fn default() -> Self {
+        BandState {
+            band: None,
+            per_tile: 0.0,
+            per_level: [0.0; LEVELS],
+            error_per_level: [f64::NAN; LEVELS],
+            bias: 1.0,
+            last_estimate: f64::NAN,
+        }
+    }
+}
+
+/// One selected tile, as the band's estimate sees it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TileEstimate {
+    /// Its level.
+    pub level: u8,
+    /// Resident: its triangles and the error it was extracted at (NaN for
+    /// a grid).
+    pub resident: Option<(u64, f64)>,
+    /// The error it would be extracted at with the tau being tried (NaN
+    /// for a grid).
+    pub error_m: f64,
+}
+
+/// How a mesh's triangles scale from error `made` to error `wanted`:
+/// about as their ratio on real relief (the lod bench: 4 times the error,
+/// 3.8 times fewer triangles), within 16 either way; 1 where either is
+/// unknown (grids).
+fn rescale(made: f64, wanted: f64) -> f64 {
+    if made > 0.0 && wanted > 0.0 {
+        (made / wanted).clamp(1.0 / 16.0, 16.0)
+    } else {
+        1.0
+    }
 }
 
 impl BandState {
     /// Triangles a frame of `tiles` (level, and the count of a resident one).
-    pub fn estimate(&self, tiles: impl Iterator<Item = (u8, Option<u64>)>) -> f64 {
+    pub fn estimate(&mut self, tiles: impl Iterator<Item = TileEstimate>) -> f64 {
         let guess = |level: u8| match self.per_level.get(level as usize) {
-            Some(&n) if n > 0.0 => n,
-            _ => self.per_tile,
+            Some(&n) if n > 0.0 => (n, self.error_per_level[level as usize]),
+            _ => (self.per_tile, f64::NAN),
         };
-        tiles.map(|(level, t)| t.map_or_else(|| guess(level), |n| n as f64)).sum()
+        let estimate = tiles
+            .map(|tile| {
+                let (triangles, made) = match tile.resident {
+                    Some((n, made)) => (n as f64, made),
+                    None => guess(tile.level),
+                };
+                triangles * rescale(made, tile.error_m)
+            })
+            .sum::<f64>();
+        self.last_estimate = estimate;
+        estimate * self.bias
+    }
+
+    /// Learns the estimate's bias from a frame that drew `triangles` for
+    /// the selection last estimated: tiles remade at another error have
+    /// counts the map's histogram only foretells.
+    pub fn observe(&mut self, triangles: u64) {
+        if self.last_estimate > 0.0 && triangles > 0 {
+            let ratio = (triangles as f64 / self.last_estimate).clamp(0.5, 2.0);
+            self.bias = (self.bias * ratio).sqrt();
+        }
+        self.last_estimate = f64::NAN;
     }
 
     /// A search for this frame's tau between `floor` and `ceiling`; `None`
@@ -62,6 +129,7 @@ impl BandState {
             low: floor,
             high: ceiling.max(floor),
             best: (f64::INFINITY, floor),
+            bracket: (floor, ceiling.max(floor)),
             last: None,
             exponent: SMOOTH_EXPONENT,
             tries: 0,
@@ -70,18 +138,19 @@ impl BandState {
 
     /// Learns triangles per tile, overall and per level, from a frame's
     /// tiles (level, triangles).
-    pub fn learn(&mut self, tiles: impl Iterator<Item = (u8, u64)>) {
-        let mut sums = [(0.0f64, 0u32); LEVELS];
-        for (level, triangles) in tiles {
+    pub fn learn(&mut self, tiles: impl Iterator<Item = (u8, u64, f64)>) {
+        let mut sums = [(0.0f64, 0u32, 0.0f64); LEVELS];
+        for (level, triangles, error_m) in tiles {
             let sum = &mut sums[(level as usize).min(LEVELS - 1)];
-            *sum = (sum.0 + triangles as f64, sum.1 + 1);
+            *sum = (sum.0 + triangles as f64, sum.1 + 1, sum.2 + error_m);
         }
         let (all, count) = sums.iter().fold((0.0, 0), |(a, c), s| (a + s.0, c + s.1));
         if count > 0 {
             self.per_tile = all / count as f64;
         }
-        for (mean, (sum, n)) in self.per_level.iter_mut().zip(sums) {
-            *mean = if n > 0 { sum / n as f64 } else { 0.0 };
+        for (level, (sum, n, errors)) in sums.into_iter().enumerate() {
+            self.per_level[level] = if n > 0 { sum / n as f64 } else { 0.0 };
+            self.error_per_level[level] = if n > 0 { errors / n as f64 } else { f64::NAN };
         }
     }
 }
@@ -97,6 +166,8 @@ const SMOOTH_EXPONENT: f64 = 0.5;
 #[derive(Clone, Copy, Debug)]
 pub(super) struct BandSearch {
     band: TriangleBand,
+    /// The tau range it started from.
+    bracket: (f64, f64),
     /// Taus known to draw too many (`low`) and too few (`high`) triangles.
     low: f64,
     high: f64,
@@ -109,6 +180,23 @@ pub(super) struct BandSearch {
 }
 
 impl BandSearch {
+    /// The budget, triangles.
+    pub fn target(&self) -> f64 {
+        self.band.target
+    }
+
+    /// The tau to select again with, once a selection at `tau` made
+    /// `drawn` triangles: the search from there, its tries reset (the real
+    /// count is worth a fresh bracket's worth).
+    pub fn correct(&mut self, drawn: f64, tau: f64) -> Option<f64> {
+        (self.low, self.high) = self.bracket;
+        self.best = (f64::INFINITY, tau);
+        self.tries = 0;
+        self.last = None;
+        self.exponent = SMOOTH_EXPONENT;
+        self.next(drawn, tau)
+    }
+
     /// The tau to select with next, given that the selection at `tau` would
     /// draw `estimate` triangles; `None` to keep it.
     pub fn next(&mut self, estimate: f64, tau: f64) -> Option<f64> {
@@ -129,6 +217,13 @@ impl BandSearch {
             self.low = self.low.max(tau);
         } else {
             self.high = self.high.min(tau);
+        }
+        // The counts are not monotone in tau (a tile remade at another
+        // error moves them both ways): a bracket that closed or crossed
+        // has no tau left inside, so the best seen is kept.
+        if self.low >= self.high || self.low.is_nan() || self.high.is_nan() {
+            let best = self.best.1;
+            return (best != tau).then_some(best);
         }
         // The same count as the last try: tau moved within one step.
         let stuck = self.last.is_some_and(|last| (last - estimate).abs() < 0.5);
@@ -154,14 +249,20 @@ mod tests {
             ..BandState::default()
         };
         assert!(state.search(1.0, 8.0).is_none(), "nothing learnt yet");
-        state.learn((0..200).map(|i| (if i < 100 { 0 } else { 1 }, 1000)));
-        let tiles = |n: usize| state.estimate((0..n).map(|i| (1, (i % 2 == 0).then_some(1000))));
+        state.learn((0..200).map(|i| (if i < 100 { 0 } else { 1 }, 1000, f64::NAN)));
+        let tile = |i: usize| TileEstimate {
+            level: 1,
+            resident: (i % 2 == 0).then_some((1000, f64::NAN)),
+            error_m: f64::NAN,
+        };
+        let tiles = |n: usize| state.clone().estimate((0..n).map(tile));
+        let (e102, e121, e50, e400) = (tiles(102), tiles(121), tiles(50), tiles(400));
         let mut search = state.search(1.0, 8.0).unwrap();
-        assert_eq!(search.next(tiles(102), 2.0), None, "in the band");
+        assert_eq!(search.next(e102, 2.0), None, "in the band");
         let mut search2 = state.search(1.0, 8.0).unwrap();
-        assert_eq!(search2.next(tiles(121), 2.0), Some(2.0 * 1.21f64.sqrt()));
-        assert_eq!(state.search(1.0, 8.0).unwrap().next(tiles(50), 1.0), None, "at the floor");
-        assert_eq!(state.search(1.0, 8.0).unwrap().next(tiles(400), 8.0), None, "at the ceiling");
+        assert_eq!(search2.next(e121, 2.0), Some(2.0 * 1.21f64.sqrt()));
+        assert_eq!(state.search(1.0, 8.0).unwrap().next(e50, 1.0), None, "at the floor");
+        assert_eq!(state.search(1.0, 8.0).unwrap().next(e400, 8.0), None, "at the ceiling");
         // A step plant: 130k below tau 3, 70k from 3 on; no tau hits the band.
         let plant = |tau: f64| if tau < 3.0 { 130_000.0 } else { 70_000.0 };
         let mut tau = 2.0;
@@ -187,7 +288,7 @@ mod tests {
         };
         let band = TriangleBand { target: 240_000.0, tolerance: 0.04 };
         let mut state = BandState { band: Some(band), ..BandState::default() };
-        state.learn(std::iter::once((0, 3000)));
+        state.learn(std::iter::once((0, 3000, f64::NAN)));
         let mut search = state.search(1.0, 6.0).unwrap();
         let mut tau = 2.146;
         while let Some(next) = search.next(plant(tau), tau) {

@@ -5,9 +5,11 @@ use super::terrain::{node_height_bounds, TerrainData};
 use crate::clipmap::{Clipmap, SlotState};
 use crate::lod::select::{children_node_stored, TileBounds};
 use crate::lod::TileKey;
+use crate::meshes::StoreInfo;
 use crate::node::{NodeData, NodeId, NodeLayout, NodeSource};
 use crate::procedural::ProceduralEarth;
 use crate::pyramid::PyramidInfo;
+use crate::tiles::errors::MapErrors;
 use crate::tiles::ResidentNodes;
 
 /// Per-level error and height range of the data behind a clipmap (from the
@@ -23,6 +25,8 @@ pub struct TerrainSummary {
     pub grid_delta_per_level: Vec<f64>,
     /// Lowest and highest height of the data, metres.
     pub height_range: (f32, f32),
+    /// What each level's error maps can do (empty without maps).
+    pub map_errors: MapErrors,
 }
 
 impl TerrainSummary {
@@ -33,6 +37,18 @@ impl TerrainSummary {
             grid_delta_per_level: deltas.clone(),
             delta_per_level: deltas,
             height_range: (info.stats.height_min, info.stats.height_max),
+            map_errors: MapErrors::default(),
+        }
+    }
+
+    /// The summary of a pyramid drawn from its error maps: the rings' Ulrich
+    /// rule takes each level's finest mesh error, the tiles their maps'
+    /// floors and reference deltas.
+    pub fn of_maps(pyramid: &PyramidInfo, maps: &StoreInfo) -> Self {
+        TerrainSummary {
+            delta_per_level: maps.finest_error_per_level(),
+            map_errors: maps.map_errors(),
+            ..TerrainSummary::from_pyramid(pyramid)
         }
     }
 
@@ -46,6 +62,7 @@ impl TerrainSummary {
             grid_delta_per_level: deltas.clone(),
             delta_per_level: deltas,
             height_range: (low as f32, high as f32),
+            map_errors: MapErrors::default(),
         }
     }
 }
@@ -103,5 +120,9 @@ impl TerrainData for ClipmapTerrain<'_> {
 
     fn height_range(&self) -> (f32, f32) {
         self.summary.height_range
+    }
+
+    fn map_errors(&self) -> MapErrors {
+        self.summary.map_errors.clone()
     }
 }

@@ -10,7 +10,7 @@ mod band;
 mod clipmap_terrain;
 mod terrain;
 
-pub use band::{TriangleBand, MAX_RESELECTIONS};
+pub use band::{TileEstimate, TriangleBand, MAX_RESELECTIONS};
 
 pub use clipmap_terrain::{ClipmapTerrain, TerrainSummary};
 pub use terrain::{PreloadedTerrain, TerrainData};
@@ -22,11 +22,13 @@ use crate::lod::horizon::Horizon;
 use crate::lod::life::LifeStats;
 use crate::lod::rings::RingInputs;
 use crate::lod::select::View;
-use crate::lod::{LevelRings, LodConfig, LodError, TileSelector};
-use crate::node::NodeLayout;
+use crate::lod::{LevelRings, LodConfig, LodError, TileKey, TileSelector};
+use crate::mesh::code::threshold_code;
+use crate::node::{NodeId, NodeLayout};
 use crate::render::draw_list::{made_delta, TileGeometry};
 use crate::render::draw_list::{DepthSlices, PostFrame};
 use crate::render::{palette, ClusterMorph, ClusterOrder, DrawList, FrameUniforms};
+use crate::tiles::errors::{MapErrors, MeshErrors};
 use crate::tiles::{TileCache, TileCacheConfig, TileError};
 use std::time::Instant;
 
@@ -200,7 +202,16 @@ pub struct Scene {
     band: band::BandState,
     /// With clusters on: their blocks, which the GPU buffer then mirrors.
     clusters: Option<ClusterCache>,
+    /// What the terrain's error maps can do per level.
+    map_errors: MapErrors,
+    /// The errors this frame's tiles are extracted at.
+    mesh_errors: MeshErrors,
 }
+
+/// How far, as a share, the tiles made may miss a triangle budget before
+/// the frame selects once more with their real count: under the 5 % a
+/// budget promises, over the in-frame band the estimate aims at.
+const CORRECTION_BAND: f64 = 0.04;
 
 /// The near plane sits this share of the way to the nearest drawn tile's
 /// bounding box (the rest is margin for the curvature drop and rounding).
@@ -254,6 +265,8 @@ impl Scene {
             deltas,
             grid_deltas: terrain.grid_delta_per_level(),
             tau_px: config.lod.tau_px,
+            map_errors: terrain.map_errors(),
+            mesh_errors: MeshErrors::default(),
         })
     }
 
@@ -339,18 +352,37 @@ impl Scene {
         let frustum = Frustum::from_view_projection(camera.projection(near, far) * camera.view());
         let mut report = SceneStats::default();
         let horizon = self.horizon(camera, terrain);
-        let mut lod = loosened(&self.config.lod, self.tau_px);
+        // With error maps tau coarsens the meshes; without, only the rings,
+        // so Kühnert's view distance shrinks with it.
+        let maps = !self.map_errors.is_empty();
+        let mut lod = loosened(&self.config.lod, self.tau_px, !maps);
         let mut nearest_m: f64;
         let inputs = ring_inputs(&layout, grid_size, &self.deltas, self.height_range_m, camera);
-        let loosest = LodConfig { view_distance: 1.0, ..self.config.lod };
-        let ceiling = LevelRings::tau_ceiling(&mut self.loose_rings, &loosest, inputs);
         let requested = self.config.lod;
-        self.tau_ceiling = ceiling.max(requested.tau_px * requested.view_distance);
+        self.tau_ceiling = if maps {
+            let (rings, errors) = (&mut self.loose_rings, &mut self.mesh_errors);
+            let k = camera.perspective_scale();
+            mesh_ceiling(rings, errors, &self.map_errors, &requested, inputs, layout.levels, k)
+        } else {
+            let loosest = LodConfig { view_distance: 1.0, ..requested };
+            let ceiling = LevelRings::tau_ceiling(&mut self.loose_rings, &loosest, inputs);
+            ceiling.max(requested.tau_px * requested.view_distance)
+        };
         let mut search = self.band.search(requested.tau_px, self.tau_ceiling);
+        let mut retaking = false;
         loop {
             let start = Instant::now();
             let inputs = ring_inputs(&layout, grid_size, &self.deltas, self.height_range_m, camera);
             self.rings.update(&lod, inputs);
+            let rings = &self.rings;
+            self.mesh_errors.update(
+                |level| rings.split_distance(level),
+                layout.levels,
+                camera.perspective_scale(),
+                lod.tau_px,
+                lod.morph_range,
+                &self.map_errors,
+            );
             let view = View {
                 eye: camera.position,
                 frustum: &frustum,
@@ -361,15 +393,33 @@ impl Scene {
             let selected = self.selector.select(&view, terrain);
             let retarget = match (&mut search, report.coarsened) {
                 (Some(search), 0) => {
-                    let cache = &self.cache;
-                    let tiles =
-                        selected.iter().map(|t| (t.key.level, cache.resident_triangles(t.key)));
-                    search.next(self.band.estimate(tiles), lod.tau_px)
+                    let (cache, errors) = (&self.cache, &self.mesh_errors);
+                    let tiles = selected.iter().map(|t| {
+                        let leaf = !terrain.has_finer_data(t.key, grid_size);
+                        let wanted = errors.for_tile(t.key.level, t.distance, leaf).own.metres();
+                        // Scaled by the source's map where it is resident
+                        // (then as made at the wanted error), else by the
+                        // errors' ratio in the band.
+                        // Skirts follow a tile's edge vertices: the square
+                        // root of what its surface does.
+                        let resident = cache.resident_parts(t.key).map(|(n, skirts, made)| {
+                            match map_scale(cache, terrain, t.key, grid_size, made, wanted) {
+                                Some(s) => {
+                                    let scaled = n as f64 * s + skirts as f64 * s.sqrt();
+                                    (scaled.round() as u64, wanted)
+                                }
+                                None => (n + skirts, made),
+                            }
+                        });
+                        TileEstimate { level: t.key.level, resident, error_m: wanted }
+                    });
+                    let estimate = self.band.estimate(tiles);
+                    search.next(estimate, lod.tau_px)
                 }
                 _ => None,
             };
             if let Some(tau_px) = retarget {
-                lod = loosened(&self.config.lod, tau_px);
+                lod = loosened(&self.config.lod, tau_px, !maps);
                 report.reselected += 1;
                 report.cpu_ms.select_ms += ms(start, Instant::now());
                 continue;
@@ -377,9 +427,27 @@ impl Scene {
             nearest_m = selected.iter().map(|t| t.distance).fold(f64::INFINITY, f64::min);
             let selected_at = Instant::now();
             report.cpu_ms.select_ms += ms(start, selected_at);
-            let outcome =
-                self.cache.update(selected, terrain).map(|_| ()).map_err(SceneError::from);
+            let tiles = match retaking {
+                true => self.cache.retake(selected, terrain, &self.mesh_errors),
+                false => self.cache.update(selected, terrain, &self.mesh_errors),
+            };
+            let outcome = tiles.map(|_| ()).map_err(SceneError::from);
             report.cpu_ms.tiles_ms += ms(selected_at, Instant::now());
+            // The tiles remade at another error hold counts the estimate
+            // only foretold: off the budget's promise, select once more
+            // with the real count (the tiles made stay for this frame).
+            if let (Ok(()), Some(search), false) = (&outcome, &mut search, retaking) {
+                let drawn = self.cache.drawn_triangles() as f64;
+                let off = (drawn / search.target() - 1.0).abs();
+                if off > CORRECTION_BAND {
+                    if let Some(tau_px) = search.correct(drawn, lod.tau_px) {
+                        lod = loosened(&self.config.lod, tau_px, !maps);
+                        report.reselected += 1;
+                        retaking = true;
+                        continue;
+                    }
+                }
+            }
             let outcome = outcome.and_then(|()| {
                 let near_m = (nearest_m * NEAR_SHARE).min(f32::MAX as f64) as f32;
                 let uniforms = frame_uniforms(&self.config, camera, terrain, near_m);
@@ -390,6 +458,7 @@ impl Scene {
                     spacing_m: layout.spacing_m,
                     delta_per_level: &self.deltas,
                     grid_delta_per_level: &self.grid_deltas,
+                    mesh_errors: &self.mesh_errors,
                 };
                 self.draw_list.build(uniforms, self.cache.draws(), &self.rings, geometry);
                 if let Some(clusters) = &mut self.clusters {
@@ -411,6 +480,7 @@ impl Scene {
             match outcome {
                 Ok(()) => break,
                 Err(_) if full && (lod.view_distance > 1.0 || lod.tau_px < 1e6) => {
+                    retaking = false;
                     // Coarser: half the rings (Ulrich's rule through tau, Kühnert's through distance).
                     lod.view_distance = (lod.view_distance / 2.0).max(1.0);
                     lod.tau_px *= 2.0;
@@ -427,7 +497,14 @@ impl Scene {
         (report.fallback_tiles, report.bound_px) = self.fallback_bound(camera, lod.tau_px);
         report.life = self.selector.life_stats().unwrap_or_default();
         report.triangles = self.draw_list.triangles();
-        self.band.learn(self.draw_list.tiles.iter().map(|t| (t.key.level, t.triangles())));
+        if report.coarsened == 0 {
+            self.band.observe(report.triangles);
+        }
+        let cache = &self.cache;
+        self.band.learn(self.draw_list.tiles.iter().map(|t| {
+            let made = cache.resident_triangles(t.key).map_or(f64::NAN, |(_, e)| e);
+            (t.key.level, t.triangles(), made)
+        }));
         report.bytes_uploaded = stats.bytes_uploaded;
         report.transfers = stats.transfers;
         report.generated = stats.generated;
@@ -458,15 +535,20 @@ impl Scene {
         let mut bound = tau_px;
         for tile in self.selector.selected() {
             let level = tile.key.level;
-            let Some((source, node_mesh)) = self.cache.made_from(tile.key) else { continue };
+            let Some(made) = self.cache.made_from(tile.key) else { continue };
+            let source = made.source_level;
             if source <= level {
                 continue;
             }
             fallback += 1;
-            let delta = |level: u8| made_delta(&self.deltas, &self.grid_deltas, node_mesh, level);
+            let delta =
+                |level: u8| made_delta(&self.deltas, &self.grid_deltas, made.node_mesh, level);
             // Inside its box the distance is 0: a metre keeps the bound finite.
             let near = tile.distance.max(1.0);
-            let own = delta(source) * scale / near;
+            // An extracted tile knows its own error; a grid its level's.
+            let own_error =
+                if made.error_m.is_finite() { made.error_m as f64 } else { delta(source) };
+            let own = own_error * scale / near;
             // Its vertices morph toward the source's parent from the morph
             // start on, wherever in the tile they are.
             let parent =
@@ -556,14 +638,82 @@ pub fn ring_inputs<'a>(
     }
 }
 
-/// The tiling for a budget's `tau_px`: tau itself, and Kühnert's view
-/// distance shrunk by as much as tau grew (never below 1 tile), so the rings
-/// shrink even where his rule, not Ulrich's, sets them (node meshes). The
-/// bound drawn is still `tau_px`: Ulrich's rule is kept at every level.
-fn loosened(requested: &LodConfig, tau_px: f64) -> LodConfig {
-    let factor = tau_px / requested.tau_px;
+/// The tiling for a budget's `tau_px`: tau itself, and, when `shrink`
+/// (tiles made as grids, whose triangles tau cannot change), Kühnert's
+/// view distance shrunk by as much as tau grew (never below 1 tile), so the
+/// rings shrink even where his rule, not Ulrich's, sets them. Tiles
+/// extracted from error maps coarsen with tau instead: their rings stay.
+/// The bound drawn is still `tau_px`: Ulrich's rule is kept at every level.
+fn loosened(requested: &LodConfig, tau_px: f64, shrink: bool) -> LodConfig {
+    let factor = if shrink { tau_px / requested.tau_px } else { 1.0 };
     let view_distance = (requested.view_distance / factor).max(1.0);
     LodConfig { tau_px, view_distance, ..*requested }
+}
+
+/// How a resident tile's triangles scale from the error it was made at to
+/// `wanted`, read from its source node's error map: the posts whose split
+/// the one error makes and the other does not (`ErrorMap::above`). `None`
+/// for a grid or a node no longer resident.
+fn map_scale(
+    cache: &TileCache,
+    terrain: &dyn TerrainData,
+    key: TileKey,
+    grid_size: u32,
+    made: f64,
+    wanted: f64,
+) -> Option<f64> {
+    let from = cache.made_from(key)?;
+    if !(from.node_mesh && made > 0.0 && wanted > 0.0) {
+        return None;
+    }
+    let (node, _) = crate::tiles::vertex::tile_node(key, grid_size, terrain.layout().node_size);
+    let shift = from.source_level.checked_sub(node.level)?;
+    let source = NodeId::new(from.source_level, node.x >> shift, node.y >> shift);
+    let map = &terrain.resident(source)?.map;
+    let quadrants = tile_quadrants(key, grid_size, terrain.layout().node_size, source);
+    let above = |error: f64| map.above_in(quadrants, threshold_code(error));
+    // The corners and forced posts every mesh has keep small meshes finite.
+    let base = 16.0;
+    Some((above(wanted) as f64 + base) / (above(made) as f64 + base))
+}
+
+/// The quadrants of node `source` tile `key` covers (a bit each, `x + 2 y`).
+fn tile_quadrants(key: TileKey, grid_size: u32, node_size: u32, source: NodeId) -> u8 {
+    let span = |level: u8, cells: u32| (cells as u64) << level;
+    let (tile, node) = (span(key.level, grid_size), span(source.level, node_size));
+    let half = node / 2;
+    let lo = [key.x as u64 * tile, key.y as u64 * tile];
+    let origin = [source.x as u64 * node, source.y as u64 * node];
+    let mut bits = 0;
+    for q in 0..4u8 {
+        let (qx, qy) = ((q & 1) as u64, (q >> 1) as u64);
+        let q0 = [origin[0] + qx * half, origin[1] + qy * half];
+        let meets = (0..2).all(|k| lo[k] < q0[k] + half && lo[k] + tile > q0[k]);
+        if meets {
+            bits |= 1 << q;
+        }
+    }
+    bits.max(1)
+}
+
+/// The tau past which tiles extracted from error maps get no coarser
+/// (every level at its coarsest meshes), for the rings of `requested`
+/// (made in `rings`, the errors in `errors`).
+fn mesh_ceiling(
+    rings: &mut LevelRings,
+    errors: &mut MeshErrors,
+    maps: &MapErrors,
+    requested: &LodConfig,
+    inputs: RingInputs<'_>,
+    levels: u8,
+    k: f64,
+) -> f64 {
+    rings.update(requested, inputs);
+    let rings = &*rings;
+    let split = |level| rings.split_distance(level);
+    let (tau, morph) = (requested.tau_px, requested.morph_range);
+    errors.update(split, levels, k, tau, morph, maps);
+    errors.tau_ceiling(maps, k, tau)
 }
 
 fn ms(from: Instant, to: Instant) -> f64 {

@@ -6,6 +6,7 @@
 use crate::lod::select::{children_node_stored, TileBounds};
 use crate::lod::TileKey;
 use crate::node::{NodeData, NodeError, NodeId, NodeLayout, NodeSource};
+use crate::tiles::errors::MapErrors;
 use crate::tiles::vertex::tile_node;
 use crate::tiles::{best_resident, ResidentNodes};
 use std::collections::HashMap;
@@ -20,6 +21,8 @@ pub trait TerrainData: ResidentNodes + TileBounds {
     fn grid_delta_per_level(&self) -> Vec<f64>;
     /// Lowest and highest height of the data, metres.
     fn height_range(&self) -> (f32, f32);
+    /// What each level's error maps can do (empty without maps).
+    fn map_errors(&self) -> MapErrors;
 }
 
 /// Height bounds of a tile from the finest resident node that covers it:
@@ -45,6 +48,7 @@ pub struct PreloadedTerrain {
     deltas: Vec<f64>,
     grid_deltas: Vec<f64>,
     range: (f32, f32),
+    maps: MapErrors,
 }
 
 impl PreloadedTerrain {
@@ -55,6 +59,8 @@ impl PreloadedTerrain {
         let mut nodes = HashMap::new();
         let mut deltas = vec![0.0f64; layout.levels as usize];
         let mut grid_deltas = deltas.clone();
+        let mut maps =
+            MapErrors { floor: deltas.clone(), reference: deltas.clone(), max: deltas.clone() };
         let mut range = (f32::INFINITY, f32::NEG_INFINITY);
         for lod in 0..layout.levels {
             let [nx, ny] = layout.nodes_at(lod);
@@ -69,13 +75,22 @@ impl PreloadedTerrain {
                     deltas[lod as usize] = deltas[lod as usize].max(data.delta as f64);
                     let grid = &mut grid_deltas[lod as usize];
                     *grid = grid.max(data.grid_delta as f64);
+                    let l = lod as usize;
+                    maps.floor[l] = maps.floor[l].max(data.map.floor_m as f64);
+                    maps.reference[l] = maps.reference[l].max(data.map.reference_delta as f64);
+                    let coarsest = data.map.codes.iter().filter(|&&c| c < 255).max();
+                    let coarsest = coarsest.map_or(0.0, |&c| crate::mesh::code::code_error(c));
+                    maps.max[l] = maps.max[l].max(coarsest);
                     // Every level: a layered pyramid's level 0 is sparse.
                     range = (range.0.min(data.min), range.1.max(data.max));
                     nodes.insert(id, data);
                 }
             }
         }
-        Ok(PreloadedTerrain { layout, nodes, deltas, grid_deltas, range })
+        // A source without maps draws grids: its summary says so.
+        let any_map = nodes.values().any(|d| !d.map.is_empty());
+        let maps = if any_map { maps } else { MapErrors::default() };
+        Ok(PreloadedTerrain { layout, nodes, deltas, grid_deltas, range, maps })
     }
 }
 
@@ -122,5 +137,9 @@ impl TerrainData for PreloadedTerrain {
 
     fn height_range(&self) -> (f32, f32) {
         self.range
+    }
+
+    fn map_errors(&self) -> MapErrors {
+        self.maps.clone()
     }
 }

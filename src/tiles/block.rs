@@ -71,6 +71,8 @@ pub struct MeshCounts {
     pub vertices: u32,
     /// Indices, three per triangle, skirts included.
     pub indices: u32,
+    /// Of those, the skirts' (0 where not counted: a grid's).
+    pub skirt_indices: u32,
 }
 
 impl MeshCounts {
@@ -172,7 +174,7 @@ mod tests {
     #[test]
     fn a_block_is_its_vertices_then_its_indices_padded_to_four_bytes() {
         assert_eq!((VERTEX_BYTES, HEIGHT_OFFSET, NORMAL_OFFSET), (20, 8, 16));
-        let counts = MeshCounts { vertices: 3, indices: 3 };
+        let counts = MeshCounts { vertices: 3, indices: 3, skirt_indices: 0 };
         assert_eq!((counts.vertex_bytes(), counts.block_bytes()), (60, 68));
         let vertex = |i: u16, skirt: u16| TileVertex {
             post: [i, 1],

@@ -16,6 +16,8 @@
 
 use super::block::TileVertex;
 use super::block::{write_block, MeshCounts, BLOCK_ALIGNMENT};
+use super::errors::{MeshErrors, TileErrors};
+use super::extract::{forced_step, Extraction, Extractor, PlacedMap, TargetMesh};
 use super::grid::{self, TileGrid};
 use super::mesh_tile::{CutInputs, MeshCutter, TileSquare};
 use super::vertex::{fill_tile, tile_node, PostReader, TileCoverage};
@@ -27,6 +29,7 @@ use crate::allocator::{
 use crate::lod::select::{children_node_stored, tiles_at};
 use crate::lod::{SelectedTile, TileKey};
 use crate::node::{NodeData, NodeId, NodeLayout};
+use arrayvec::ArrayVec;
 use std::collections::HashMap;
 use std::ops::Range;
 
@@ -71,6 +74,28 @@ pub struct TileDraw {
     /// Whether some of its posts have no data (never [`TileCoverage::Empty`]:
     /// tiles without data are not drawn).
     pub coverage: TileCoverage,
+    /// Its sub-level (a leaf tile nearer than its level's ring; see
+    /// [`super::errors`]).
+    pub sub_level: u8,
+    /// How far the surface it shows may lie from the data, metres: its
+    /// mesh's error and its reference lattice's, or those of the mesh it
+    /// morphs toward, whichever is larger; NaN where unknown (a grid).
+    pub error_m: f32,
+    /// The same where it has not morphed: its own mesh's and reference
+    /// lattice's error (NaN for a grid).
+    pub own_error_m: f32,
+}
+
+/// How a resident tile was made.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MadeFrom {
+    /// The level of the node its heights came from.
+    pub source_level: u8,
+    /// Extracted from the node's error map (else a grid of its posts).
+    pub node_mesh: bool,
+    /// How far its surface may lie from the data, metres (NaN for a grid:
+    /// its level's grid delta).
+    pub error_m: f32,
 }
 
 /// What one frame of the cache did.
@@ -162,59 +187,117 @@ fn has_finer_data(nodes: &dyn ResidentNodes, key: TileKey, grid_size: u32) -> bo
 }
 
 /// What tiles are made with: the regular grid (its vertices the scratch a
-/// grid tile is made in), the cutter of node meshes and its scratch.
+/// grid tile is made in), the extractor of meshes from error maps, the
+/// cutter that adds their skirts, and their scratch.
 struct TileMaker {
     grid: TileGrid,
+    extractor: Extractor,
     cutter: MeshCutter,
     vertices: Vec<TileVertex>,
     indices: Vec<u16>,
 }
 
+/// One tile to make: which node it is made from and with what errors.
+#[derive(Clone, Copy)]
+struct MakeSpec<'a> {
+    key: TileKey,
+    source: NodeId,
+    data: &'a NodeData,
+    errors: TileErrors,
+}
+
 impl TileMaker {
-    /// How tile `key` is made from `source`'s `data`, and its size: from
-    /// the node's mesh where it has one whose triangles fit the tile, else
-    /// as the regular grid of the node's posts.
+    /// How tile `key` is made from `spec.source`'s data, and its size:
+    /// extracted from the node's error map where it has one whose lattice
+    /// the tile's square covers, else as the regular grid of the node's
+    /// posts.
     fn plan(
         &mut self,
-        layout: &NodeLayout,
-        key: TileKey,
-        source: NodeId,
-        data: &NodeData,
-        has_finer_data: bool,
+        nodes: &dyn ResidentNodes,
+        spec: MakeSpec<'_>,
+        mesh_errors: &MeshErrors,
     ) -> (TileMeshKind, MeshCounts) {
-        let grid_size = self.grid.grid_size;
-        // No finer data under the tile: it is drawn however near the camera
-        // comes, so it must be exact. A node simplified on a finer lattice
-        // (some of its children are stored) is not; its own posts are.
-        let exact = data.mesh.post_level == source.level;
-        let mesh_fits = has_finer_data || exact || source.level != key.level;
-        let square = (mesh_fits && !data.mesh.is_empty())
-            .then(|| TileSquare::of(layout, key, grid_size, source, &data.mesh))
-            .flatten();
-        if let Some(square) = square {
-            if let Some(size) = self.cutter.cut(&data.mesh, square) {
-                let counts =
-                    MeshCounts { vertices: size.vertices as u32, indices: size.indices as u32 };
-                if counts.vertices <= 1 << 16 {
-                    return (TileMeshKind::NodeMesh(square), counts);
+        let layout = *nodes.layout();
+        if let Some(square) = map_square(&layout, spec.key, self.grid.grid_size, spec) {
+            if self.extract(nodes, spec, square, mesh_errors).is_ok() {
+                if let Some(size) = self.cutter.cut(&self.extractor.mesh, square) {
+                    let counts = MeshCounts {
+                        vertices: size.vertices as u32,
+                        indices: size.indices as u32,
+                        skirt_indices: size.skirt_indices as u32,
+                    };
+                    if counts.vertices <= 1 << 16 {
+                        return (TileMeshKind::NodeMesh(square), counts);
+                    }
                 }
             }
         }
-        (TileMeshKind::Grid, grid::counts(grid_size))
+        (TileMeshKind::Grid, grid::counts(self.grid.grid_size))
+    }
+
+    /// Extracts the tile's mesh from the source's map and its resident
+    /// ancestors' into the extractor.
+    fn extract(
+        &mut self,
+        nodes: &dyn ResidentNodes,
+        spec: MakeSpec<'_>,
+        square: TileSquare,
+        mesh_errors: &MeshErrors,
+    ) -> Result<(), super::extract::ExtractError> {
+        let layout = nodes.layout();
+        let grid_size = self.grid.grid_size;
+        let place = |id, data, error_m| place_map(layout, grid_size, id, data, error_m);
+        let own_level = spec.source.level == spec.key.level;
+        let mut own = place(spec.source, spec.data, spec.errors.own.metres());
+        own.set_forced(square.width.min(own.forced()));
+        // On the stack: tiles are made in frames, which allocate nothing
+        // once their scratch has grown.
+        let mut chain: ArrayVec<PlacedMap<'_>, { crate::pyramid::MAX_LEVELS as usize }> =
+            ArrayVec::new();
+        let mut id = spec.source;
+        while let Some(parent) = id.parent().filter(|p| p.level < layout.levels) {
+            if let Some(data) = nodes.resident(parent).filter(|d| !d.map.is_empty()) {
+                chain.push(place(parent, data, level_error(mesh_errors, parent.level)));
+            }
+            id = parent;
+        }
+        // Split at the tile's square like the neighbour of the coarser
+        // sub-level is: the shared edge then morphs onto that neighbour's.
+        let coarser = (own_level && spec.errors.sub_level > 0).then(|| {
+            let mut coarser = place(spec.source, spec.data, spec.errors.target.metres());
+            coarser.set_forced(square.width.min(coarser.forced()));
+            coarser
+        });
+        let parent_resident = chain.first().is_some_and(|p| Some(p.node()) == spec.source.parent());
+        let target = match &coarser {
+            Some(c) => TargetMesh::Coarser(c),
+            None if own_level && parent_resident => TargetMesh::Parent,
+            None => TargetMesh::None,
+        };
+        let job = Extraction {
+            own: &own,
+            ancestors: &chain,
+            target,
+            origin: square.origin,
+            width: square.width,
+        };
+        self.extractor.extract(&job)
     }
 
     /// Makes the tile's mesh into `block` (its planned size): vertices,
     /// then indices.
     fn fill(
         &mut self,
+        nodes: &dyn ResidentNodes,
         job: &Job,
         key: TileKey,
-        layout: &NodeLayout,
-        data: &NodeData,
+        mesh_errors: &MeshErrors,
         block: &mut [u8],
     ) -> TileCoverage {
+        let layout = *nodes.layout();
+        let data = nodes.resident(job.source).expect("resident since mark_selected");
         let grid_size = self.grid.grid_size;
-        let reader = PostReader::new(layout, key, grid_size, job.source, data);
+        let reader = PostReader::new(&layout, key, grid_size, job.source, data);
         match job.kind {
             TileMeshKind::Grid => {
                 let scale = 2f64.powi(key.level as i32);
@@ -225,7 +308,9 @@ impl TileMaker {
                 coverage
             }
             TileMeshKind::NodeMesh(square) => {
-                let mesh = &data.mesh;
+                let spec = MakeSpec { key, source: job.source, data, errors: job.errors };
+                self.extract(nodes, spec, square, mesh_errors).expect("planned from the same maps");
+                let mesh = &self.extractor.mesh;
                 let size = self.cutter.cut(mesh, square).expect("planned from the same mesh");
                 self.vertices.resize(size.vertices, TileVertex::default());
                 self.indices.resize(size.indices, 0);
@@ -247,10 +332,71 @@ impl TileMaker {
     }
 }
 
+/// How far a tile's surface may lie from the data, metres: the error it
+/// was extracted at, or of the mesh it morphs toward, plus its reference
+/// lattice's; NaN for a grid (its level's grid delta applies).
+fn tile_error(kind: TileMeshKind, spec: MakeSpec<'_>) -> (f32, f32) {
+    let own_level = spec.source.level == spec.key.level;
+    match kind {
+        TileMeshKind::Grid => (f32::NAN, f32::NAN),
+        TileMeshKind::NodeMesh(_) => {
+            let morph = if own_level { spec.errors.target.metres() } else { 0.0 };
+            let map = &spec.data.map;
+            let own = spec.errors.own.metres().max(map.floor_m as f64);
+            let reference = map.reference_delta as f64;
+            ((own + reference) as f32, (own.max(morph) + reference) as f32)
+        }
+    }
+}
+
+/// Node `id`'s map placed for meshes of `error_m` split at least to the
+/// squares of its own level's tiles (`grid_size` cells).
+fn place_map<'a>(
+    layout: &'a NodeLayout,
+    grid_size: u32,
+    id: NodeId,
+    data: &'a NodeData,
+    error_m: f64,
+) -> PlacedMap<'a> {
+    let map = &data.map;
+    let tile_posts = grid_size << (id.level - map.post_level.min(id.level));
+    let forced = forced_step(layout, map.post_level, map.cells, tile_posts, error_m);
+    PlacedMap::new(layout, id, data, error_m, forced)
+}
+
+/// The error a level's tiles are extracted at this frame, metres.
+fn level_error(errors: &MeshErrors, level: u8) -> f64 {
+    errors.level.get(level as usize).map_or(0.0, |s| s.metres())
+}
+
+/// The tile's square in its source's map, when the source has a map and
+/// the tile covers whole posts of its lattice.
+fn map_square(
+    layout: &NodeLayout,
+    key: TileKey,
+    grid_size: u32,
+    spec: MakeSpec<'_>,
+) -> Option<TileSquare> {
+    let map = &spec.data.map;
+    if map.is_empty() {
+        return None;
+    }
+    TileSquare::of(layout, key, grid_size, spec.source, map.post_level)
+}
+
 #[derive(Clone, Copy, Debug)]
 struct Resident {
     key: TileKey,
     source_level: u8,
+    /// The errors it was made with.
+    errors: TileErrors,
+    /// Whether its parent node was resident when it was made (its mesh
+    /// then refines the parent's; made again once it is).
+    parent_resident: bool,
+    /// How far its surface may lie from the data, metres: fully morphed,
+    /// and unmorphed.
+    error_m: f32,
+    own_error_m: f32,
     coverage: TileCoverage,
     /// What its block holds.
     mesh: MeshCounts,
@@ -267,6 +413,14 @@ struct Job {
     new: bool,
     /// The resident node the tile's heights come from.
     source: NodeId,
+    /// The errors it is made with.
+    errors: TileErrors,
+    /// Whether the source's parent is resident.
+    parent_resident: bool,
+    /// How far its surface may lie from the data, metres: fully morphed,
+    /// and unmorphed.
+    error_m: f32,
+    own_error_m: f32,
     /// The mesh it is made as, and its size.
     kind: TileMeshKind,
     mesh: MeshCounts,
@@ -318,6 +472,7 @@ impl TileCache {
             dirty: Vec::with_capacity(max),
             maker: TileMaker {
                 grid: TileGrid::new(config.grid_size),
+                extractor: Extractor::default(),
                 cutter: MeshCutter::default(),
                 vertices: Vec::new(),
                 indices: Vec::new(),
@@ -340,11 +495,26 @@ impl TileCache {
         &mut self,
         selected: &[SelectedTile],
         nodes: &dyn ResidentNodes,
+        errors: &MeshErrors,
     ) -> Result<&[TileDraw], TileError> {
         self.frame += 1;
         self.allocator.begin_frame();
-        self.stats = TileFrameStats { tiles: selected.len(), ..TileFrameStats::default() };
+        self.stats = TileFrameStats::default();
         self.dirty.clear();
+        self.retake(selected, nodes, errors)
+    }
+
+    /// [`Self::update`] again within the same frame, for another selection
+    /// (a frame budget's correction once the tiles' real counts are
+    /// known): what the first made stays resident this frame and its dirty
+    /// ranges are kept, so the GPU still receives every block made.
+    pub fn retake(
+        &mut self,
+        selected: &[SelectedTile],
+        nodes: &dyn ResidentNodes,
+        errors: &MeshErrors,
+    ) -> Result<&[TileDraw], TileError> {
+        self.stats.tiles = selected.len();
         // Unused tiles go first so that their slots and bytes can serve new ones.
         for tile in selected {
             if let Some(&slot) = self.by_key.get(&tile.key) {
@@ -353,15 +523,20 @@ impl TileCache {
             }
         }
         self.release_unused();
-        self.mark_selected(selected, nodes)?;
+        self.mark_selected(selected, nodes, errors)?;
         if !self.requests.is_empty() {
-            self.generate(nodes)?;
+            self.generate(nodes, errors)?;
         }
         self.list_draws(selected);
         let stats = self.allocator.stats();
         self.stats.allocator_used_bytes = stats.live_bytes;
         self.stats.allocator_workspace_bytes = stats.workspace_end;
         Ok(&self.draws)
+    }
+
+    /// Triangles of the last update's draws, skirts included.
+    pub fn drawn_triangles(&self) -> u64 {
+        self.draws.iter().map(|d| d.index_count as u64 / 3).sum()
     }
 
     /// The draws of the last successful update, in memory order.
@@ -384,22 +559,38 @@ impl TileCache {
         self.stats
     }
 
-    /// Triangles of `key`'s block, skirts included, when it is resident
-    /// (a frame budget's estimate before the tiles are made).
-    pub fn resident_triangles(&self, key: TileKey) -> Option<u64> {
+    /// Triangles of `key`'s block, skirts included, and the error it was
+    /// extracted at (NaN for a grid), when it is resident (a frame
+    /// budget's estimate before the tiles are made).
+    pub fn resident_triangles(&self, key: TileKey) -> Option<(u64, f64)> {
+        self.resident_parts(key).map(|(surface, skirts, error)| (surface + skirts, error))
+    }
+
+    /// [`Self::resident_triangles`] parted: the surface's, the skirts'
+    /// (0 for a grid, whose skirts are not counted apart), and the error.
+    pub fn resident_parts(&self, key: TileKey) -> Option<(u64, u64, f64)> {
         let slot = *self.by_key.get(&key)?;
         let resident = self.slots.get(slot as usize)?.as_ref()?;
-        Some(resident.mesh.indices as u64 / 3)
+        let error = match resident.kind {
+            TileMeshKind::Grid => f64::NAN,
+            TileMeshKind::NodeMesh(_) => resident.errors.own.metres(),
+        };
+        let skirts = resident.mesh.skirt_indices as u64 / 3;
+        Some((resident.mesh.indices as u64 / 3 - skirts, skirts, error))
     }
 
     /// How `key`'s resident tile was made: the level of the node it came
     /// from (above `key.level` when only coarser data was resident: best
     /// available), and whether it was cut from that node's mesh (else made
     /// as a grid of its posts).
-    pub fn made_from(&self, key: TileKey) -> Option<(u8, bool)> {
+    pub fn made_from(&self, key: TileKey) -> Option<MadeFrom> {
         let slot = *self.by_key.get(&key)?;
         let resident = self.slots.get(slot as usize)?.as_ref()?;
-        Some((resident.source_level, resident.kind != TileMeshKind::Grid))
+        Some(MadeFrom {
+            source_level: resident.source_level,
+            node_mesh: resident.kind != TileMeshKind::Grid,
+            error_m: resident.error_m,
+        })
     }
 
     /// Resident tiles (for statistics and tests).
@@ -420,7 +611,7 @@ impl TileCache {
                 (0..nx).map(move |x| SelectedTile { key: TileKey::new(root, x, y), distance: 0.0 })
             })
             .collect();
-        self.update(&roots, nodes)?;
+        self.update(&roots, nodes, &MeshErrors::default())?;
         for slot in self.slots.iter_mut().flatten() {
             slot.pinned = true;
         }
@@ -434,6 +625,7 @@ impl TileCache {
         &mut self,
         selected: &[SelectedTile],
         nodes: &dyn ResidentNodes,
+        mesh_errors: &MeshErrors,
     ) -> Result<(), TileError> {
         self.requests.clear();
         self.jobs.clear();
@@ -444,25 +636,45 @@ impl TileCache {
             });
         }
         let layout = *nodes.layout();
+        let grid_size = self.config.grid_size;
         for tile in selected {
-            let (node, _) = tile_node(tile.key, self.config.grid_size, layout.node_size);
-            let (source, _) = best_resident(nodes, node).ok_or(TileError::NoData(tile.key))?;
+            let (node, _) = tile_node(tile.key, grid_size, layout.node_size);
+            let (source, data) = best_resident(nodes, node).ok_or(TileError::NoData(tile.key))?;
+            let leaf = !has_finer_data(nodes, tile.key, grid_size);
+            let errors = mesh_errors.for_tile(tile.key.level, tile.distance, leaf);
+            let parent_resident = source.parent().is_some_and(|p| nodes.resident(p).is_some());
             let (slot, new) = match self.by_key.get(&tile.key) {
                 Some(&slot) => (slot, false),
                 None => (self.reserve(tile.key, source.level)?, true),
             };
             let resident = self.slots[slot as usize].as_mut().expect("reserved");
             resident.last_frame = self.frame;
-            if new || source.level < resident.source_level {
-                let data = nodes.resident(source).expect("best_resident found it");
-                let finer = has_finer_data(nodes, tile.key, self.config.grid_size);
-                let (kind, mesh) = self.maker.plan(&layout, tile.key, source, data, finer);
+            let stale = resident.kind != TileMeshKind::Grid
+                && (resident.errors != errors || (parent_resident && !resident.parent_resident));
+            if new || source.level < resident.source_level || stale {
+                let spec = MakeSpec { key: tile.key, source, data, errors };
+                let (kind, mesh) = self.maker.plan(nodes, spec, mesh_errors);
+                // A grid of posts has no sub-levels: it morphs toward its
+                // parent level's posts from its level's ring, as ever.
+                let errors =
+                    if kind == TileMeshKind::Grid { TileErrors::default() } else { errors };
                 self.requests.push(Request {
                     generator: GeneratorId(slot),
                     format: VertexFormat(0),
                     size: mesh.block_bytes(),
                 });
-                self.jobs.push(Job { slot, new, source, kind, mesh });
+                let (own_error_m, error_m) = tile_error(kind, spec);
+                self.jobs.push(Job {
+                    slot,
+                    new,
+                    source,
+                    errors,
+                    parent_resident,
+                    error_m,
+                    own_error_m,
+                    kind,
+                    mesh,
+                });
             }
         }
         Ok(())
@@ -476,6 +688,10 @@ impl TileCache {
         self.slots[slot as usize] = Some(Resident {
             key,
             source_level,
+            errors: TileErrors::default(),
+            parent_resident: false,
+            error_m: f32::NAN,
+            own_error_m: f32::NAN,
             coverage: TileCoverage::Full,
             mesh: MeshCounts::default(),
             kind: TileMeshKind::Grid,
@@ -512,16 +728,20 @@ impl TileCache {
     /// all, finer data for tiles that have data already waits: the
     /// improvements are dropped and the new tiles placed alone, so a small
     /// buffer still takes a coarser selection whose tiles are resident.
-    fn generate(&mut self, nodes: &dyn ResidentNodes) -> Result<(), TileError> {
-        let mut outcome = self.place(nodes);
+    fn generate(
+        &mut self,
+        nodes: &dyn ResidentNodes,
+        errors: &MeshErrors,
+    ) -> Result<(), TileError> {
+        let mut outcome = self.place(nodes, errors);
         if outcome.is_err() && self.drop_improvements() {
-            outcome = self.place(nodes);
+            outcome = self.place(nodes, errors);
         }
         match outcome {
             Ok(bytes_uploaded) => {
-                self.stats.generated = self.requests.len();
+                self.stats.generated += self.requests.len();
                 self.stats.transfers = self.dirty.len();
-                self.stats.bytes_uploaded = bytes_uploaded;
+                self.stats.bytes_uploaded += bytes_uploaded;
                 Ok(())
             }
             Err(error) => {
@@ -533,11 +753,10 @@ impl TileCache {
 
     /// One placement of the queued requests as a run, making each block;
     /// the bytes made.
-    fn place(&mut self, nodes: &dyn ResidentNodes) -> Result<u64, AllocError> {
+    fn place(&mut self, nodes: &dyn ResidentNodes, errors: &MeshErrors) -> Result<u64, AllocError> {
         if self.requests.is_empty() {
             return Ok(0);
         }
-        let layout = *nodes.layout();
         let (slots, maker, dirty, jobs) =
             (&mut self.slots, &mut self.maker, &mut self.dirty, &self.jobs);
         self.allocator.allocate(&self.requests).map(|mut plan| {
@@ -547,12 +766,15 @@ impl TileCache {
                     .as_mut()
                     .expect("queued tiles are reserved");
                 let job = jobs[index];
-                let data = nodes.resident(job.source).expect("resident since mark_selected");
                 debug_assert_eq!(block.len(), job.mesh.block_bytes() as usize);
-                resident.coverage = maker.fill(&job, resident.key, &layout, data, block);
+                resident.coverage = maker.fill(nodes, &job, resident.key, errors, block);
                 resident.mesh = job.mesh;
                 resident.kind = job.kind;
                 resident.source_level = job.source.level;
+                resident.errors = job.errors;
+                resident.parent_resident = job.parent_resident;
+                resident.error_m = job.error_m;
+                resident.own_error_m = job.own_error_m;
                 bytes_uploaded += block.len() as u64;
             });
             dirty.extend(plan.dirty_ranges().iter().cloned());
@@ -608,6 +830,9 @@ impl TileCache {
                 node_mesh: resident.kind != TileMeshKind::Grid,
                 source_level: resident.source_level,
                 coverage: resident.coverage,
+                sub_level: resident.errors.sub_level,
+                error_m: resident.error_m,
+                own_error_m: resident.own_error_m,
             });
         }
         // Memory order keeps the attribute pointer moving forward.

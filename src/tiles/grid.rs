@@ -71,7 +71,11 @@ pub fn positions(g: u32) -> impl Iterator<Item = ([u16; 2], u16)> {
 
 /// Vertices and indices of a regular tile of `grid_size` cells.
 pub fn counts(grid_size: u32) -> MeshCounts {
-    MeshCounts { vertices: vertex_count(grid_size) as u32, indices: index_count(grid_size) as u32 }
+    MeshCounts {
+        vertices: vertex_count(grid_size) as u32,
+        indices: index_count(grid_size) as u32,
+        skirt_indices: 0,
+    }
 }
 
 /// Bytes of a regular tile's block of `grid_size` cells (vertices, indices, padding).

@@ -29,10 +29,6 @@ pub struct TileSquare {
     pub step: u32,
 }
 
-/// Node-mesh triangles each lie inside one of this many squares a node
-/// side (`MeshOptions::tile_cells`, 8 node posts of 64, by default).
-pub const NODE_MESH_SQUARES: u64 = 8;
-
 impl TileSquare {
     /// The square of tile `key` (of `grid_size` cells) in the mesh of
     /// `node`, if the tile lies inside the node on whole mesh posts.
@@ -41,20 +37,18 @@ impl TileSquare {
         key: TileKey,
         grid_size: u32,
         node: NodeId,
-        mesh: &NodeMesh,
+        post_level: u8,
     ) -> Option<TileSquare> {
-        let step = 1u64 << mesh.post_level;
+        let step = 1u64 << post_level;
         let tile_span = (grid_size as u64) << key.level;
         let node_span = (layout.node_size as u64) << node.level;
         let tile0 = [key.x as u64 * tile_span, key.y as u64 * tile_span];
         let node0 = [node.x as u64 * node_span, node.y as u64 * node_span];
         let inside =
             (0..2).all(|k| tile0[k] >= node0[k] && tile0[k] + tile_span <= node0[k] + node_span);
-        // A tile smaller than the squares the mesh's triangles keep to
-        // would cut them and leave holes (a tile drawn from an ancestor
-        // three levels or more above it, when the atlas is short of slots).
-        let whole_triangles = tile_span * NODE_MESH_SQUARES >= node_span;
-        if !inside || !whole_triangles || tile_span % step != 0 {
+        // Meshes are extracted split to the tile's square, so any tile of
+        // whole map posts takes whole triangles.
+        if !inside || tile_span % step != 0 {
             return None;
         }
         let origin = [0, 1].map(|k| ((tile0[k] - node0[k]) / step) as u32);
@@ -69,6 +63,8 @@ pub struct CutSize {
     pub vertices: usize,
     /// Indices: the triangles', then the skirts'.
     pub indices: usize,
+    /// Of those, the skirts'.
+    pub skirt_indices: usize,
 }
 
 /// Scratch for cutting tiles out of node meshes, sized once (no allocation
@@ -165,6 +161,7 @@ impl MeshCutter {
         Some(CutSize {
             vertices: self.order.len() + skirt_vertices,
             indices: self.indices.len() + skirt_indices,
+            skirt_indices,
         })
     }
 

@@ -8,12 +8,17 @@
 
 pub mod block;
 pub mod cache;
+pub mod errors;
+pub mod extract;
+pub mod fan;
 pub mod grid;
 pub mod mesh_tile;
 pub mod vertex;
 
 pub use block::{MeshCounts, TileBlock, TileVertex};
-pub use cache::{TileCache, TileCacheConfig, TileDraw, TileError, TileFrameStats, TileMeshKind};
+pub use cache::{
+    MadeFrom, TileCache, TileCacheConfig, TileDraw, TileError, TileFrameStats, TileMeshKind,
+};
 pub use grid::TileGrid;
 pub use vertex::{TileCoverage, NO_DATA};
 

@@ -336,7 +336,7 @@ mod tests {
             max: 120.0,
             delta: 0.0,
             grid_delta: 0.0,
-            mesh: Default::default(),
+            map: Default::default(),
         };
         let reader =
             PostReader::new(&layout, TileKey::new(0, 0, 0), 8, NodeId::new(0, 0, 0), &data);
@@ -374,7 +374,7 @@ mod tests {
             max: 324.0,
             delta: 0.0,
             grid_delta: 0.0,
-            mesh: Default::default(),
+            map: Default::default(),
         };
         let reader =
             PostReader::new(&layout, TileKey::new(1, 0, 0), 8, NodeId::new(1, 0, 0), &data);

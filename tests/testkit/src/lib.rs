@@ -70,37 +70,22 @@ pub fn builtin_pyramid() -> Arc<Pyramid> {
     Arc::clone(pyramid)
 }
 
-/// The built-in terrain with each node's adaptive mesh, as `fly` draws it
-/// (the mesh file is built once beside [`builtin_pyramid`]'s).
+/// The built-in terrain with each node's error map, as `fly` draws it
+/// (the map file is built once beside [`builtin_pyramid`]'s, and serves
+/// every tau).
 pub fn builtin_terrain() -> Arc<MeshedSource> {
-    builtin_terrain_for(1.0)
+    static TERRAIN: OnceLock<Arc<MeshedSource>> = OnceLock::new();
+    Arc::clone(TERRAIN.get_or_init(|| Arc::new(meshed(builtin_pyramid()))))
 }
 
-/// [`builtin_terrain`] with the meshes a display of `tau_px` uses
-/// ([`MeshOptions::for_tau`]), each opened once per binary.
-pub fn builtin_terrain_for(tau_px: f64) -> Arc<MeshedSource> {
-    static TERRAINS: std::sync::Mutex<Vec<(u64, Arc<MeshedSource>)>> =
-        std::sync::Mutex::new(Vec::new());
-    let mut terrains = TERRAINS.lock().unwrap_or_else(|e| e.into_inner());
-    let key = tau_px.to_bits();
-    if let Some((_, terrain)) = terrains.iter().find(|(k, _)| *k == key) {
-        return Arc::clone(terrain);
-    }
-    let terrain = Arc::new(meshed(builtin_pyramid(), tau_px));
-    terrains.push((key, Arc::clone(&terrain)));
-    terrain
-}
-
-/// `pyramid` with the node meshes of a display of `tau_px`, built beside it
-/// when missing.
-pub fn meshed(pyramid: Arc<Pyramid>, tau_px: f64) -> MeshedSource {
-    MeshedSource::open_or_build(pyramid, MeshOptions::for_tau(tau_px), &Silent).expect("meshes")
+/// `pyramid` with its error maps, built beside it when missing.
+pub fn meshed(pyramid: Arc<Pyramid>) -> MeshedSource {
+    MeshedSource::open_or_build(pyramid, MeshOptions::default(), &Silent).expect("meshes")
 }
 
 /// What the rings of a display over `source` are computed from.
 pub fn summary_of(source: &MeshedSource) -> TerrainSummary {
-    let info = source.pyramid().info();
-    TerrainSummary { delta_per_level: source.delta_per_level(), ..TerrainSummary::from_pyramid(info) }
+    TerrainSummary::of_maps(source.pyramid().info(), source.info())
 }
 
 /// The built-in SRTM tile alone, without any layer under it: a real tile
@@ -113,6 +98,10 @@ pub fn srtm_tile_pyramid() -> Arc<Pyramid> {
 /// The pyramid of `assets/dem/<file>` alone, built once into
 /// `<target_tmp>/<name>` (and opened from there by later runs).
 pub fn asset_pyramid(name: &str, file: &str) -> Arc<Pyramid> {
+    // Tests of one binary run in parallel: one builds, the others wait and
+    // open what it wrote.
+    static BUILDING: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _one_at_a_time = BUILDING.lock().unwrap_or_else(|e| e.into_inner());
     let dir = target_tmp().join(name);
     if let Ok(pyramid) = Pyramid::open(&dir) {
         return Arc::new(pyramid);

@@ -65,7 +65,7 @@ pub fn config(backend: GlBackend, version: GlesVersion) -> DisplayConfig {
 /// A display over the built-in terrain, tiles cut from its node meshes for
 /// the config's tau (what `ridgeline fly` draws).
 pub fn open(config: &DisplayConfig) -> Result<DisplayParts, DisplayError> {
-    let terrain = crate::builtin_terrain_for(config.scene.lod.tau_px);
+    let terrain = crate::builtin_terrain();
     let summary = crate::summary_of(&terrain);
     DisplayParts::open(config, terrain, summary)
 }
@@ -225,7 +225,7 @@ pub fn measure_accuracy_budgeted(
     }
     config.budget = triangle_budget.map(|n| BudgetConfig::new(BudgetTarget::Triangles(n)));
     let mut display = if meshed {
-        let terrain = Arc::new(crate::meshed(pyramid.clone(), tau_px));
+        let terrain = Arc::new(crate::meshed(pyramid.clone()));
         let summary = crate::summary_of(&terrain);
         DisplayParts::open(&config, terrain, summary).expect("headless EGL display")
     } else {

@@ -37,7 +37,7 @@ pub fn pipeline_over(
 /// [`pipeline_over`] the built-in terrain with its node meshes for the
 /// config's tau (what `ridgeline fly` draws).
 pub fn pipeline(config: SceneConfig) -> FramePipeline {
-    let terrain = crate::builtin_terrain_for(config.lod.tau_px);
+    let terrain = crate::builtin_terrain();
     let summary = crate::summary_of(&terrain);
     pipeline_over(terrain, summary, config)
 }

@@ -39,10 +39,33 @@ pub fn fan_unnested_cells(
     indices: &mut Vec<u16>,
     parent_at: impl Fn(f64, f64) -> Option<(f64, [f64; 2])>,
 ) -> usize {
-    let cells = half_cell_pairs(vertices, indices);
-    let mut fanned = vec![false; indices.len() / 3];
-    let mut fans: Vec<[u16; 12]> = Vec::new();
-    for pair in cells {
+    fan_with(&mut FanScratch::default(), vertices, indices, parent_at)
+}
+
+/// What [`fan_with`] works in, reused from tile to tile (tiles are made in
+/// frames: no allocation once the largest has been fanned).
+#[derive(Default)]
+pub struct FanScratch {
+    by_cell: Vec<([u16; 2], usize)>,
+    fanned: Vec<bool>,
+    fans: Vec<[u16; 12]>,
+    kept: Vec<u16>,
+}
+
+/// [`fan_unnested_cells`] in `scratch`.
+pub fn fan_with(
+    scratch: &mut FanScratch,
+    vertices: &mut Vec<MeshVertex>,
+    indices: &mut Vec<u16>,
+    parent_at: impl Fn(f64, f64) -> Option<(f64, [f64; 2])>,
+) -> usize {
+    half_cell_pairs(vertices, indices, &mut scratch.by_cell);
+    let FanScratch { by_cell, fanned, fans, kept } = scratch;
+    fanned.clear();
+    fanned.resize(indices.len() / 3, false);
+    fans.clear();
+    let pairs = by_cell.windows(2).filter(|w| w[0].0 == w[1].0).map(|w| [w[0].1, w[1].1]);
+    for pair in pairs {
         if pair.iter().any(|&t| fanned[t]) {
             continue;
         }
@@ -81,14 +104,11 @@ pub fn fan_unnested_cells(
         return 0;
     }
     let ccw = first_is_ccw(vertices, indices);
-    let kept: Vec<u16> = indices
-        .chunks_exact(3)
-        .zip(&fanned)
-        .filter(|(_, &f)| !f)
-        .flat_map(|(t, _)| t.iter().copied())
-        .collect();
-    *indices = kept;
-    for fan in &fans {
+    kept.clear();
+    let unfanned = indices.chunks_exact(3).zip(fanned.iter()).filter(|(_, &f)| !f);
+    kept.extend(unfanned.flat_map(|(t, _)| t.iter().copied()));
+    std::mem::swap(indices, kept);
+    for fan in fans.iter() {
         for tri in fan.chunks_exact(3) {
             let t = if ccw { [tri[0], tri[1], tri[2]] } else { [tri[0], tri[2], tri[1]] };
             indices.extend_from_slice(&t);
@@ -97,22 +117,19 @@ pub fn fan_unnested_cells(
     fans.len()
 }
 
-/// Pairs of triangles (by number) that together fill one cell: each spans
-/// exactly one cell (two half steps) in both directions.
-fn half_cell_pairs(vertices: &[MeshVertex], indices: &[u16]) -> Vec<[usize; 2]> {
-    let mut by_cell: Vec<([u16; 2], usize)> = indices
-        .chunks_exact(3)
-        .enumerate()
-        .filter_map(|(t, tri)| {
-            let p = [0, 1, 2].map(|k| vertices[tri[k] as usize].post);
-            let lo = [0, 1].map(|a| p.iter().map(|q| q[a]).min().unwrap_or(0));
-            let hi = [0, 1].map(|a| p.iter().map(|q| q[a]).max().unwrap_or(0));
-            let one_cell = (0..2).all(|a| hi[a] - lo[a] == 2) && lo.iter().all(|c| c % 2 == 0);
-            one_cell.then_some((lo, t))
-        })
-        .collect();
+/// The triangles (by number) that fill one cell, each spanning exactly one
+/// cell (two half steps) in both directions, sorted by cell: two in a row
+/// with the same cell are a pair.
+fn half_cell_pairs(vertices: &[MeshVertex], indices: &[u16], by_cell: &mut Vec<([u16; 2], usize)>) {
+    by_cell.clear();
+    by_cell.extend(indices.chunks_exact(3).enumerate().filter_map(|(t, tri)| {
+        let p = [0, 1, 2].map(|k| vertices[tri[k] as usize].post);
+        let lo = [0, 1].map(|a| p.iter().map(|q| q[a]).min().unwrap_or(0));
+        let hi = [0, 1].map(|a| p.iter().map(|q| q[a]).max().unwrap_or(0));
+        let one_cell = (0..2).all(|a| hi[a] - lo[a] == 2) && lo.iter().all(|c| c % 2 == 0);
+        one_cell.then_some((lo, t))
+    }));
     by_cell.sort_unstable();
-    by_cell.windows(2).filter(|w| w[0].0 == w[1].0).map(|w| [w[0].1, w[1].1]).collect()
 }
 
 /// The cell's corners (south-west, south-east, north-east, north-west) as

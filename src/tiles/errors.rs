@@ -1,0 +1,227 @@
+//! The errors a frame's tiles are extracted at (issue 22): what the bound
+//! allows each tile for this viewport and tau, no less, quantised so that
+//! a tile is remade only when its error moves by a step.
+//!
+//! A tile of level `l` is drawn from its level's ring on, `split_l` away
+//! or more, so Ulrich's bound `delta K / D <= tau` holds for it, and for
+//! its morph toward the parent from `split_{l+1} (1 - morph)` on, with
+//! `delta_l = tau (1 - morph) split_l / K` less its map's reference delta.
+//! A *leaf* tile (no finer node under it) is drawn however near the camera
+//! comes: nearer than its level's ring it takes *sub-levels*, the ring
+//! halved `k` times and the error with it, each morphing toward the one
+//! above over the outer part of its band, as the levels do.
+
+/// Sub-levels a leaf tile may take: the error halves each time, 2^-16 of
+/// its level's at the most.
+pub const MAX_SUB_LEVEL: u8 = 16;
+
+/// Quantisation steps a doubling of the error spans.
+const STEPS_PER_OCTAVE: f64 = 8.0;
+
+/// A quantised error: `2^(step / 4)` metres.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+pub struct ErrorStep(pub i16);
+
+impl ErrorStep {
+    /// The largest step whose error is at most `error_m` (tiny errors
+    /// clamp to the smallest step).
+    pub fn at_most(error_m: f64) -> ErrorStep {
+        if error_m.is_nan() || error_m <= 0.0 {
+            return ErrorStep(i16::MIN);
+        }
+        let step = (STEPS_PER_OCTAVE * error_m.log2()).floor();
+        ErrorStep(step.clamp(i16::MIN as f64 + 1.0, i16::MAX as f64) as i16)
+    }
+
+    /// The error of this step, metres (0 for the smallest step).
+    pub fn metres(self) -> f64 {
+        if self.0 == i16::MIN {
+            0.0
+        } else {
+            (self.0 as f64 / STEPS_PER_OCTAVE).exp2()
+        }
+    }
+
+    /// The step a sub-level `k` below this one: the error halved `k` times.
+    pub fn halved(self, k: u8) -> ErrorStep {
+        if self.0 == i16::MIN {
+            return self;
+        }
+        ErrorStep(self.0.saturating_sub(STEPS_PER_OCTAVE as i16 * k as i16).max(i16::MIN + 1))
+    }
+}
+
+/// What a frame's tiles are extracted at, per level.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MeshErrors {
+    /// Per level: the error its tiles are extracted at at their ring.
+    pub level: Vec<ErrorStep>,
+    /// Per level: the distance a leaf tile's sub-level 0 reaches down to,
+    /// metres (the level's ring, or half the next for level 0).
+    pub leaf_ring: Vec<f64>,
+    /// Share of each band its tiles morph over, toward the band above.
+    pub morph_range: f64,
+}
+
+/// What the maps of each level can do: the smallest error their sparse
+/// maps serve (0 where every map is dense) and the largest error of their
+/// reference lattices, metres, per level.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MapErrors {
+    /// Per level, the floor.
+    pub floor: Vec<f64>,
+    /// Per level, the reference delta.
+    pub reference: Vec<f64>,
+    /// Per level, the error of its coarsest meshes.
+    pub max: Vec<f64>,
+}
+
+impl MapErrors {
+    /// The floor of `level` (0 past the table).
+    pub fn floor(&self, level: u8) -> f64 {
+        self.floor.get(level as usize).copied().unwrap_or(0.0)
+    }
+
+    /// Whether the terrain has error maps at all (else tiles are grids,
+    /// whose triangles tau does not change).
+    pub fn is_empty(&self) -> bool {
+        self.floor.is_empty()
+    }
+
+    /// The error of `level`'s coarsest meshes (0 past the table).
+    pub fn max(&self, level: u8) -> f64 {
+        self.max.get(level as usize).copied().unwrap_or(0.0)
+    }
+
+    /// The reference delta of `level` (0 past the table).
+    pub fn reference(&self, level: u8) -> f64 {
+        self.reference.get(level as usize).copied().unwrap_or(0.0)
+    }
+}
+
+/// The errors one tile is made with.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TileErrors {
+    /// Its sub-level (0 but for leaf tiles nearer than their level's ring).
+    pub sub_level: u8,
+    /// The error it is extracted at.
+    pub own: ErrorStep,
+    /// The error of the mesh it morphs toward: the same node's one
+    /// sub-level up, or the parent level's at sub-level 0.
+    pub target: ErrorStep,
+}
+
+impl MeshErrors {
+    /// Fills the table for rings `split` (per level, metres; 0 for level
+    /// 0), `k` (Ulrich's K), `tau_px`, `morph_range` and the maps' floors
+    /// and reference deltas per level (`maps`). Reuses its buffers.
+    pub fn update(
+        &mut self,
+        split: impl Fn(u8) -> f64,
+        levels: u8,
+        k: f64,
+        tau_px: f64,
+        morph_range: f64,
+        maps: &MapErrors,
+    ) {
+        self.level.clear();
+        self.leaf_ring.clear();
+        self.morph_range = morph_range;
+        let keep = 1.0 - morph_range;
+        for level in 0..levels {
+            let ring = if level == 0 || split(level) <= 0.0 {
+                split(level.saturating_add(1).min(levels - 1)) / 2.0
+            } else {
+                split(level)
+            };
+            // The reference lattice's own error comes on top of the mesh's.
+            let allowed = tau_px * keep * ring / k - maps.reference(level);
+            let wanted = ErrorStep::at_most(allowed.max(maps.floor(level)));
+            self.level.push(wanted);
+            self.leaf_ring.push(ring);
+        }
+    }
+
+    /// The tau past which no level's tiles get any coarser, pixels: every
+    /// level's error reaches its coarsest meshes' (the table as last
+    /// filled by [`Self::update`] at `tau_px`, whose errors are linear in
+    /// tau but for the reference deltas).
+    pub fn tau_ceiling(&self, maps: &MapErrors, k: f64, tau_px: f64) -> f64 {
+        let keep = 1.0 - self.morph_range;
+        let mut ceiling = tau_px;
+        for (level, &ring) in self.leaf_ring.iter().enumerate() {
+            let level = level as u8;
+            let coarsest = maps.max(level) + maps.reference(level);
+            if ring > 0.0 && coarsest > 0.0 {
+                ceiling = ceiling.max(coarsest * k / (keep * ring));
+            }
+        }
+        ceiling
+    }
+
+    /// The errors of a tile of `level` at `distance` metres; `leaf`: no
+    /// finer node lies under it.
+    pub fn for_tile(&self, level: u8, distance: f64, leaf: bool) -> TileErrors {
+        let l = level as usize;
+        let own = self.level.get(l).copied().unwrap_or_default();
+        let parent = self.level.get(l + 1).copied().unwrap_or(own);
+        let sub_level = if leaf { self.sub_level(level, distance) } else { 0 };
+        let target = if sub_level == 0 { parent } else { own.halved(sub_level - 1) };
+        TileErrors { sub_level, own: own.halved(sub_level), target }
+    }
+
+    /// The sub-level of a leaf tile of `level` `distance` metres away: how
+    /// many times its level's ring halves before it is no farther than the
+    /// tile.
+    pub fn sub_level(&self, level: u8, distance: f64) -> u8 {
+        let ring = self.leaf_ring.get(level as usize).copied().unwrap_or(0.0);
+        if ring.is_nan() || ring <= 0.0 || distance >= ring {
+            return 0;
+        }
+        let halvings = (ring / distance.max(1e-3)).log2().ceil();
+        halvings.clamp(0.0, MAX_SUB_LEVEL as f64) as u8
+    }
+
+    /// The morph of a leaf tile of `level` at sub-level `k >= 1` toward
+    /// sub-level `k - 1`: `(start, end)` metres.
+    pub fn sub_level_morph(&self, level: u8, k: u8) -> (f64, f64) {
+        let ring = self.leaf_ring.get(level as usize).copied().unwrap_or(0.0);
+        let end = ring / (1u64 << (k.max(1) - 1)) as f64;
+        (end * (1.0 - self.morph_range), end)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn steps_are_at_most_the_error_and_halve_by_four() {
+        for e in [0.003, 0.1, 1.0, 7.3, 12.0, 450.0] {
+            let s = ErrorStep::at_most(e);
+            assert!(s.metres() <= e && s.metres() > e / 2f64.powf(0.25) - 1e-12, "{e}");
+            assert!((s.halved(1).metres() * 2.0 - s.metres()).abs() < 1e-9);
+        }
+        assert_eq!(ErrorStep::at_most(0.0).metres(), 0.0);
+    }
+
+    #[test]
+    fn leaf_tiles_nearer_than_their_ring_halve_their_error() {
+        let mut errors = MeshErrors::default();
+        let rings = [0.0, 20_000.0, 40_000.0, 80_000.0];
+        errors.update(|l| rings[l as usize], 4, 1000.0, 1.0, 0.3, &MapErrors::default());
+        // Level 0's sub-level 0 reaches down to half of level 1's ring.
+        assert_eq!(errors.sub_level(0, 10_000.0), 0);
+        assert_eq!(errors.sub_level(0, 9_999.0), 1);
+        assert_eq!(errors.sub_level(0, 2_400.0), 3);
+        let near = errors.for_tile(0, 2_400.0, true);
+        assert_eq!(near.own, errors.level[0].halved(3));
+        assert_eq!(near.target, errors.level[0].halved(2));
+        // A tile with finer data under it never takes a sub-level.
+        assert_eq!(errors.for_tile(2, 1.0, false).sub_level, 0);
+        // The bound: the error at the band's near end is tau (1 - morph) D / K at most.
+        let (_, end) = errors.sub_level_morph(0, 3);
+        assert!((end - 2_500.0).abs() < 1e-9);
+        assert!(near.own.metres() * 1000.0 / 1_250.0 <= 0.7 + 1e-12);
+    }
+}
