@@ -12,6 +12,7 @@
 //! | [`netcdf`] | netCDF-3 classic grids (ETOPO5) |
 //! | [`raw`] | the pre-fill grid with voids and the checks importers share |
 //! | [`mosaic`] | joining several files on one lattice |
+//! | [`spilled`] | files into layers in memory-mapped spills, for imports larger than memory |
 //! | [`voids`] | the documented void fill |
 //! | [`error`] | [`ImportError`]: the file and the problem |
 
@@ -29,6 +30,7 @@ pub mod hgt;
 pub mod mosaic;
 pub mod netcdf;
 pub mod raw;
+pub mod spilled;
 pub mod voids;
 
 pub use error::{ImportError, Problem};
@@ -55,7 +57,35 @@ pub struct ElevationGrid {
     pub voids_filled: u64,
 }
 
+/// A grid's heights wherever they are (on the heap or in a
+/// [`crate::spill::Spill`]), with the rest of an [`ElevationGrid`]: what
+/// the pyramid builders read.
+#[derive(Clone, Copy, Debug)]
+pub struct GridView<'a> {
+    /// Posts per row, west to east.
+    pub width: u32,
+    /// Rows, south to north.
+    pub height: u32,
+    /// `width * height` heights in metres, row 0 southern; NaN: no data.
+    pub heights: &'a [f32],
+    /// Where post (0, 0) is and how far apart the posts are.
+    pub georef: GeoRef,
+    /// Samples that were voids in the sources and were interpolated.
+    pub voids_filled: u64,
+}
+
 impl ElevationGrid {
+    /// The grid as a [`GridView`].
+    pub fn view(&self) -> GridView<'_> {
+        GridView {
+            width: self.width,
+            height: self.height,
+            heights: &self.heights,
+            georef: self.georef,
+            voids_filled: self.voids_filled,
+        }
+    }
+
     /// The height of sample `(i, j)`.
     pub fn at(&self, i: u32, j: u32) -> f32 {
         debug_assert!(i < self.width && j < self.height);

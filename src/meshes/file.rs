@@ -59,6 +59,9 @@ const DENSE: u32 = 0;
 const SPARSE: u32 = 1;
 /// Bytes of the pyramid file its identity covers.
 const PYRAMID_ID_BYTES: u64 = 64 * 1024;
+/// Chunks of nodes built between two releases of the source's pages:
+/// a few hundred nodes, some tens of MB of a pyramid's records.
+const RELEASE_EVERY_CHUNKS: usize = 64;
 /// Bytes a decoded map takes beside its arrays: `above`'s 4 x 256 counts.
 const ABOVE_BYTES: u64 = 4 * 256 * 4;
 
@@ -285,7 +288,7 @@ pub fn build_store(
             writer.start(&info).map_err(|e| io(temporary, e))?;
             let mut table = initial_table(source, &layout);
             let chunk = 4 * rayon::current_num_threads().max(1);
-            for ids in nodes.chunks(chunk) {
+            for (n, ids) in nodes.chunks(chunk).enumerate() {
                 let built: Vec<Result<(u64, ErrorMap), MeshesError>> = ids
                     .par_iter()
                     .map(|&id| {
@@ -299,6 +302,11 @@ pub fn build_store(
                     note_level(&mut info, nodes_level(&layout, index), &map);
                     let entry = writer.append(index, &map).map_err(|e| io(temporary, e))?;
                     table[index as usize] = entry;
+                }
+                // The nodes read stay mapped; memory must not grow with
+                // the pyramid (every few chunks: the call walks the map).
+                if n % RELEASE_EVERY_CHUNKS == RELEASE_EVERY_CHUNKS - 1 {
+                    source.release_pages();
                 }
             }
             writer.finish(&info, &table).map_err(|e| io(temporary, e))
