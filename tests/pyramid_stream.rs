@@ -7,9 +7,9 @@
 
 use std::path::{Path, PathBuf};
 
-use ridgeline::dem::spilled::spill_layers;
 use ridgeline::dem::{import_layers, ElevationGrid, GridView};
 use ridgeline::geo::{Crs, GeoRef};
+use ridgeline::pyramid::spilled::spill_layers;
 use ridgeline::pyramid::{
     build_layers, build_streaming, write_atomic, BuildOptions, Silent, StreamError, StreamOptions,
     FILE_NAME,

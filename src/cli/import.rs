@@ -11,9 +11,9 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
-use ridgeline::dem::spilled::{spill_layers, SpilledLayer};
 use ridgeline::dem::GridView;
 use ridgeline::meshes::{MeshOptions, MeshedSource};
+use ridgeline::pyramid::spilled::{spill_layers, SpilledLayer};
 use ridgeline::pyramid::{
     self, BuildOptions, Pyramid, StreamOptions, FILE_NAME, MAX_SYNTHETIC_SIZE,
 };

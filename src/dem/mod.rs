@@ -12,7 +12,6 @@
 //! | [`netcdf`] | netCDF-3 classic grids (ETOPO5) |
 //! | [`raw`] | the pre-fill grid with voids and the checks importers share |
 //! | [`mosaic`] | joining several files on one lattice |
-//! | [`spilled`] | files into layers in memory-mapped spills, for imports larger than memory |
 //! | [`voids`] | the documented void fill |
 //! | [`error`] | [`ImportError`]: the file and the problem |
 
@@ -30,7 +29,6 @@ pub mod hgt;
 pub mod mosaic;
 pub mod netcdf;
 pub mod raw;
-pub mod spilled;
 pub mod voids;
 
 pub use error::{ImportError, Problem};

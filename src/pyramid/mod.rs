@@ -61,6 +61,7 @@ pub mod layers;
 mod limits;
 mod open;
 mod progress;
+pub mod spilled;
 mod stream;
 mod synthetic;
 mod write;

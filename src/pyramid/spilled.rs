@@ -2,7 +2,7 @@
 //! imports larger than memory: each file is decoded once (one at a time)
 //! and written into its layer's spill at its place on the mosaic's
 //! lattice, so no layer is ever whole on the heap. The rules are those of
-//! [`super::import_layers`] (grouping by spacing, the mosaic's first valid
+//! [`crate::dem::import_layers`] (grouping by spacing, the mosaic's first valid
 //! height wins, a global grid's closing column), with one difference in
 //! void filling: small voids are filled per file, over the file's posts
 //! and [`FILL_HALO`] posts around them, instead of over the whole mosaic.
@@ -13,12 +13,10 @@ use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
 
-use super::error::{ImportError, Problem};
-use super::mosaic::{plan, Footprint, SPACING_TOLERANCE};
-use super::raw::RawGrid;
-use super::{read_raw, voids, GridView};
+use super::progress::Progress;
+use crate::dem::mosaic::{plan, Footprint, SPACING_TOLERANCE};
+use crate::dem::{read_raw, voids, GridView, ImportError, Problem, RawGrid};
 use crate::geo::GeoRef;
-use crate::pyramid::Progress;
 use crate::spill::{ScratchDir, Spill};
 
 /// Posts around a file that its void filling sees in a mosaic (and half
@@ -61,7 +59,7 @@ struct Decoded {
 }
 
 /// Reads `paths` into layers in spills of `scratch`, in the order their
-/// first file was given (see [`super::import_layers`]).
+/// first file was given (see [`crate::dem::import_layers`]).
 pub fn spill_layers(
     paths: &[PathBuf],
     scratch: &ScratchDir,
@@ -245,7 +243,7 @@ fn window_grid(layer: &SpilledLayer, start: [u32; 2], end: [u32; 2]) -> RawGrid 
     }
 }
 
-/// The closing column of a global grid (see [`super::close_global`]),
+/// The closing column of a global grid (see [`crate::dem::close_global`]),
 /// written into a new spill one post wider.
 fn close_global(layer: SpilledLayer, scratch: &ScratchDir) -> Result<SpilledLayer, ImportError> {
     if !layer.georef.lacks_closing_column(layer.width) {
