@@ -213,6 +213,10 @@ fn write_levels(
     Ok((levels, file))
 }
 
+/// A node cut from the layers: its id, posts, summary, and whether any
+/// centre post has data.
+type CutNode = (NodeId, Vec<f32>, NodeSummary, bool);
+
 /// Cuts one band of `candidates` (whole rows of nodes), measures their
 /// deltas against `finer`, records them in `level` and returns their
 /// records' bytes in node order.
@@ -225,7 +229,7 @@ fn cut_band(
     progress: &dyn Progress,
 ) -> Vec<u8> {
     let side = layout.stored_side() as usize;
-    let cut: Vec<Option<(NodeId, Vec<f32>, NodeSummary, bool)>> = band
+    let cut: Vec<Option<CutNode>> = band
         .par_iter()
         .map(|&(id, parent)| {
             let mut posts = vec![0.0f32; side * side];
