@@ -150,26 +150,40 @@ pub fn import_layers(paths: &[PathBuf]) -> Result<Vec<ElevationGrid>, ImportErro
     for path in paths {
         let grid = read_raw(path)?;
         if let Some(first) = groups.first().and_then(|g| g.first()) {
-            if first.georef.crs != grid.georef.crs {
-                let why = format!(
-                    "its coordinate system {:?} differs from {:?} of {}; layers must share one \
-                     (reproject one of them)",
-                    grid.georef.crs,
-                    first.georef.crs,
-                    first.path.display()
-                );
-                return Err(ImportError::new(path, Problem::Mosaic(why)));
-            }
+            check_same_crs(&first.path, &first.georef, path, &grid.georef)?;
         }
-        let same_spacing = |g: &Vec<RawGrid>| {
-            let s = g[0].georef.spacing;
-            (0..2)
-                .all(|a| (grid.georef.spacing[a] - s[a]).abs() / s[a] <= mosaic::SPACING_TOLERANCE)
-        };
+        let same_spacing = |g: &Vec<RawGrid>| same_spacing(&g[0].georef, &grid.georef);
         match groups.iter_mut().find(|g| same_spacing(g)) {
             Some(group) => group.push(grid),
             None => groups.push(vec![grid]),
         }
     }
     groups.into_iter().map(|g| voids::fill_small(mosaic::mosaic(g)?).map(close_global)).collect()
+}
+
+/// Refuses the file at `path` when its coordinate system differs from the
+/// first file's (`first`): the layers of an import must share one.
+pub fn check_same_crs(
+    first: &Path,
+    first_georef: &GeoRef,
+    path: &Path,
+    georef: &GeoRef,
+) -> Result<(), ImportError> {
+    if first_georef.crs == georef.crs {
+        return Ok(());
+    }
+    let why = format!(
+        "its coordinate system {:?} differs from {:?} of {}; layers must share one \
+         (reproject one of them)",
+        georef.crs,
+        first_georef.crs,
+        first.display()
+    );
+    Err(ImportError::new(path, Problem::Mosaic(why)))
+}
+
+/// Whether two files share a spacing (within [`mosaic::SPACING_TOLERANCE`]),
+/// so they belong to one layer.
+pub fn same_spacing(a: &GeoRef, b: &GeoRef) -> bool {
+    (0..2).all(|k| (b.spacing[k] - a.spacing[k]).abs() / a.spacing[k] <= mosaic::SPACING_TOLERANCE)
 }

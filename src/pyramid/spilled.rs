@@ -14,8 +14,10 @@ use std::path::{Path, PathBuf};
 use rayon::prelude::*;
 
 use super::progress::Progress;
-use crate::dem::mosaic::{plan, Footprint, SPACING_TOLERANCE};
-use crate::dem::{read_raw, voids, GridView, ImportError, Problem, RawGrid};
+use crate::dem::mosaic::{plan, Footprint};
+use crate::dem::{
+    check_same_crs, read_raw, same_spacing, voids, GridView, ImportError, Problem, RawGrid,
+};
 use crate::geo::GeoRef;
 use crate::spill::{ScratchDir, Spill};
 
@@ -74,16 +76,7 @@ pub fn spill_layers(
         let grid = read_raw(path)?;
         if let Some(first) = groups.first().and_then(|g| g.first()) {
             let first = &first.footprint;
-            if first.georef.crs != grid.georef.crs {
-                let why = format!(
-                    "its coordinate system {:?} differs from {:?} of {}; layers must share one \
-                     (reproject one of them)",
-                    grid.georef.crs,
-                    first.georef.crs,
-                    first.path.display()
-                );
-                return Err(ImportError::new(path, Problem::Mosaic(why)));
-            }
+            check_same_crs(&first.path, &first.georef, path, &grid.georef)?;
         }
         let mut heights = scratch
             .spill("file", grid.heights.len(), 0.0f32)
@@ -92,11 +85,8 @@ pub fn spill_layers(
         heights.release();
         let decoded = Decoded { footprint: Footprint::of(&grid), heights };
         drop(grid);
-        let same_spacing = |g: &Vec<Decoded>| {
-            let s = g[0].footprint.georef.spacing;
-            let t = decoded.footprint.georef.spacing;
-            (0..2).all(|a| (t[a] - s[a]).abs() / s[a] <= SPACING_TOLERANCE)
-        };
+        let same_spacing =
+            |g: &Vec<Decoded>| same_spacing(&g[0].footprint.georef, &decoded.footprint.georef);
         match groups.iter_mut().position(|g| same_spacing(g)) {
             Some(k) => groups[k].push(decoded),
             None => groups.push(vec![decoded]),
