@@ -143,7 +143,7 @@ fn rows_of<'a>(grid: GridView<'a>, rows: &std::ops::Range<u32>) -> &'a [f32] {
 
 /// Per layer, whether it is blended over coarser ones and needs blend
 /// weights (every layer but the coarsest, see [`place_layers`]).
-pub fn weighted(layers: &[GridView]) -> Vec<bool> {
+pub(super) fn weighted(layers: &[GridView]) -> Vec<bool> {
     let order = coarsest_first(layers);
     let mut weighted = vec![false; layers.len()];
     order.iter().skip(1).for_each(|&k| weighted[k] = true);

@@ -66,7 +66,7 @@ mod stream;
 mod synthetic;
 mod write;
 
-pub use build::{build, build_layers, weighted, BuildOptions};
+pub use build::{build, build_layers, BuildOptions};
 pub use built::BuiltPyramid;
 pub use error::{BuildError, PyramidError, StreamError};
 pub use format::{GridStats, LevelSummary, NodeSummary, PostWindow, PyramidInfo, FILE_NAME};
