@@ -96,8 +96,15 @@ pub fn build_streaming(
     replace_file(
         path,
         |temporary| {
-            let built =
-                write_levels(&layout, &composite, rows_per_band, temporary, release, progress)?;
+            let built = write_levels(
+                &layout,
+                &composite,
+                rows_per_band,
+                options.band_bytes,
+                temporary,
+                release,
+                progress,
+            )?;
             let (levels, file) = built;
             let summaries: Vec<_> = (0..layout.levels)
                 .map(|l| {
@@ -166,6 +173,7 @@ fn write_levels(
     layout: &NodeLayout,
     composite: &Composite,
     rows_per_band: u32,
+    band_bytes: u64,
     path: &Path,
     release: &dyn Fn(),
     progress: &dyn Progress,
@@ -199,8 +207,17 @@ fn write_levels(
             failed: Mutex::new(None),
         };
         for band in candidates.chunk_by(|a, b| a.0.y / rows_per_band == b.0.y / rows_per_band) {
-            let bytes = cut_band(layout, composite, &finer, band, &mut level, progress);
-            release();
+            let nodes_per_step = nodes_per_step(layout, lod, band_bytes);
+            let bytes = cut_band(
+                layout,
+                composite,
+                &finer,
+                band,
+                nodes_per_step,
+                &mut level,
+                release,
+                progress,
+            );
             if let Some(error) = finer.failed.lock().expect("not poisoned").take() {
                 return Err(io(error));
             }
@@ -220,28 +237,35 @@ type CutNode = (NodeId, Vec<f32>, NodeSummary, bool);
 /// Cuts one band of `candidates` (whole rows of nodes), measures their
 /// deltas against `finer`, records them in `level` and returns their
 /// records' bytes in node order.
+#[allow(clippy::too_many_arguments)]
 fn cut_band(
     layout: &NodeLayout,
     composite: &Composite,
     finer: &WrittenNodes,
     band: &[(NodeId, bool)],
+    nodes_per_step: usize,
     level: &mut LevelIndex,
+    release: &dyn Fn(),
     progress: &dyn Progress,
 ) -> Vec<u8> {
     let side = layout.stored_side() as usize;
-    let cut: Vec<Option<CutNode>> = band
-        .par_iter()
-        .map(|&(id, parent)| {
-            let mut posts = vec![0.0f32; side * side];
-            let (mut summary, has_data) = cut_node(layout, composite, id, &mut posts);
-            if (has_data || parent) && id.level > 0 {
-                summary.delta = node_delta(finer, layout, id, &posts);
-            }
-            progress.advance(1);
-            (has_data || parent).then_some((id, posts, summary, has_data))
-        })
-        .collect();
-    let present: Vec<_> = cut.into_iter().flatten().collect();
+    let mut present: Vec<CutNode> = Vec::new();
+    for step in band.chunks(nodes_per_step) {
+        let cut: Vec<Option<CutNode>> = step
+            .par_iter()
+            .map(|&(id, parent)| {
+                let mut posts = vec![0.0f32; side * side];
+                let (mut summary, has_data) = cut_node(layout, composite, id, &mut posts);
+                if (has_data || parent) && id.level > 0 {
+                    summary.delta = node_delta(finer, layout, id, &posts);
+                }
+                progress.advance(1);
+                (has_data || parent).then_some((id, posts, summary, has_data))
+            })
+            .collect();
+        present.extend(cut.into_iter().flatten());
+        release();
+    }
     let record = record_len(layout) as usize;
     let mut bytes = vec![0u8; present.len() * record];
     bytes.par_chunks_mut(record).zip(&present).for_each(|(out, (id, posts, summary, _))| {
@@ -256,6 +280,16 @@ fn cut_band(
         level.has_data.push(has_data);
     }
     bytes
+}
+
+/// Nodes of level `lod` cut between two releases of the layers' pages. A
+/// coarse node samples rows spread over its whole area, and the kernel
+/// maps file pages in folios of up to 2 MB, so the pages it touches grow
+/// with its area (4 bytes a level-0 post), not with its posts: as many
+/// nodes as `band_bytes` of area allows, at least one per core.
+fn nodes_per_step(layout: &NodeLayout, lod: u8, band_bytes: u64) -> usize {
+    let area = 4 * layout.span(lod).pow(2);
+    ((band_bytes / area.max(1)) as usize).max(rayon::current_num_threads()).max(1)
 }
 
 /// Bytes of the header and node table at the start of the file.
