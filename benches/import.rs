@@ -13,9 +13,16 @@
 //! rebuild or to free its 1.5 GB. Timings are with the file in the page
 //! cache, best of the repeats.
 //!
-//! `cargo bench --bench import [-- --quick]` prints both tables and writes
-//! `target/bench/import.json` and `target/bench/import.svg`.
+//! A third table imports SRTM1-sized tiles (1, 4, 16; 64 in the full run)
+//! with the release binary as a child process: time, posts per second,
+//! peak resident memory, bytes per level-0 post (see `import_scale/`).
+//!
+//! `cargo bench --bench import [-- --quick]` prints the tables and writes
+//! `target/bench/import.json` and `target/bench/import.svg`, and the scale
+//! table to `target/bench/import_scale.json` and `import_scale.svg`.
 
+#[path = "import_scale/mod.rs"]
+mod scale;
 mod support;
 
 use std::io::Read;
@@ -66,11 +73,19 @@ struct OpenRow {
 
 fn main() {
     let quick = BenchArgs::parse().quick;
+    let scale_rows = scale::measure_all(quick);
+    scale::print_scale_rows(&scale_rows);
+    let threads = rayon::current_num_threads();
+    let scale_report = serde_json::json!({
+        "bench": "import_scale", "quick": quick, "threads": threads, "rows": scale_rows,
+    });
+    let json = support::write_json("import_scale", &scale_report);
+    let svg = support::write_svg("import_scale", &[scale::scale_panel(&scale_rows)]);
+    println!("\nwrote {} and {}\n", json.display(), svg.display());
     let (sizes, repeats): (&[u32], usize) =
         if quick { (&[1024, 2048], 2) } else { (&[1024, 2048, 4096, 8192], 3) };
     let scratch = support::out_dir().join("import-scratch");
     std::fs::create_dir_all(&scratch).expect("create the scratch directory");
-    let threads = rayon::current_num_threads();
     let rows: Vec<Row> = sizes.iter().map(|&size| measure(size, repeats, &scratch)).collect();
     std::fs::remove_dir_all(&scratch).ok();
     let title = format!(

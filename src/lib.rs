@@ -27,6 +27,7 @@
 //! | [`display`] | the display put together: GL context and renderer, scene, clipmap; one call per frame |
 //! | [`node`] | the node pyramid's vocabulary: node ids, layout, node data, the `NodeSource` trait |
 //! | [`pyramid`] | building the node pyramid from a grid (split, downsample, stitch, delta), its checksummed file, writing it atomically, opening it memory-mapped |
+//! | [`spill`] | memory-mapped scratch arrays of an import bigger than memory, and its scratch directory |
 //! | [`procedural`] | a deterministic earth-sized `NodeSource` computed on demand, for scale tests |
 //! | [`clipmap`] | the chunked clipmap: node atlas, clipped quadtrees per view, loader, height queries |
 #![deny(unsafe_code)]
@@ -54,5 +55,6 @@ pub mod procedural;
 pub mod pyramid;
 pub mod render;
 pub mod scene;
+pub mod spill;
 pub mod symbology;
 pub mod tiles;

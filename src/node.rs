@@ -536,6 +536,12 @@ pub trait NodeSource: Send + Sync {
         self.read_node(point.id, &mut node)?;
         Ok(node.interpolate(&layout, point.posts))
     }
+
+    /// Drops the pages of a memory-mapped source that reads have made
+    /// resident (a long pass over every node, such as building the map
+    /// file, calls it between batches so its memory stays flat). The
+    /// default, for sources that map nothing, does nothing.
+    fn release_pages(&self) {}
 }
 
 /// Why a node could not be produced.

@@ -72,6 +72,29 @@ fn import_refuses_absurd_sizes_before_allocating() {
     assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("node size"));
 }
 
+/// `--memory-mb` below the least an import needs is refused by name; an
+/// import removes its own scratch directory and a killed import's stale one.
+#[test]
+fn import_bounds_its_memory_and_cleans_its_scratch() {
+    let cache = fresh_dir("cli-memory");
+    let out = ridgeline(&["import", "--synthetic", "100", "--memory-mb", "0", "--out"], &cache);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && stderr.contains("--memory-mb 0"), "{stderr}");
+    // No process has this id (Linux pids stop at 2^22).
+    let stale = cache.join(".import-4999999");
+    std::fs::create_dir_all(&stale).expect("a stale scratch directory");
+    std::fs::write(stale.join("0000-layer"), b"left by a killed import").expect("stale spill");
+    let out = ridgeline(&["import", "--synthetic", "100", "--memory-mb", "64", "--out"], &cache);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let left: Vec<_> = std::fs::read_dir(&cache)
+        .expect("the cache")
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with(".import-"))
+        .collect();
+    assert!(left.is_empty(), "scratch left behind: {left:?}");
+}
+
 #[test]
 fn importing_the_shipped_srtm_tile_records_where_it_is() {
     let cache = fresh_dir("cli-srtm");

@@ -7,9 +7,11 @@ pub struct Bar(ProgressBar);
 
 impl Bar {
     pub fn new() -> Self {
-        let style = ProgressStyle::with_template("{msg:>18} [{bar:40}] {percent:>3}% {elapsed}")
-            .expect("the template is valid")
-            .progress_chars("=> ");
+        let style = ProgressStyle::with_template(
+            "{msg:>18} [{bar:40}] {percent:>3}% {elapsed} (ETA {eta})",
+        )
+        .expect("the template is valid")
+        .progress_chars("=> ");
         Bar(ProgressBar::new(0).with_style(style))
     }
 

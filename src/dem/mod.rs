@@ -55,7 +55,35 @@ pub struct ElevationGrid {
     pub voids_filled: u64,
 }
 
+/// A grid's heights wherever they are (on the heap or in a
+/// [`crate::spill::Spill`]), with the rest of an [`ElevationGrid`]: what
+/// the pyramid builders read.
+#[derive(Clone, Copy, Debug)]
+pub struct GridView<'a> {
+    /// Posts per row, west to east.
+    pub width: u32,
+    /// Rows, south to north.
+    pub height: u32,
+    /// `width * height` heights in metres, row 0 southern; NaN: no data.
+    pub heights: &'a [f32],
+    /// Where post (0, 0) is and how far apart the posts are.
+    pub georef: GeoRef,
+    /// Samples that were voids in the sources and were interpolated.
+    pub voids_filled: u64,
+}
+
 impl ElevationGrid {
+    /// The grid as a [`GridView`].
+    pub fn view(&self) -> GridView<'_> {
+        GridView {
+            width: self.width,
+            height: self.height,
+            heights: &self.heights,
+            georef: self.georef,
+            voids_filled: self.voids_filled,
+        }
+    }
+
     /// The height of sample `(i, j)`.
     pub fn at(&self, i: u32, j: u32) -> f32 {
         debug_assert!(i < self.width && j < self.height);
@@ -122,26 +150,40 @@ pub fn import_layers(paths: &[PathBuf]) -> Result<Vec<ElevationGrid>, ImportErro
     for path in paths {
         let grid = read_raw(path)?;
         if let Some(first) = groups.first().and_then(|g| g.first()) {
-            if first.georef.crs != grid.georef.crs {
-                let why = format!(
-                    "its coordinate system {:?} differs from {:?} of {}; layers must share one \
-                     (reproject one of them)",
-                    grid.georef.crs,
-                    first.georef.crs,
-                    first.path.display()
-                );
-                return Err(ImportError::new(path, Problem::Mosaic(why)));
-            }
+            check_same_crs(&first.path, &first.georef, path, &grid.georef)?;
         }
-        let same_spacing = |g: &Vec<RawGrid>| {
-            let s = g[0].georef.spacing;
-            (0..2)
-                .all(|a| (grid.georef.spacing[a] - s[a]).abs() / s[a] <= mosaic::SPACING_TOLERANCE)
-        };
+        let same_spacing = |g: &Vec<RawGrid>| same_spacing(&g[0].georef, &grid.georef);
         match groups.iter_mut().find(|g| same_spacing(g)) {
             Some(group) => group.push(grid),
             None => groups.push(vec![grid]),
         }
     }
     groups.into_iter().map(|g| voids::fill_small(mosaic::mosaic(g)?).map(close_global)).collect()
+}
+
+/// Refuses the file at `path` when its coordinate system differs from the
+/// first file's (`first`): the layers of an import must share one.
+pub fn check_same_crs(
+    first: &Path,
+    first_georef: &GeoRef,
+    path: &Path,
+    georef: &GeoRef,
+) -> Result<(), ImportError> {
+    if first_georef.crs == georef.crs {
+        return Ok(());
+    }
+    let why = format!(
+        "its coordinate system {:?} differs from {:?} of {}; layers must share one \
+         (reproject one of them)",
+        georef.crs,
+        first_georef.crs,
+        first.display()
+    );
+    Err(ImportError::new(path, Problem::Mosaic(why)))
+}
+
+/// Whether two files share a spacing (within [`mosaic::SPACING_TOLERANCE`]),
+/// so they belong to one layer.
+pub fn same_spacing(a: &GeoRef, b: &GeoRef) -> bool {
+    (0..2).all(|k| (b.spacing[k] - a.spacing[k]).abs() / a.spacing[k] <= mosaic::SPACING_TOLERANCE)
 }

@@ -59,6 +59,9 @@ const DENSE: u32 = 0;
 const SPARSE: u32 = 1;
 /// Bytes of the pyramid file its identity covers.
 const PYRAMID_ID_BYTES: u64 = 64 * 1024;
+/// Node reads between two releases of the source's pages: some tens of
+/// MB of a pyramid's records.
+const RELEASE_AFTER_READS: u64 = 2048;
 /// Bytes a decoded map takes beside its arrays: `above`'s 4 x 256 counts.
 const ABOVE_BYTES: u64 = 4 * 256 * 4;
 
@@ -285,6 +288,7 @@ pub fn build_store(
             writer.start(&info).map_err(|e| io(temporary, e))?;
             let mut table = initial_table(source, &layout);
             let chunk = 4 * rayon::current_num_threads().max(1);
+            let mut read = 0u64;
             for ids in nodes.chunks(chunk) {
                 let built: Vec<Result<(u64, ErrorMap), MeshesError>> = ids
                     .par_iter()
@@ -299,6 +303,17 @@ pub fn build_store(
                     note_level(&mut info, nodes_level(&layout, index), &map);
                     let entry = writer.append(index, &map).map_err(|e| io(temporary, e))?;
                     table[index as usize] = entry;
+                }
+                // The nodes read stay mapped; memory must not grow with
+                // the pyramid. A map of level l reads up to 4^min(l, depth)
+                // nodes: release after that many reads, not every chunk (the
+                // call walks the map).
+                let depth = u32::from(options.depth);
+                read +=
+                    ids.iter().map(|id| 1u64 << (2 * u32::from(id.level).min(depth))).sum::<u64>();
+                if read >= RELEASE_AFTER_READS {
+                    source.release_pages();
+                    read = 0;
                 }
             }
             writer.finish(&info, &table).map_err(|e| io(temporary, e))

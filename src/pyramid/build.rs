@@ -5,14 +5,15 @@
 
 use rayon::prelude::*;
 
-use super::built::{BuiltLevel, BuiltPyramid};
-use super::delta::node_delta;
+use super::built::{node_of, BuiltLevel, BuiltPyramid};
+use super::delta::{node_delta, InMemory};
 use super::error::BuildError;
 use super::format::{GridStats, LevelSummary, NodeSummary, PostWindow, PyramidInfo};
 use super::layers::{blend_weights, Composite, PlacedLayer};
 use super::limits::{check_levels, check_node, MAX_POSTS_PER_SIDE};
 use super::progress::Progress;
 use crate::dem::ElevationGrid;
+use crate::dem::GridView;
 use crate::geo::GeoRef;
 use crate::node::{NodeId, NodeLayout};
 
@@ -55,24 +56,25 @@ pub fn build_layers(
     options: &BuildOptions,
     progress: &dyn Progress,
 ) -> Result<BuiltPyramid, BuildError> {
+    let views: Vec<GridView> = layers.iter().map(ElevationGrid::view).collect();
     check_options(options)?;
-    for (k, layer) in layers.iter().enumerate() {
-        check_layer(k, layer)?;
+    for (k, layer) in views.iter().enumerate() {
+        check_layer(k, *layer, &mut || {})?;
     }
-    let (layout, georef, composite) = place_layers(layers, options)?;
-    let finest = composite
-        .layers
-        .iter()
-        .filter_map(|l| l.exact.map(|first| (first, l.grid)))
-        .min_by(|a, b| spacing_area(a.1).total_cmp(&spacing_area(b.1)))
-        .map(|(first, grid)| PostWindow {
-            first: first.map(|f| f.max(0) as u32),
-            posts: [grid.width, grid.height],
+    let weights: Vec<Option<Vec<f32>>> = weighted(&views)
+        .into_iter()
+        .zip(&views)
+        .map(|(weighted, v)| {
+            weighted.then(|| blend_weights(*v, v.georef.spacing_m([v.width, v.height])))
         })
-        .unwrap_or_default();
+        .collect();
+    let weights: Vec<Option<&[f32]>> = weights.iter().map(Option::as_deref).collect();
+    let (layout, georef, composite) = place_layers(&views, &weights, options)?;
+    let finest = finest_window(&composite);
     let mut levels: Vec<BuiltLevel> = Vec::with_capacity(layout.levels as usize);
     for lod in 0..layout.levels {
-        let candidates = candidates(&layout, &composite, lod, levels.last());
+        let below = levels.last().map(|l| l.slots.as_slice());
+        let candidates = candidates(&layout, &composite, lod, below);
         progress.phase(&format!("level {lod}: nodes"), candidates.len() as u64);
         levels.push(cut_level(&layout, &composite, lod, &candidates, progress));
     }
@@ -86,9 +88,11 @@ pub fn build_layers(
         } else {
             let level = &levels[lod as usize];
             let ids = present_ids(&layout, lod, level);
+            let finer = InMemory { levels: &levels, layout: &layout };
             ids.par_iter()
                 .map(|&id| {
-                    let delta = node_delta(&levels, &layout, id);
+                    let (posts, _) = node_of(&levels, &layout, id).expect("a present node");
+                    let delta = node_delta(&finer, &layout, id, posts);
                     progress.advance(1);
                     delta
                 })
@@ -96,23 +100,79 @@ pub fn build_layers(
         };
         let level = &mut levels[lod as usize];
         level.summaries.iter_mut().zip(deltas).for_each(|(s, delta)| s.delta = delta);
-        summaries.push(summarise_level(layout.nodes_at(lod), level));
+        let nodes = layout.nodes_at(lod);
+        summaries.push(summarise_level(nodes, &level.summaries, &level.has_data));
     }
-    let stats = grid_stats(&summaries, &composite)?;
+    let stats = grid_stats(&summaries, &composite, &mut || {})?;
     let layer_count = layers.len() as u32;
     let info =
         PyramidInfo { layout, georef, stats, layers: layer_count, finest, levels: summaries };
     Ok(BuiltPyramid { info, levels })
 }
 
-fn check_options(options: &BuildOptions) -> Result<(), BuildError> {
+/// The level-0 posts of the finest layer on the lattice (see [`PyramidInfo::finest`]).
+pub(super) fn finest_window(composite: &Composite) -> PostWindow {
+    composite
+        .layers
+        .iter()
+        .filter_map(|l| l.exact.map(|first| (first, l.grid)))
+        .min_by(|a, b| spacing_area(&a.1).total_cmp(&spacing_area(&b.1)))
+        .map(|(first, grid)| PostWindow {
+            first: first.map(|f| f.max(0) as u32),
+            posts: [grid.width, grid.height],
+        })
+        .unwrap_or_default()
+}
+
+/// Heights checked or counted between two calls of a `band_done`
+/// callback: 32 MB of `f32`, so memory-mapped layers can drop their pages.
+const BAND_POSTS: usize = 8 << 20;
+
+/// Rows of `grid` in bands of about [`BAND_POSTS`] posts: the first row
+/// and the rows of each band.
+fn row_bands(grid: GridView) -> impl Iterator<Item = std::ops::Range<u32>> {
+    let rows = (BAND_POSTS / grid.width.max(1) as usize).max(1) as u32;
+    (0..grid.height.div_ceil(rows)).map(move |b| b * rows..((b + 1) * rows).min(grid.height))
+}
+
+/// The posts of rows `rows` of `grid`.
+fn rows_of<'a>(grid: GridView<'a>, rows: &std::ops::Range<u32>) -> &'a [f32] {
+    let w = grid.width as usize;
+    &grid.heights[rows.start as usize * w..rows.end as usize * w]
+}
+
+/// Per layer, whether it is blended over coarser ones and needs blend
+/// weights (every layer but the coarsest, see [`place_layers`]).
+pub(super) fn weighted(layers: &[GridView]) -> Vec<bool> {
+    let order = coarsest_first(layers);
+    let mut weighted = vec![false; layers.len()];
+    order.iter().skip(1).for_each(|&k| weighted[k] = true);
+    weighted
+}
+
+/// Layer indices coarsest first; among equal spacings the first given
+/// last, so it wins.
+fn coarsest_first(layers: &[GridView]) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..layers.len()).collect();
+    order.sort_by(|&a, &b| {
+        spacing_area(&layers[b]).total_cmp(&spacing_area(&layers[a])).then(b.cmp(&a))
+    });
+    order
+}
+
+pub(super) fn check_options(options: &BuildOptions) -> Result<(), BuildError> {
     let BuildOptions { node_size, border } = *options;
     check_node(node_size, border).map_err(BuildError::InvalidOptions)?;
     Ok(())
 }
 
-/// Why layer `k` cannot be built, if it cannot.
-fn check_layer(k: usize, grid: &ElevationGrid) -> Result<(), BuildError> {
+/// Why layer `k` cannot be built, if it cannot; `band_done` is called
+/// after each band of rows.
+pub(super) fn check_layer(
+    k: usize,
+    grid: GridView,
+    band_done: &mut dyn FnMut(),
+) -> Result<(), BuildError> {
     let fail = |why: String| Err(BuildError::InvalidGrid(format!("layer {}: {why}", k + 1)));
     let samples = [grid.width, grid.height];
     let expected = (grid.width as usize).checked_mul(grid.height as usize);
@@ -122,24 +182,32 @@ fn check_layer(k: usize, grid: &ElevationGrid) -> Result<(), BuildError> {
     if let Some(problem) = grid.georef.problem(samples) {
         return fail(problem);
     }
-    if let Some(index) = grid.heights.par_iter().position_any(|h| h.is_infinite()) {
-        let (i, j) = (index % grid.width as usize, index / grid.width as usize);
-        return fail(format!("height at sample ({i}, {j}) is {}", grid.heights[index]));
+    let mut any_data = false;
+    for rows in row_bands(grid) {
+        let band = rows_of(grid, &rows);
+        if let Some(index) = band.par_iter().position_any(|h| h.is_infinite()) {
+            let index = index + rows.start as usize * grid.width as usize;
+            let (i, j) = (index % grid.width as usize, index / grid.width as usize);
+            return fail(format!("height at sample ({i}, {j}) is {}", grid.heights[index]));
+        }
+        any_data = any_data || band.par_iter().any(|h| !h.is_nan());
+        band_done();
     }
-    if grid.heights.par_iter().all(|h| h.is_nan()) {
+    if !any_data {
         return fail("no post has data".into());
     }
     Ok(())
 }
 
-fn spacing_area(grid: &ElevationGrid) -> f64 {
+fn spacing_area(grid: &GridView) -> f64 {
     grid.georef.spacing[0] * grid.georef.spacing[1]
 }
 
 /// The level-0 lattice over the union of `layers`, its layout and
 /// georeference, and the layers placed on it, coarsest first.
-fn place_layers<'a>(
-    layers: &'a [ElevationGrid],
+pub(super) fn place_layers<'a>(
+    layers: &[GridView<'a>],
+    weights: &[Option<&'a [f32]>],
     options: &BuildOptions,
 ) -> Result<(NodeLayout, GeoRef, Composite<'a>), BuildError> {
     let Some(first) = layers.first() else {
@@ -197,16 +265,10 @@ fn place_layers<'a>(
         posts,
         spacing_m: georef.spacing_m(posts),
     };
-    // Coarsest first; among equal spacings the first given last, so it wins.
-    let mut order: Vec<usize> = (0..layers.len()).collect();
-    order.sort_by(|&a, &b| {
-        spacing_area(&layers[b]).total_cmp(&spacing_area(&layers[a])).then(b.cmp(&a))
-    });
-    let placed = order
+    let placed = coarsest_first(layers)
         .iter()
-        .enumerate()
-        .map(|(rank, &k)| {
-            let grid = &layers[k];
+        .map(|&k| {
+            let grid = layers[k];
             let offset = [0, 1].map(|a| (grid.georef.origin[a] - origin[a]) / spacing[a]);
             let scale = [0, 1].map(|a| grid.georef.spacing[a] / spacing[a]);
             let on_lattice = (0..2).all(|a| {
@@ -216,8 +278,7 @@ fn place_layers<'a>(
             let exact = on_lattice.then(|| offset.map(|o| o.round() as i64));
             let ratio = scale[0].min(scale[1]) * (1.0 + LATTICE_SLACK);
             let native = (ratio.max(1.0).log2().floor() as u8).min(levels - 1);
-            let weights = (rank > 0)
-                .then(|| blend_weights(grid, grid.georef.spacing_m([grid.width, grid.height])));
+            let weights = weights[k];
             let last = posts.map(|p| p as i64 - 1);
             PlacedLayer { grid, offset, scale, exact, native, last, weights }
         })
@@ -229,11 +290,11 @@ fn place_layers<'a>(
 /// level is `lod` or finer, and the parents of every present node of the
 /// level below (so every present node's ancestors are present), the latter
 /// marked `true`.
-fn candidates(
+pub(super) fn candidates(
     layout: &NodeLayout,
     composite: &Composite,
     lod: u8,
-    below: Option<&BuiltLevel>,
+    below: Option<&[Option<u32>]>,
 ) -> Vec<(NodeId, bool)> {
     let [nodes_x, nodes_y] = layout.nodes_at(lod);
     let mut wanted = vec![false; nodes_x as usize * nodes_y as usize];
@@ -258,7 +319,7 @@ fn candidates(
     }
     if let Some(below) = below {
         let [child_x, _] = layout.nodes_at(lod - 1);
-        for (index, slot) in below.slots.iter().enumerate() {
+        for (index, slot) in below.iter().enumerate() {
             if slot.is_some() {
                 let (x, y) = (index as u32 % child_x / 2, index as u32 / child_x / 2);
                 parent[(y * nodes_x + x) as usize] = true;
@@ -313,7 +374,7 @@ fn cut_level(
 /// data's edge take the edge post's place (Kühnert's rule for borders
 /// without a neighbour). Returns the min and max of the centre posts with
 /// data (0 and 0 when there are none) and whether there were any.
-fn cut_node(
+pub(super) fn cut_node(
     layout: &NodeLayout,
     composite: &Composite,
     id: NodeId,
@@ -359,23 +420,32 @@ fn present_ids(layout: &NodeLayout, lod: u8, level: &BuiltLevel) -> Vec<NodeId> 
         .collect()
 }
 
-fn summarise_level(nodes: [u32; 2], level: &BuiltLevel) -> LevelSummary {
-    let with_data = || level.summaries.iter().zip(&level.has_data).filter(|(_, d)| **d);
+pub(super) fn summarise_level(
+    nodes: [u32; 2],
+    summaries: &[NodeSummary],
+    has_data: &[bool],
+) -> LevelSummary {
+    let with_data = || summaries.iter().zip(has_data).filter(|(_, d)| **d);
     let height_min = with_data().map(|(s, _)| s.min).fold(f32::INFINITY, f32::min);
     let height_max = with_data().map(|(s, _)| s.max).fold(f32::NEG_INFINITY, f32::max);
     let (height_min, height_max) =
         if height_min <= height_max { (height_min, height_max) } else { (0.0, 0.0) };
     LevelSummary {
         nodes,
-        present: level.summaries.len() as u64,
-        delta_max: level.summaries.iter().map(|s| s.delta).fold(0.0, f32::max),
+        present: summaries.len() as u64,
+        delta_max: summaries.iter().map(|s| s.delta).fold(0.0, f32::max),
         height_min,
         height_max,
     }
 }
 
-/// Heights over every level and the void counts of the layers.
-fn grid_stats(levels: &[LevelSummary], composite: &Composite) -> Result<GridStats, BuildError> {
+/// Heights over every level and the void counts of the layers;
+/// `band_done` is called after each band of rows.
+pub(super) fn grid_stats(
+    levels: &[LevelSummary],
+    composite: &Composite,
+    band_done: &mut dyn FnMut(),
+) -> Result<GridStats, BuildError> {
     let with_data = levels.iter().filter(|l| l.present > 0 && l.height_min <= l.height_max);
     let (height_min, height_max) = with_data
         .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), l| {
@@ -393,28 +463,38 @@ fn grid_stats(levels: &[LevelSummary], composite: &Composite) -> Result<GridStat
     };
     for (k, layer) in composite.layers.iter().enumerate() {
         let grid = layer.grid;
-        let (from_layer, no_data) = (0..grid.height)
-            .into_par_iter()
-            .map(|q| {
-                let row = &grid.heights[q as usize * grid.width as usize..][..grid.width as usize];
-                let mut counts = (0u64, 0u64);
-                for (p, h) in row.iter().enumerate() {
-                    if !h.is_nan() {
-                        continue;
-                    }
-                    let x = (layer.offset[0] + p as f64 * layer.scale[0]).round() as i64;
-                    let y = (layer.offset[1] + q as f64 * layer.scale[1]).round() as i64;
-                    if composite.height_without(x, y, k).is_nan() {
-                        counts.1 += 1;
-                    } else {
-                        counts.0 += 1;
-                    }
-                }
-                counts
-            })
-            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
-        stats.posts_from_layer += from_layer;
-        stats.posts_no_data += no_data;
+        for rows in row_bands(grid) {
+            let (from_layer, no_data) = void_counts(composite, k, rows);
+            stats.posts_from_layer += from_layer;
+            stats.posts_no_data += no_data;
+            band_done();
+        }
     }
     Ok(stats)
+}
+
+/// Of the void posts of layer `k` in `rows`: how many another layer
+/// covers, and how many have no data.
+fn void_counts(composite: &Composite, k: usize, rows: std::ops::Range<u32>) -> (u64, u64) {
+    let layer = &composite.layers[k];
+    let grid = layer.grid;
+    rows.into_par_iter()
+        .map(|q| {
+            let row = &grid.heights[q as usize * grid.width as usize..][..grid.width as usize];
+            let mut counts = (0u64, 0u64);
+            for (p, h) in row.iter().enumerate() {
+                if !h.is_nan() {
+                    continue;
+                }
+                let x = (layer.offset[0] + p as f64 * layer.scale[0]).round() as i64;
+                let y = (layer.offset[1] + q as f64 * layer.scale[1]).round() as i64;
+                if composite.height_without(x, y, k).is_nan() {
+                    counts.1 += 1;
+                } else {
+                    counts.0 += 1;
+                }
+            }
+            counts
+        })
+        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
 }

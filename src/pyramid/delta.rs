@@ -11,9 +11,36 @@
 //! the largest distance is reached at a finer post: the maximum over posts
 //! is the exact maximum over the area. Posts without data are left out.
 
+use std::borrow::Cow;
+
 use super::built::{node_of, BuiltLevel};
 use crate::mesh::rtin::round_up_to_f32;
 use crate::node::{cell_surface, NodeId, NodeLayout};
+
+/// The finer levels a delta is measured against: the pyramid in memory,
+/// or the records already written by a streaming build.
+pub(crate) trait FinerNodes: Sync {
+    /// Whether node `id` is stored.
+    fn is_present(&self, id: NodeId) -> bool;
+    /// The stored posts of node `id`, `None` when it is absent.
+    fn posts(&self, id: NodeId) -> Option<Cow<'_, [f32]>>;
+}
+
+/// The levels of a pyramid built in memory.
+pub(crate) struct InMemory<'a> {
+    pub levels: &'a [BuiltLevel],
+    pub layout: &'a NodeLayout,
+}
+
+impl FinerNodes for InMemory<'_> {
+    fn is_present(&self, id: NodeId) -> bool {
+        node_of(self.levels, self.layout, id).is_some()
+    }
+
+    fn posts(&self, id: NodeId) -> Option<Cow<'_, [f32]>> {
+        node_of(self.levels, self.layout, id).map(|(posts, _)| Cow::Borrowed(posts))
+    }
+}
 
 /// A node's surface: its stored posts and where it lies.
 struct Surface<'a> {
@@ -21,25 +48,37 @@ struct Surface<'a> {
     posts: &'a [f32],
 }
 
-/// Delta of present node `id` (level 1 or coarser), rounded up to `f32`.
-pub(crate) fn node_delta(levels: &[BuiltLevel], layout: &NodeLayout, id: NodeId) -> f32 {
-    let Some((posts, _)) = node_of(levels, layout, id) else { return 0.0 };
+/// Delta of node `id` (level 1 or coarser) whose stored posts are `posts`,
+/// against the present nodes of `finer`, rounded up to `f32`.
+pub(crate) fn node_delta(
+    finer: &dyn FinerNodes,
+    layout: &NodeLayout,
+    id: NodeId,
+    posts: &[f32],
+) -> f32 {
     let target = Surface { id, posts };
     let mut worst = 0.0f64;
-    explore(levels, layout, &target, id, &mut worst);
+    explore(finer, layout, &target, id, &mut worst);
     round_up_to_f32(worst)
 }
 
 /// Measures the finest present posts under present node `node` against `target`.
 fn explore(
-    levels: &[BuiltLevel],
+    finer: &dyn FinerNodes,
     layout: &NodeLayout,
     target: &Surface,
     node: NodeId,
     worst: &mut f64,
 ) {
-    let Some((posts, _)) = node_of(levels, layout, node) else { return };
-    let here = Surface { id: node, posts };
+    let posts = if node == target.id {
+        Cow::Borrowed(target.posts)
+    } else {
+        match finer.posts(node) {
+            Some(posts) => posts,
+            None => return,
+        }
+    };
+    let here = Surface { id: node, posts: &posts };
     if node.level == 0 {
         measure(layout, target, &here, area(layout, node), worst);
         return;
@@ -50,8 +89,8 @@ fn explore(
         if child.x >= children_x || child.y >= children_y {
             continue; // beyond the data
         }
-        if node_of(levels, layout, child).is_some() {
-            explore(levels, layout, target, child, worst);
+        if finer.is_present(child) {
+            explore(finer, layout, target, child, worst);
         } else if node != target.id {
             measure(layout, target, &here, area(layout, child), worst);
         }

@@ -13,6 +13,20 @@ pub enum BuildError {
     InvalidOptions(String),
 }
 
+/// Why a streaming build ([`super::build_streaming`]) failed.
+#[derive(Debug, thiserror::Error)]
+pub enum StreamError {
+    /// The layers or options cannot be built.
+    #[error(transparent)]
+    Build(#[from] BuildError),
+    /// Writing the file failed.
+    #[error(transparent)]
+    Write(#[from] PyramidError),
+    /// The memory bound is too small for one band of this input.
+    #[error("memory: {0}")]
+    Memory(String),
+}
+
 /// Why a pyramid file could not be written or opened. Every variant names
 /// the file.
 #[derive(Debug, thiserror::Error)]

@@ -146,7 +146,7 @@ pub fn record_len(layout: &NodeLayout) -> u64 {
 }
 
 /// Bytes of the header, padding included, for this many levels and nodes.
-fn header_len(levels: u64, nodes: u64) -> Option<u64> {
+pub(crate) fn header_len(levels: u64, nodes: u64) -> Option<u64> {
     let unpadded = FIXED_LEN
         .checked_add(levels.checked_mul(LEVEL_ENTRY_LEN)?)?
         .checked_add(4)?

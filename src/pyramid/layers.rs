@@ -26,7 +26,7 @@
 
 use rayon::prelude::*;
 
-use crate::dem::ElevationGrid;
+use crate::dem::GridView;
 use crate::node::cell_surface;
 
 /// Width of the blend inside a finer layer's edge (and around its large
@@ -39,7 +39,7 @@ const ON_POST: f64 = 1e-6;
 
 /// One layer placed on the level-0 lattice.
 pub(crate) struct PlacedLayer<'a> {
-    pub grid: &'a ElevationGrid,
+    pub grid: GridView<'a>,
     /// The layer's post (0, 0) in level-0 posts.
     pub offset: [f64; 2],
     /// The layer's spacing in level-0 posts.
@@ -52,7 +52,7 @@ pub(crate) struct PlacedLayer<'a> {
     /// past it take its place, as nodes' posts do).
     pub last: [i64; 2],
     /// Blend weight per post of the layer, when a coarser layer may lie under it.
-    pub weights: Option<Vec<f32>>,
+    pub weights: Option<&'a [f32]>,
 }
 
 impl PlacedLayer<'_> {
@@ -67,13 +67,13 @@ impl PlacedLayer<'_> {
     /// has no data.
     pub fn height(&self, i: i64, j: i64) -> f32 {
         if self.native == 0 {
-            return self.sample(i, j, &self.grid.heights);
+            return self.sample(i, j, self.grid.heights);
         }
         let step = 1i64 << self.native;
         let (k, m) = (i.div_euclid(step) * step, j.div_euclid(step) * step);
         let (fu, fv) = ((i - k) as f64 / step as f64, (j - m) as f64 / step as f64);
         let post = |x: i64, y: i64| {
-            self.sample(x.clamp(0, self.last[0]), y.clamp(0, self.last[1]), &self.grid.heights)
+            self.sample(x.clamp(0, self.last[0]), y.clamp(0, self.last[1]), self.grid.heights)
                 as f64
         };
         // On a post or a cell edge, only the posts there count (a corner
@@ -94,7 +94,7 @@ impl PlacedLayer<'_> {
 
     /// The blend weight at level-0 post `(i, j)` (1 without a weight raster).
     pub fn weight(&self, i: i64, j: i64) -> f32 {
-        match &self.weights {
+        match self.weights {
             Some(weights) => {
                 let w = self.sample(i, j, weights);
                 if w.is_nan() {
@@ -178,23 +178,40 @@ impl Composite<'_> {
     }
 }
 
+/// Rows of a layer between two calls of the release callback of
+/// [`blend_weights_into`]: a few MB of a world-wide grid's rows.
+const WEIGHT_BAND_ROWS: usize = 64;
+
 /// Blend weights of `grid`: 0 on its edge posts and its no-data posts,
 /// rising as a cosine ramp to 1 at [`BLEND_MARGIN_M`] from the nearest of
 /// them (chamfer distance in metres, `spacing_m` between posts).
-pub(crate) fn blend_weights(grid: &ElevationGrid, spacing_m: [f64; 2]) -> Vec<f32> {
+pub(crate) fn blend_weights(grid: GridView, spacing_m: [f64; 2]) -> Vec<f32> {
+    let mut distance = vec![0.0f64; grid.heights.len()];
+    let mut weights = vec![0.0f32; grid.heights.len()];
+    blend_weights_into(grid, spacing_m, &mut distance, &mut weights, &mut || {});
+    weights
+}
+
+/// [`blend_weights`] into `weights`, with `distance` (one per post) as
+/// scratch; `band_done` is called every [`WEIGHT_BAND_ROWS`] rows of each
+/// sweep, so memory-mapped arrays can drop the pages behind it.
+pub(crate) fn blend_weights_into(
+    grid: GridView,
+    spacing_m: [f64; 2],
+    d: &mut [f64],
+    weights: &mut [f32],
+    band_done: &mut dyn FnMut(),
+) {
     let (w, h) = (grid.width as usize, grid.height as usize);
-    let far = f64::INFINITY;
-    let mut d: Vec<f64> = (0..w * h)
-        .map(|k| {
-            let (i, j) = (k % w, k / w);
+    debug_assert!(d.len() == w * h && weights.len() == w * h);
+    let band = WEIGHT_BAND_ROWS * w;
+    d.par_chunks_mut(w).enumerate().for_each(|(j, row)| {
+        for (i, d) in row.iter_mut().enumerate() {
             let edge = i == 0 || j == 0 || i + 1 == w || j + 1 == h;
-            if edge || grid.heights[k].is_nan() {
-                0.0
-            } else {
-                far
-            }
-        })
-        .collect();
+            *d = if edge || grid.heights[j * w + i].is_nan() { 0.0 } else { f64::INFINITY };
+        }
+    });
+    band_done();
     let [sx, sy] = spacing_m;
     let diagonal = (sx * sx + sy * sy).sqrt();
     // Forward pass: west, south-west, south, south-east neighbours.
@@ -215,6 +232,9 @@ pub(crate) fn blend_weights(grid: &ElevationGrid, spacing_m: [f64; 2]) -> Vec<f3
             }
             d[j * w + i] = best;
         }
+        if j % WEIGHT_BAND_ROWS == WEIGHT_BAND_ROWS - 1 {
+            band_done();
+        }
     }
     // Backward pass: east, north-east, north, north-west neighbours.
     for j in (0..h).rev() {
@@ -234,8 +254,14 @@ pub(crate) fn blend_weights(grid: &ElevationGrid, spacing_m: [f64; 2]) -> Vec<f3
             }
             d[j * w + i] = best;
         }
+        if j % WEIGHT_BAND_ROWS == 0 {
+            band_done();
+        }
     }
-    d.par_iter().map(|&d| ramp(d / BLEND_MARGIN_M)).collect()
+    for (out, d) in weights.chunks_mut(band).zip(d.chunks(band)) {
+        out.par_iter_mut().zip(d).for_each(|(w, &d)| *w = ramp(d / BLEND_MARGIN_M));
+        band_done();
+    }
 }
 
 /// The cosine ramp: 0 at `t <= 0`, 1 at `t >= 1`, smooth in between.

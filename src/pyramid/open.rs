@@ -312,6 +312,19 @@ fn node_at(layout: &NodeLayout, mut index: u64) -> NodeId {
     unreachable!("index beyond the node table")
 }
 
+/// Drops the map's resident pages (MADV_DONTNEED).
+#[cfg(unix)]
+#[allow(unsafe_code)]
+fn release_pages(map: &Mmap) {
+    // SAFETY: the map is a read-only shared mapping of a file: DONTNEED
+    // only unmaps its pages, and the next access reads the same bytes back
+    // from the page cache or the file, so live slices into it stay valid.
+    let _ = unsafe { map.unchecked_advise(memmap2::UncheckedAdvice::DontNeed) };
+}
+
+#[cfg(not(unix))]
+fn release_pages(_map: &Mmap) {}
+
 #[allow(unsafe_code)]
 fn map_file(file: &File) -> std::io::Result<Mmap> {
     // SAFETY: the mapping is only read, and the file behind it is never
@@ -331,6 +344,10 @@ fn map_file(file: &File) -> std::io::Result<Mmap> {
 impl NodeSource for Pyramid {
     fn layout(&self) -> &NodeLayout {
         &self.info.layout
+    }
+
+    fn release_pages(&self) {
+        release_pages(&self.map);
     }
 
     fn has_node(&self, id: NodeId) -> bool {

@@ -1,0 +1,259 @@
+//! Elevation files into layers that live in spills ([`crate::spill`]), for
+//! imports larger than memory: each file is decoded once (one at a time)
+//! and written into its layer's spill at its place on the mosaic's
+//! lattice, so no layer is ever whole on the heap. The rules are those of
+//! [`crate::dem::import_layers`] (grouping by spacing, the mosaic's first valid
+//! height wins, a global grid's closing column), with one difference in
+//! void filling: small voids are filled per file, over the file's posts
+//! and [`FILL_HALO`] posts around them, instead of over the whole mosaic.
+//! For a layer of one file that is the same thing; in a mosaic it differs
+//! only for a void that reaches farther than the halo across a seam.
+
+use std::path::{Path, PathBuf};
+
+use rayon::prelude::*;
+
+use super::progress::Progress;
+use crate::dem::mosaic::{plan, Footprint};
+use crate::dem::{
+    check_same_crs, read_raw, same_spacing, voids, GridView, ImportError, Problem, RawGrid,
+};
+use crate::geo::GeoRef;
+use crate::spill::{ScratchDir, Spill};
+
+/// Posts around a file that its void filling sees in a mosaic (and half
+/// of it the gap between files it fills).
+pub const FILL_HALO: u32 = 256;
+
+/// One layer in a spill.
+pub struct SpilledLayer {
+    /// The layer's first file, named in errors.
+    pub path: PathBuf,
+    /// Posts per row.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
+    /// `width * height` heights, row 0 southern; NaN: no data.
+    pub heights: Spill<f32>,
+    /// Where post (0, 0) is.
+    pub georef: GeoRef,
+    /// Void posts filled.
+    pub voids_filled: u64,
+}
+
+impl SpilledLayer {
+    /// The layer as a [`GridView`].
+    pub fn view(&self) -> GridView<'_> {
+        GridView {
+            width: self.width,
+            height: self.height,
+            heights: self.heights.as_slice(),
+            georef: self.georef,
+            voids_filled: self.voids_filled,
+        }
+    }
+}
+
+/// A decoded file waiting for its layer: its footprint and its heights.
+struct Decoded {
+    footprint: Footprint,
+    heights: Spill<f32>,
+}
+
+/// Reads `paths` into layers in spills of `scratch`, in the order their
+/// first file was given (see [`crate::dem::import_layers`]).
+pub fn spill_layers(
+    paths: &[PathBuf],
+    scratch: &ScratchDir,
+    progress: &dyn Progress,
+) -> Result<Vec<SpilledLayer>, ImportError> {
+    if paths.is_empty() {
+        return Err(ImportError::new(Path::new(""), Problem::NoInput));
+    }
+    let mut groups: Vec<Vec<Decoded>> = Vec::new();
+    progress.phase("reading files", paths.len() as u64);
+    for path in paths {
+        let grid = read_raw(path)?;
+        if let Some(first) = groups.first().and_then(|g| g.first()) {
+            let first = &first.footprint;
+            check_same_crs(&first.path, &first.georef, path, &grid.georef)?;
+        }
+        let mut heights = scratch
+            .spill("file", grid.heights.len(), 0.0f32)
+            .map_err(|e| ImportError::new(path, e.into()))?;
+        heights.as_mut_slice().copy_from_slice(&grid.heights);
+        heights.release();
+        let decoded = Decoded { footprint: Footprint::of(&grid), heights };
+        drop(grid);
+        let same_spacing =
+            |g: &Vec<Decoded>| same_spacing(&g[0].footprint.georef, &decoded.footprint.georef);
+        match groups.iter_mut().position(|g| same_spacing(g)) {
+            Some(k) => groups[k].push(decoded),
+            None => groups.push(vec![decoded]),
+        }
+        progress.advance(1);
+    }
+    groups.into_iter().map(|group| spill_layer(group, scratch, progress)).collect()
+}
+
+/// One group of files of one spacing into one layer.
+fn spill_layer(
+    group: Vec<Decoded>,
+    scratch: &ScratchDir,
+    progress: &dyn Progress,
+) -> Result<SpilledLayer, ImportError> {
+    let footprints: Vec<Footprint> = group.iter().map(|d| d.footprint.clone()).collect();
+    let path = footprints[0].path.clone();
+    let io = |e: std::io::Error| ImportError::new(&path, e.into());
+    let plan = plan(&footprints, u64::MAX)?;
+    progress.phase("mosaic", footprints.len() as u64);
+    let (width, height) = (plan.width, plan.height);
+    let heights = if group.len() == 1 {
+        group.into_iter().next().expect("one file").heights
+    } else {
+        let posts = width as usize * height as usize;
+        let mut heights = scratch.spill("layer", posts, f32::NAN).map_err(io)?;
+        for (decoded, offset) in group.iter().zip(&plan.offsets) {
+            paste(&mut heights, width, &decoded.footprint, decoded.heights.as_slice(), *offset);
+            heights.release();
+            decoded.heights.release();
+            progress.advance(1);
+        }
+        heights
+    };
+    let mut layer =
+        SpilledLayer { path, width, height, heights, georef: plan.georef, voids_filled: 0 };
+    let rects: Vec<[u32; 4]> = footprints
+        .iter()
+        .zip(&plan.offsets)
+        .map(|(f, o)| [o[0], o[1], o[0] + f.size[0], o[1] + f.size[1]])
+        .collect();
+    fill_voids(&mut layer, &rects, progress)?;
+    close_global(layer, scratch)
+}
+
+/// Copies a file's heights into the layer at `offset`, keeping heights
+/// already there (the first file given wins).
+fn paste(layer: &mut Spill<f32>, width: u32, file: &Footprint, heights: &[f32], offset: [u32; 2]) {
+    let (w, fw) = (width as usize, file.size[0] as usize);
+    let rows = layer.as_mut_slice()[offset[1] as usize * w..].par_chunks_mut(w);
+    rows.zip(heights.par_chunks(fw)).for_each(|(row, source)| {
+        let row = &mut row[offset[0] as usize..offset[0] as usize + fw];
+        for (to, &from) in row.iter_mut().zip(source) {
+            if to.is_nan() {
+                *to = from;
+            }
+        }
+    });
+}
+
+/// Fills the layer's small voids window by window (each file's rectangle
+/// and [`FILL_HALO`] around it), counting them; refuses a layer without
+/// data. Fills are applied once all windows are measured, so no window
+/// sees another's fills, and a post two windows fill takes the first's.
+fn fill_voids(
+    layer: &mut SpilledLayer,
+    rects: &[[u32; 4]],
+    progress: &dyn Progress,
+) -> Result<(), ImportError> {
+    let (w, h) = (layer.width, layer.height);
+    let (mut voids, mut any_data) = (0u64, false);
+    for band in layer.heights.as_slice().chunks(BAND_POSTS) {
+        voids += band.par_iter().filter(|v| v.is_nan()).count() as u64;
+        any_data = any_data || band.par_iter().any(|v| !v.is_nan());
+        layer.heights.release();
+    }
+    if !any_data {
+        return Err(ImportError::new(&layer.path, Problem::AllVoids));
+    }
+    if voids == 0 {
+        return Ok(());
+    }
+    progress.phase("void filling", rects.len() as u64);
+    let one_file = rects.len() == 1;
+    let mut fills: Vec<(usize, f32)> = Vec::new();
+    for rect in rects {
+        // A layer of one file is filled whole, as before mosaicking.
+        let grow =
+            |v: u32, by: u32, max: u32| if one_file { v } else { v.saturating_add(by).min(max) };
+        let shrink = |v: u32, by: u32| if one_file { v } else { v.saturating_sub(by) };
+        let core = [shrink(rect[0], FILL_HALO / 2), shrink(rect[1], FILL_HALO / 2)];
+        let core_end = [grow(rect[2], FILL_HALO / 2, w), grow(rect[3], FILL_HALO / 2, h)];
+        let window = [shrink(rect[0], FILL_HALO), shrink(rect[1], FILL_HALO)];
+        let window_end = [grow(rect[2], FILL_HALO, w), grow(rect[3], FILL_HALO, h)];
+        let raw = window_grid(layer, window, window_end);
+        let (ww, wh) = (raw.width as usize, raw.height as usize);
+        let before: Vec<bool> = raw.heights.iter().map(|v| v.is_nan()).collect();
+        layer.heights.release();
+        let Ok(filled) = voids::fill_small(raw) else {
+            progress.advance(1);
+            continue; // a window of voids only: nothing to fill from
+        };
+        for q in 0..wh {
+            for p in 0..ww {
+                let (x, y) = (window[0] as usize + p, window[1] as usize + q);
+                let inside = (core[0] as usize..core_end[0] as usize).contains(&x)
+                    && (core[1] as usize..core_end[1] as usize).contains(&y);
+                let value = filled.heights[q * ww + p];
+                if inside && before[q * ww + p] && !value.is_nan() {
+                    fills.push((y * w as usize + x, value));
+                }
+            }
+        }
+        progress.advance(1);
+    }
+    fills.sort_by_key(|&(index, _)| index);
+    fills.dedup_by_key(|&mut (index, _)| index);
+    let heights = layer.heights.as_mut_slice();
+    for &(index, value) in &fills {
+        heights[index] = value;
+    }
+    layer.heights.release();
+    layer.voids_filled = fills.len() as u64;
+    Ok(())
+}
+
+/// Posts between two releases while a layer is scanned.
+const BAND_POSTS: usize = 8 << 20;
+
+/// A copy of the layer's posts `[start, end)` as a grid with its voids.
+fn window_grid(layer: &SpilledLayer, start: [u32; 2], end: [u32; 2]) -> RawGrid {
+    let (ww, w) = ((end[0] - start[0]) as usize, layer.width as usize);
+    let mut heights = Vec::with_capacity(ww * (end[1] - start[1]) as usize);
+    let all = layer.heights.as_slice();
+    for y in start[1] as usize..end[1] as usize {
+        heights.extend_from_slice(&all[y * w + start[0] as usize..][..ww]);
+    }
+    RawGrid {
+        path: layer.path.clone(),
+        width: ww as u32,
+        height: end[1] - start[1],
+        heights,
+        georef: layer.georef,
+    }
+}
+
+/// The closing column of a global grid (see [`crate::dem::close_global`]),
+/// written into a new spill one post wider.
+fn close_global(layer: SpilledLayer, scratch: &ScratchDir) -> Result<SpilledLayer, ImportError> {
+    if !layer.georef.lacks_closing_column(layer.width) {
+        return Ok(layer);
+    }
+    let (w, h) = (layer.width as usize, layer.height as usize);
+    let io = |e: std::io::Error| ImportError::new(&layer.path, e.into());
+    let mut wider = scratch.spill("closed", (w + 1) * h, 0.0f32).map_err(io)?;
+    let rows_per_band = (BAND_POSTS / w).max(1);
+    for first in (0..h).step_by(rows_per_band) {
+        let rows = rows_per_band.min(h - first);
+        let from = &layer.heights.as_slice()[first * w..(first + rows) * w];
+        let to = &mut wider.as_mut_slice()[first * (w + 1)..(first + rows) * (w + 1)];
+        to.par_chunks_mut(w + 1).zip(from.par_chunks(w)).for_each(|(to, from)| {
+            to[..w].copy_from_slice(from);
+            to[w] = from[0];
+        });
+        layer.heights.release();
+        wider.release();
+    }
+    wider.release();
+    Ok(SpilledLayer { width: layer.width + 1, heights: wider, ..layer })
+}

@@ -1,0 +1,386 @@
+//! Building the pyramid file streaming, with bounded memory: each level is
+//! cut band by band (rows of nodes) from the layers, which may live in
+//! memory-mapped spills, and its records are appended to the file as the
+//! bands complete; a node's delta reads the finer levels back from the
+//! records already written. Only the node tables (a few bytes per node)
+//! grow with the input. The header and node table are written last, into
+//! the space reserved for them at the start, and the file is renamed into
+//! place ([`replace_file`]). The bytes are those of
+//! [`build_layers`](super::build_layers) and [`write_atomic`](super::write_atomic).
+
+use std::borrow::Cow;
+use std::fs::File;
+use std::io::{BufWriter, Seek, SeekFrom, Write};
+use std::path::Path;
+use std::sync::Mutex;
+
+use rayon::prelude::*;
+
+use super::build::weighted;
+use super::build::{
+    candidates, check_layer, check_options, cut_node, finest_window, grid_stats, place_layers,
+    summarise_level, BuildOptions,
+};
+use super::delta::{node_delta, FinerNodes};
+use super::error::{PyramidError, StreamError};
+use super::format::{encode_header, encode_record, record_len, NodeSummary, PyramidInfo};
+use super::layers::{blend_weights_into, Composite};
+use super::progress::Progress;
+use super::write::replace_file;
+use crate::dem::GridView;
+use crate::node::{NodeId, NodeLayout};
+use crate::spill::{Releaser, ScratchDir, Spill};
+
+/// How to build and how much memory the bands may take.
+#[derive(Clone, Copy, Debug)]
+pub struct StreamOptions {
+    /// Node size and border.
+    pub build: BuildOptions,
+    /// Bytes the bands of nodes in flight may take (a quarter of
+    /// `--memory-mb`: the rest is for decoding files and the pages of the
+    /// layers a band touches).
+    pub band_bytes: u64,
+}
+
+/// One level's present nodes: where each is stored and its summary.
+pub(crate) struct LevelIndex {
+    /// Per node of the level, its slot among the present nodes.
+    pub slots: Vec<Option<u32>>,
+    /// Summaries of the present nodes in slot order.
+    pub summaries: Vec<NodeSummary>,
+    /// Per slot, whether any centre post has data.
+    pub has_data: Vec<bool>,
+    /// Present nodes of all finer levels: the record number of slot 0.
+    pub first_record: u64,
+}
+
+/// Builds the pyramid of `layers` into the file at `path`, atomically;
+/// the blend weights of layers over coarser ones go to spills in
+/// `scratch`; `release` is called after every band to drop the layers'
+/// touched pages (see [`crate::spill`]).
+pub fn build_streaming(
+    layers: &[GridView],
+    scratch: &ScratchDir,
+    options: &StreamOptions,
+    path: &Path,
+    release: &dyn Fn(),
+    progress: &dyn Progress,
+) -> Result<PyramidInfo, StreamError> {
+    check_options(&options.build)?;
+    for (k, layer) in layers.iter().enumerate() {
+        check_layer(k, *layer, &mut || release())?;
+    }
+    let weights = spill_weights(layers, scratch, release, progress)
+        .map_err(|source| PyramidError::Io { path: scratch.path().to_path_buf(), source })?;
+    let release = &|| {
+        release();
+        weights.iter().flatten().for_each(Spill::release);
+    };
+    let weight_slices: Vec<Option<&[f32]>> =
+        weights.iter().map(|w| w.as_ref().map(Spill::as_slice)).collect();
+    let (layout, georef, composite) = place_layers(layers, &weight_slices, &options.build)?;
+    let record = record_len(&layout);
+    let widest = (0..layout.levels).map(|l| layout.nodes_at(l)[0] as u64).max().unwrap_or(1);
+    // A band holds its nodes' posts twice (cut and encoded) and reads a
+    // node's worth of layer rows per node.
+    let row_bytes = 3 * widest * record;
+    if row_bytes > options.band_bytes {
+        return Err(StreamError::Memory(format!(
+            "one row of {widest} nodes needs {} MB; raise --memory-mb to at least {}",
+            row_bytes.div_ceil(1 << 20),
+            (4 * row_bytes).div_ceil(1 << 20)
+        )));
+    }
+    let rows_per_band = (options.band_bytes / row_bytes).max(1) as u32;
+    let mut info = None;
+    replace_file(
+        path,
+        |temporary| {
+            let built = write_levels(
+                &layout,
+                &composite,
+                rows_per_band,
+                options.band_bytes,
+                temporary,
+                release,
+                progress,
+            )?;
+            let (levels, file) = built;
+            let summaries: Vec<_> = (0..layout.levels)
+                .map(|l| {
+                    let level = &levels[l as usize];
+                    summarise_level(layout.nodes_at(l), &level.summaries, &level.has_data)
+                })
+                .collect();
+            let stats = grid_stats(&summaries, &composite, &mut || release())?;
+            let finest = finest_window(&composite);
+            let layer_count = layers.len() as u32;
+            let built_info = PyramidInfo {
+                layout,
+                georef,
+                stats,
+                layers: layer_count,
+                finest,
+                levels: summaries,
+            };
+            write_header(file, &built_info, &levels, temporary)?;
+            info = Some(built_info);
+            Ok(())
+        },
+        |path, source| StreamError::Write(PyramidError::Io { path: path.to_path_buf(), source }),
+    )?;
+    Ok(info.expect("written"))
+}
+
+/// The blend weights of every layer [`weighted`] names, each in a spill
+/// (its chamfer distances in another, dropped once done).
+fn spill_weights(
+    layers: &[GridView],
+    scratch: &ScratchDir,
+    release: &dyn Fn(),
+    progress: &dyn Progress,
+) -> std::io::Result<Vec<Option<Spill<f32>>>> {
+    let mut all = Vec::with_capacity(layers.len());
+    for (layer, weighted) in layers.iter().zip(weighted(layers)) {
+        if !weighted {
+            all.push(None);
+            continue;
+        }
+        progress.phase("blend weights", 1);
+        let posts = layer.heights.len();
+        let mut distance = scratch.spill("distance", posts, 0.0f64)?;
+        let mut weights = scratch.spill("weights", posts, 0.0f32)?;
+        let spacing_m = layer.georef.spacing_m([layer.width, layer.height]);
+        let releasers = [distance.releaser(), weights.releaser()];
+        let (d, w) = (distance.as_mut_slice(), weights.as_mut_slice());
+        // The passes run over the spills in place, dropping the pages
+        // behind them (they map back on the next access).
+        blend_weights_into(*layer, spacing_m, d, w, &mut || {
+            release();
+            releasers.iter().for_each(Releaser::release);
+        });
+        distance.release();
+        weights.release();
+        progress.advance(1);
+        all.push(Some(weights));
+    }
+    Ok(all)
+}
+
+/// Writes every level's records after the space for the header, finest
+/// first; returns the levels' indices and the file.
+fn write_levels(
+    layout: &NodeLayout,
+    composite: &Composite,
+    rows_per_band: u32,
+    band_bytes: u64,
+    path: &Path,
+    release: &dyn Fn(),
+    progress: &dyn Progress,
+) -> Result<(Vec<LevelIndex>, File), StreamError> {
+    let io = |source| StreamError::Write(PyramidError::Io { path: path.to_path_buf(), source });
+    let info_len = header_len_of(layout);
+    let file = File::create(path).map_err(io)?;
+    let reader = File::open(path).map_err(io)?;
+    let mut out = BufWriter::with_capacity(1 << 20, file);
+    out.seek(SeekFrom::Start(info_len)).map_err(io)?;
+    let mut levels: Vec<LevelIndex> = Vec::with_capacity(layout.levels as usize);
+    let mut records = 0u64;
+    for lod in 0..layout.levels {
+        let below = levels.last().map(|l| l.slots.as_slice());
+        let candidates = candidates(layout, composite, lod, below);
+        progress.phase(&format!("level {lod}"), candidates.len() as u64);
+        let [nodes_x, nodes_y] = layout.nodes_at(lod);
+        let mut level = LevelIndex {
+            slots: vec![None; nodes_x as usize * nodes_y as usize],
+            summaries: Vec::new(),
+            has_data: Vec::new(),
+            first_record: records,
+        };
+        // The finer levels are read back through their own handle.
+        out.flush().map_err(io)?;
+        let finer = WrittenNodes {
+            file: &reader,
+            layout,
+            levels: &levels,
+            info_len,
+            failed: Mutex::new(None),
+        };
+        for band in candidates.chunk_by(|a, b| a.0.y / rows_per_band == b.0.y / rows_per_band) {
+            let nodes_per_step = nodes_per_step(layout, lod, band_bytes);
+            let bytes = cut_band(
+                layout,
+                composite,
+                &finer,
+                band,
+                nodes_per_step,
+                &mut level,
+                release,
+                progress,
+            );
+            if let Some(error) = finer.failed.lock().expect("not poisoned").take() {
+                return Err(io(error));
+            }
+            out.write_all(&bytes).map_err(io)?;
+        }
+        records += level.summaries.len() as u64;
+        levels.push(level);
+    }
+    let file = out.into_inner().map_err(|e| io(e.into_error()))?;
+    Ok((levels, file))
+}
+
+/// A node cut from the layers: its id, posts, summary, and whether any
+/// centre post has data.
+type CutNode = (NodeId, Vec<f32>, NodeSummary, bool);
+
+/// Cuts one band of `candidates` (whole rows of nodes), measures their
+/// deltas against `finer`, records them in `level` and returns their
+/// records' bytes in node order.
+#[allow(clippy::too_many_arguments)]
+fn cut_band(
+    layout: &NodeLayout,
+    composite: &Composite,
+    finer: &WrittenNodes,
+    band: &[(NodeId, bool)],
+    nodes_per_step: usize,
+    level: &mut LevelIndex,
+    release: &dyn Fn(),
+    progress: &dyn Progress,
+) -> Vec<u8> {
+    let side = layout.stored_side() as usize;
+    let mut present: Vec<CutNode> = Vec::new();
+    for step in band.chunks(nodes_per_step) {
+        let cut: Vec<Option<CutNode>> = step
+            .par_iter()
+            .map(|&(id, parent)| {
+                let mut posts = vec![0.0f32; side * side];
+                let (mut summary, has_data) = cut_node(layout, composite, id, &mut posts);
+                if (has_data || parent) && id.level > 0 {
+                    summary.delta = node_delta(finer, layout, id, &posts);
+                }
+                progress.advance(1);
+                (has_data || parent).then_some((id, posts, summary, has_data))
+            })
+            .collect();
+        present.extend(cut.into_iter().flatten());
+        release();
+    }
+    let record = record_len(layout) as usize;
+    let mut bytes = vec![0u8; present.len() * record];
+    bytes.par_chunks_mut(record).zip(&present).for_each(|(out, (id, posts, summary, _))| {
+        let index = layout.node_index(*id).expect("a node of the layout");
+        encode_record(index, posts, summary, out);
+    });
+    let nodes_x = layout.nodes_at(band[0].0.level)[0] as usize;
+    for (id, _, summary, has_data) in present {
+        let index = id.y as usize * nodes_x + id.x as usize;
+        level.slots[index] = Some(level.summaries.len() as u32);
+        level.summaries.push(summary);
+        level.has_data.push(has_data);
+    }
+    bytes
+}
+
+/// Nodes of level `lod` cut between two releases of the layers' pages. A
+/// coarse node samples rows spread over its whole area, and the kernel
+/// maps file pages in folios of up to 2 MB, so the pages it touches grow
+/// with its area (4 bytes a level-0 post), not with its posts: as many
+/// nodes as `band_bytes` of area allows, at least one per core.
+fn nodes_per_step(layout: &NodeLayout, lod: u8, band_bytes: u64) -> usize {
+    let area = 4 * layout.span(lod).pow(2);
+    ((band_bytes / area.max(1)) as usize).max(rayon::current_num_threads()).max(1)
+}
+
+/// Bytes of the header and node table at the start of the file.
+fn header_len_of(layout: &NodeLayout) -> u64 {
+    super::format::header_len(layout.levels as u64, layout.node_count())
+        .expect("a checked layout's header fits u64")
+}
+
+/// Writes the header and node table at the start of `file` and flushes it.
+fn write_header(
+    mut file: File,
+    info: &PyramidInfo,
+    levels: &[LevelIndex],
+    path: &Path,
+) -> Result<(), StreamError> {
+    let io = |source| StreamError::Write(PyramidError::Io { path: path.to_path_buf(), source });
+    let nodes: Vec<Option<NodeSummary>> = levels
+        .iter()
+        .flat_map(|l| l.slots.iter().map(|s| s.map(|s| l.summaries[s as usize])))
+        .collect();
+    let header = encode_header(info, &nodes);
+    file.seek(SeekFrom::Start(0)).map_err(io)?;
+    file.write_all(&header).map_err(io)?;
+    file.sync_all().map_err(io)
+}
+
+/// The levels already written, read back record by record (positioned
+/// reads: nothing of the file stays mapped or resident). A failed read
+/// is kept in `failed` (the node counts as absent meanwhile) and fails
+/// the band.
+struct WrittenNodes<'a> {
+    file: &'a File,
+    layout: &'a NodeLayout,
+    levels: &'a [LevelIndex],
+    info_len: u64,
+    failed: Mutex<Option<std::io::Error>>,
+}
+
+impl WrittenNodes<'_> {
+    fn slot(&self, id: NodeId) -> Option<(&LevelIndex, u32)> {
+        let level = self.levels.get(id.level as usize)?;
+        let [nodes_x, nodes_y] = self.layout.nodes_at(id.level);
+        if id.x >= nodes_x || id.y >= nodes_y {
+            return None;
+        }
+        let slot = level.slots[id.y as usize * nodes_x as usize + id.x as usize]?;
+        Some((level, slot))
+    }
+}
+
+impl FinerNodes for WrittenNodes<'_> {
+    fn is_present(&self, id: NodeId) -> bool {
+        self.slot(id).is_some()
+    }
+
+    fn posts(&self, id: NodeId) -> Option<Cow<'_, [f32]>> {
+        let (level, slot) = self.slot(id)?;
+        let record = record_len(self.layout);
+        let at = self.info_len + (level.first_record + slot as u64) * record;
+        let side = self.layout.stored_side() as usize;
+        let mut posts = vec![0.0f32; side * side];
+        match read_at(self.file, bytemuck::cast_slice_mut(&mut posts), at) {
+            Ok(()) => Some(Cow::Owned(posts)),
+            Err(error) => {
+                self.failed.lock().expect("not poisoned").get_or_insert(error);
+                None
+            }
+        }
+    }
+}
+
+/// Fills `buf` from `file` at `offset`.
+fn read_at(file: &File, buf: &mut [u8], offset: u64) -> std::io::Result<()> {
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::FileExt::read_exact_at(file, buf, offset)
+    }
+    #[cfg(windows)]
+    {
+        let mut done = 0;
+        while done < buf.len() {
+            let n = std::os::windows::fs::FileExt::seek_read(
+                file,
+                &mut buf[done..],
+                offset + done as u64,
+            )?;
+            if n == 0 {
+                return Err(std::io::ErrorKind::UnexpectedEof.into());
+            }
+            done += n;
+        }
+        Ok(())
+    }
+}
