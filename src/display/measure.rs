@@ -379,7 +379,7 @@ fn measure_one(
     measure_view(&geometry, lod, truth_positions, &surface, staging, exact, errors);
     let earth = passes.earth.map(|earth| {
         let heights = |x: f64, y: f64| surface.height_at(staging, x, y);
-        let frame = DisplayFrame::planar(earth.placement, camera, &frame);
+        let frame = DisplayFrame::of(earth.placement, camera, &frame);
         measure_view_on_earth(earth, &frame, camera, &heights, lod, earth_buffers)
     });
     let mut view_errors: Vec<f32> =

@@ -17,6 +17,7 @@ pub use terrain::{PreloadedTerrain, TerrainData};
 
 use crate::camera::{Camera, CameraError, Frustum, EARTH_RADIUS_M};
 use crate::clusters::{ClusterCache, ClusterConfig, ClusterError};
+use crate::earth::{EarthFrame, GridPlacement};
 use crate::lod::census::{frustum_census, Census, CensusView};
 use crate::lod::horizon::Horizon;
 use crate::lod::life::LifeStats;
@@ -79,6 +80,10 @@ pub struct SceneConfig {
     pub cluster_morph: ClusterMorph,
     /// In which order clusters are drawn.
     pub cluster_order: ClusterOrder,
+    /// Draw on the WGS 84 ellipsoid where the grid is placed by its
+    /// geographic coordinates ([`crate::earth::EarthFrame`]); `None`, or a
+    /// projected grid: in the planar chart (`fly --chart`).
+    pub earth: Option<GridPlacement>,
 }
 
 impl Default for SceneConfig {
@@ -95,6 +100,7 @@ impl Default for SceneConfig {
             clusters: false,
             cluster_morph: ClusterMorph::PerMember,
             cluster_order: ClusterOrder::ByBase,
+            earth: None,
         }
     }
 }
@@ -617,6 +623,10 @@ pub fn frame_uniforms(
         posts: PostFrame::new(camera.position.truncate(), terrain.layout().spacing_m),
         last_post: terrain.layout().posts.map(|p| p as i64 - 1),
         slices: DepthSlices::new(camera, near, far, terrain.height_range()),
+        earth: config.earth.and_then(|placement| {
+            let anchor = PostFrame::new(camera.position.truncate(), terrain.layout().spacing_m);
+            EarthFrame::new(&placement, camera.position, anchor.anchor)
+        }),
     }
 }
 
