@@ -108,6 +108,35 @@ impl EarthFrame {
         self.to_camera * (ellipsoid::to_ecef(lat, lon, height) - self.eye)
     }
 
+    /// The box, in camera axes (lowest and highest corner), holding level-0
+    /// posts `[p0, p1]` at every height in `heights`: the patch sampled on
+    /// a lattice (neighbouring samples at most about 55 km apart) at both
+    /// heights, grown on every side by twice the most a surface arc bows
+    /// away from its chord between samples (a point inside a lattice cell
+    /// is on an arc between two points on arcs between samples). What the
+    /// selector culls, rings and orders tiles by on the ellipsoid.
+    pub fn camera_box(&self, p0: [f64; 2], p1: [f64; 2], (lo, hi): (f64, f64)) -> (DVec3, DVec3) {
+        let span = self.point(p0, 0.0).distance(self.point(p1, 0.0));
+        let n = ((span / 55_000.0).ceil() as usize).clamp(2, 32);
+        let (mut min, mut max) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        for i in 0..=n {
+            for j in 0..=n {
+                let (fu, fv) = (i as f64 / n as f64, j as f64 / n as f64);
+                let post = [p0[0] + (p1[0] - p0[0]) * fu, p0[1] + (p1[1] - p0[1]) * fv];
+                for h in [lo, hi] {
+                    let p = self.point(post, h);
+                    min = min.min(p);
+                    max = max.max(p);
+                }
+            }
+        }
+        // The smallest radius of curvature (the meridian's at the equator)
+        // bends most; the highest surface is farthest out.
+        let step = span / n as f64 / SMALLEST_RADIUS_M;
+        let bow = 2.0 * (LARGEST_RADIUS_M + hi.max(0.0)) * (1.0 - (step / 2.0).cos());
+        (min - DVec3::splat(bow), max + DVec3::splat(bow))
+    }
+
     /// The ECEF point of camera-relative point `d` (camera axes).
     pub fn ecef_of(&self, d: DVec3) -> DVec3 {
         self.eye + self.to_camera.transpose() * d
@@ -118,6 +147,12 @@ impl EarthFrame {
         self.to_camera * (p - self.eye)
     }
 }
+
+/// The meridian's radius of curvature at the equator, `a (1 - e^2)`,
+/// metres: the smallest on the ellipsoid.
+const SMALLEST_RADIUS_M: f64 = 6_335_439.0;
+/// The polar radius of curvature, `a^2 / b`, metres: the largest.
+const LARGEST_RADIUS_M: f64 = 6_399_594.0;
 
 impl NodePlace {
     /// The member uniforms' two vec4 it fills: the offset and the centre's
@@ -239,6 +274,31 @@ mod tests {
                         error <= 1e-6 * reach + 1e-3,
                         "post {post:?} of node {centre:?} at level {level}: {error} m off at {reach} m"
                     );
+                }
+            }
+        }
+    }
+
+    /// Every point of a patch, at any height between its bounds, lies in
+    /// its camera box: a fine patch near the eye and a coarse one spanning
+    /// 20 degrees, at 60 N.
+    #[test]
+    fn a_patch_lies_in_its_camera_box() {
+        let placement = grid([0.0, -90.0], 1.0 / 12.0, [4321, 2161]);
+        let chart = placement.chart_of_post([120.0, 1800.0]);
+        let frame =
+            EarthFrame::new(&placement, DVec3::new(chart[0], chart[1], 5000.0), [120, 1800])
+                .expect("geographic");
+        for (p0, p1) in [([100.0, 1790.0], [132.0, 1822.0]), ([0.0, 1700.0], [240.0, 1940.0])] {
+            let (min, max) = frame.camera_box(p0, p1, (-100.0, 4000.0));
+            for i in 0..=20 {
+                for j in 0..=20 {
+                    let (fu, fv) = (i as f64 / 20.0, j as f64 / 20.0);
+                    let post = [p0[0] + (p1[0] - p0[0]) * fu, p0[1] + (p1[1] - p0[1]) * fv];
+                    for h in [-100.0, 1234.0, 4000.0] {
+                        let p = frame.point(post, h);
+                        assert!(p.cmpge(min).all() && p.cmple(max).all(), "{post:?} at {h} m");
+                    }
                 }
             }
         }

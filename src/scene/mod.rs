@@ -17,12 +17,12 @@ pub use terrain::{PreloadedTerrain, TerrainData};
 
 use crate::camera::{Camera, CameraError, Frustum, EARTH_RADIUS_M};
 use crate::clusters::{ClusterCache, ClusterConfig, ClusterError};
-use crate::earth::{EarthFrame, GridPlacement};
+use crate::earth::{EarthFrame, EllipsoidHorizon, GridPlacement};
 use crate::lod::census::{frustum_census, Census, CensusView};
 use crate::lod::horizon::Horizon;
 use crate::lod::life::LifeStats;
 use crate::lod::rings::RingInputs;
-use crate::lod::select::View;
+use crate::lod::select::{EarthView, View};
 use crate::lod::{LevelRings, LodConfig, LodError, TileKey, TileSelector};
 use crate::mesh::code::threshold_code;
 use crate::node::{NodeId, NodeLayout};
@@ -358,6 +358,7 @@ impl Scene {
         let frustum = Frustum::from_view_projection(camera.projection(near, far) * camera.view());
         let mut report = SceneStats::default();
         let horizon = self.horizon(camera, terrain);
+        let earth_view = self.earth_view(camera, terrain, horizon.is_some());
         // With error maps tau coarsens the meshes; without, only the rings,
         // so Kühnert's view distance shrinks with it.
         let maps = !self.map_errors.is_empty();
@@ -395,6 +396,7 @@ impl Scene {
                 rings: &self.rings,
                 curvature: self.config.curvature,
                 horizon,
+                earth: earth_view,
             };
             let selected = self.selector.select(&view, terrain);
             let retarget = match (&mut search, report.coarsened) {
@@ -577,6 +579,22 @@ impl Scene {
             && inside(p.y, layout.posts[1], layout.spacing_m[1]);
         let on = self.config.horizon_culling && self.config.curvature && over_data;
         on.then(|| Horizon::new(p.z, terrain.height_range().0 as f64)).flatten()
+    }
+
+    /// What the selector measures tiles with on the ellipsoid, when the
+    /// display draws there: the frame's eye and, when `culling` (the
+    /// chart's conditions for horizon culling hold), the ellipsoid's
+    /// horizon under the data's lowest height.
+    fn earth_view(
+        &self,
+        camera: &Camera,
+        terrain: &dyn TerrainData,
+        culling: bool,
+    ) -> Option<EarthView> {
+        let frame = EarthFrame::new(&self.config.earth?, camera.position, [0, 0])?;
+        let floor = terrain.height_range().0 as f64;
+        let horizon = culling.then(|| EllipsoidHorizon::new(frame.eye(), floor)).flatten();
+        Some(EarthView { frame, horizon })
     }
 
     /// The level-0 cells a frame for `camera` holds in its frustum, above
