@@ -178,6 +178,7 @@ mod tests {
             index_count: counts.indices,
             voids: false,
             place: crate::earth::NodePlace::default(),
+            ground: None,
         };
         (staging, tile)
     }

@@ -219,6 +219,7 @@ mod tests {
             index_count: 6,
             voids: false,
             place: crate::earth::NodePlace::default(),
+            ground: None,
         }
     }
 

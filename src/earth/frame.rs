@@ -119,12 +119,22 @@ impl EarthFrame {
         let span = self.point(p0, 0.0).distance(self.point(p1, 0.0));
         let n = ((span / 55_000.0).ceil() as usize).clamp(2, 32);
         let (mut min, mut max) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-        for i in 0..=n {
-            for j in 0..=n {
-                let (fu, fv) = (i as f64 / n as f64, j as f64 / n as f64);
-                let post = [p0[0] + (p1[0] - p0[0]) * fu, p0[1] + (p1[1] - p0[1]) * fv];
+        // Sines and cosines once a column and a row (on the stack: the
+        // selector calls this for every tile it visits, every frame).
+        let mut columns = [[0.0; 2]; 33];
+        let mut rows = [[0.0; 2]; 33];
+        for k in 0..=n {
+            let f = k as f64 / n as f64;
+            let (lat, lon) =
+                self.geodetic([p0[0] + (p1[0] - p0[0]) * f, p0[1] + (p1[1] - p0[1]) * f]);
+            let ((sin_lat, cos_lat), (sin_lon, cos_lon)) = (lat.sin_cos(), lon.sin_cos());
+            rows[k] = [sin_lat, cos_lat];
+            columns[k] = [sin_lon, cos_lon];
+        }
+        for &row in &rows[..=n] {
+            for &column in &columns[..=n] {
                 for h in [lo, hi] {
-                    let p = self.point(post, h);
+                    let p = self.camera_of(ellipsoid::to_ecef_sincos(row, column, h));
                     min = min.min(p);
                     max = max.max(p);
                 }

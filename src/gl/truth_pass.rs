@@ -132,6 +132,7 @@ impl TruthPass {
                 index_count: self.index_count,
                 voids: chunk.voids,
                 place,
+                ground: None,
             })
             .collect();
         let mut list = DrawList {

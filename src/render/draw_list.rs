@@ -220,6 +220,10 @@ pub struct TileUniforms {
     pub voids: bool,
     /// Its node's placement on the ellipsoid (zero in the chart).
     pub place: NodePlace,
+    /// On the ellipsoid, its [`Self::ground_rectangle`] computed once when
+    /// the list was built (the draw order's sort and every depth slice's
+    /// filter read it); `None`: computed where asked.
+    pub ground: Option<[[f32; 2]; 2]>,
 }
 
 impl TileUniforms {
@@ -241,6 +245,9 @@ impl TileUniforms {
     /// rectangle, or on the ellipsoid the rectangle around its corners
     /// and edge midpoints (a tile's edges bow by far less than a cell).
     pub fn ground_rectangle(&self, frame: &FrameUniforms, cells: f32) -> ([f32; 2], [f32; 2]) {
+        if let Some([lo, hi]) = self.ground {
+            return (lo, hi);
+        }
         let Some(earth) = frame.earth else {
             let [x0, y0] = self.post_position(&frame.posts, 0.0, 0.0);
             let [x1, y1] = self.post_position(&frame.posts, cells, cells);
@@ -503,7 +510,7 @@ fn tile_uniforms(
     let reach = MorphReach { frame, ranges: &ranges, grid_size: geometry.grid_size };
     let depths = skirt_depths(draw, drawn, geometry, &reach);
     let (skirt_depth, skirt_shares) = skirt_shares(depths);
-    TileUniforms {
+    let mut tile = TileUniforms {
         key,
         first_post,
         post_step: step as f32,
@@ -519,7 +526,13 @@ fn tile_uniforms(
         place: frame.earth.map_or(NodePlace::default(), |earth| {
             earth.place(node_centre(key, geometry.grid_size, geometry.node_size))
         }),
+        ground: None,
+    };
+    if frame.earth.is_some() {
+        let (lo, hi) = tile.ground_rectangle(frame, geometry.grid_size as f32);
+        tile.ground = Some([lo, hi]);
     }
+    tile
 }
 
 /// The deepest of `depths` (metres per edge, 0 for none) and each edge's
@@ -815,6 +828,7 @@ mod tests {
             index_count: 0,
             voids: false,
             place: NodePlace::default(),
+            ground: None,
         }
     }
 
