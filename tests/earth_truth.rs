@@ -106,6 +106,7 @@ fn planar_view(hills: &Hills, camera: &Camera) -> (PositionImage, FrameUniforms,
         posts: PostFrame::new(camera.position.truncate(), hills.layout.spacing_m),
         last_post: hills.layout.posts.map(|p| p as i64 - 1),
         slices: DepthSlices::new(camera, 1.0, 4e5, (0.0, 1500.0)),
+        earth: None,
     };
     let geometry = ViewGeometry::new(camera, &frame);
     let exact = |x: f64, y: f64| hills.exact(x, y);

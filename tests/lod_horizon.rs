@@ -91,6 +91,7 @@ fn select(
             rings: &rings,
             curvature: true,
             horizon,
+            earth: None,
         };
         let keys: Vec<TileKey> = selector.select(&view, &bounds).iter().map(|t| t.key).collect();
         (keys, selector.horizon_culled())

@@ -4,7 +4,10 @@
 //! formation, cache and allocators) when the tiles are drawn as clusters.
 //! One test in this binary, since the counter sees the whole process.
 
+use ridgeline::earth::GridPlacement;
+use ridgeline::geo::{Crs, GeoRef};
 use ridgeline::scene::{Scene, SceneConfig, TriangleBand};
+use ridgeline::tiles::ResidentNodes;
 use testkit::scene::{camera, terrain};
 
 #[test]
@@ -16,6 +19,15 @@ fn steady_state_frames_allocate_nothing() {
     let mut config = SceneConfig::default();
     config.lod.max_travel_m = Some(50.0);
     frames_allocate_nothing(config, true);
+    // On the ellipsoid: node places, camera boxes and the ellipsoid's
+    // horizon are all on the stack.
+    let layout = *terrain().layout();
+    let georef = GeoRef { crs: Crs::Geographic, origin: [7.5, 45.9], spacing: [1.0 / 1200.0; 2] };
+    let placement = GridPlacement::new(&georef, layout.posts, layout.spacing_m);
+    frames_allocate_nothing(
+        SceneConfig { earth: Some(placement), ..SceneConfig::default() },
+        false,
+    );
 }
 
 fn frames_allocate_nothing(config: SceneConfig, budget: bool) {

@@ -76,6 +76,7 @@ fn select(
         rings: &rings,
         curvature: true,
         horizon: None,
+        earth: None,
     };
     selector.select(&view, terrain).to_vec()
 }

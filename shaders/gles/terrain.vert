@@ -6,6 +6,15 @@
 // integer post numbers counted from an anchor post next to it: a post two
 // tiles share gets the same bits from both, so edges are watertight.
 //
+// Two frames (u_earth[0].w): the planar chart (metres east and north,
+// lowered by d^2 / 2R), or the WGS 84 ellipsoid in the camera's own
+// east-north-up axes (src/earth/frame.rs, whose NodePlace::local and
+// to_camera this mirrors line for line): each vertex's latitude and
+// longitude about its node's centre, its offset from the centre's surface
+// point written with small terms only, rotated into the camera's axes and
+// added to the centre's camera-relative position. Height, morph and skirts
+// move along the vertex's geodetic up.
+//
 // The morph mirrors src/lod/morph.rs line for line: the factor grows from 0 at
 // u_morph.x to 1 at u_morph.y with the vertex's distance to the camera,
 // measured with its unmorphed height.
@@ -17,13 +26,21 @@ attribute vec4 a_normal;  // normal xy at this level, at the parent level
 uniform mat4 u_view_projection;
 // Per member tile of the draw (a cluster's up to 16, or the one tile at
 // slot 0), selected by the vertex's slot (a_grid.w):
-// [2 slot]:     south-west post numbered from the anchor (xy), level-0 posts
+// [4 slot]:     south-west post numbered from the anchor (xy), level-0 posts
 //               per vertex post (z), skirt shares (w: bits 4(k-1) to 4k-1
 //               for edge k, fifteenths of the skirt depth it hangs, 0 none);
-// [2 slot + 1]: morph start, morph end, skirt depth (the deepest), unused.
-uniform vec4 u_members[32];
+// [4 slot + 1]: morph start, morph end, skirt depth (the deepest), the
+//               node centre's post row from the anchor (ellipsoid);
+// [4 slot + 2]: the node centre's surface point from the camera (xyz,
+//               camera axes), its post column from the anchor (w);
+// [4 slot + 3]: the rotation from the centre's ENU axes to the camera's
+//               (a unit quaternion xyzw). Zero in the chart.
+uniform vec4 u_members[64];
 uniform vec4 u_posts;     // level-0 post spacing (xy), camera minus anchor post (zw), metres
 uniform vec4 u_frame;     // camera altitude, 1 / (2 R) or 0 for a flat earth, the data's last post numbered from the anchor (zw)
+// [0]: radians between posts east and north, the anchor row's latitude,
+//      1 on the ellipsoid (0: the chart); [1]: semi-major axis, e^2.
+uniform vec4 u_earth[2];
 
 varying vec3 v_normal;
 varying float v_relative_height;  // terrain height minus aircraft altitude
@@ -33,12 +50,60 @@ varying vec3 v_position;     // camera-relative, for the accuracy tool's positio
 varying float v_void;        // 1 at a post without data, 0 elsewhere (see VOIDS in the fragment shaders)
 varying vec2 v_beyond;       // posts past the data's last post, east and north (clipped where above 0)
 
+// sin d and 1 - cos d: by their series below half a radian, so a small
+// angle keeps its digits whatever the GPU's sin does with it.
+vec2 sin_hav(float d) {
+    if (abs(d) > 0.5) {
+        float half_sin = sin(0.5 * d);
+        return vec2(sin(d), 2.0 * half_sin * half_sin);
+    }
+    float d2 = d * d;
+    float s = d * (1.0 - d2 / 6.0 * (1.0 - d2 / 20.0 * (1.0 - d2 / 42.0 * (1.0 - d2 / 72.0))));
+    float h = d2 / 2.0 * (1.0 - d2 / 12.0 * (1.0 - d2 / 30.0 * (1.0 - d2 / 56.0 * (1.0 - d2 / 90.0))));
+    return vec2(s, h);
+}
+
+// The vertex at level-0 post number `post` relative to its node's centre
+// `centre`: its surface point (returned) and geodetic up (`up`), in the
+// centre's east-north-up axes.
+vec3 earth_local(vec2 post, vec2 centre, out vec3 up) {
+    float a = u_earth[1].x;
+    float e2 = u_earth[1].y;
+    float phi0 = u_earth[0].z + centre.y * u_earth[0].y;
+    float s0 = sin(phi0);
+    float c0 = cos(phi0);
+    vec2 lam = sin_hav((post.x - centre.x) * u_earth[0].x);
+    vec2 phi = sin_hav((post.y - centre.y) * u_earth[0].y);
+    // sin and cos of the latitude, as changes from the centre's.
+    float ds = c0 * phi.x - s0 * phi.y;
+    float dc = -c0 * phi.y - s0 * phi.x;
+    float s = s0 + ds;
+    float c = c0 + dc;
+    float k = ds * (2.0 * s0 + ds);
+    float w0 = sqrt(1.0 - e2 * s0 * s0);
+    float w = sqrt(1.0 - e2 * s0 * s0 - e2 * k);
+    float n0 = a / w0;
+    float dn = a * e2 * k / (w * w0 * (w + w0));
+    // Minus the centre's surface point, in the centre meridian's axes
+    // (x out at the equator, y east, z north).
+    float dx = dn * c * (1.0 - lam.y) + n0 * dc * (1.0 - lam.y) - n0 * c0 * lam.y;
+    float dy = (n0 + dn) * c * lam.x;
+    float dz = dn * (1.0 - e2) * s + n0 * (1.0 - e2) * ds;
+    up = vec3(c * lam.x, -s0 * c * (1.0 - lam.y) + c0 * s, c0 * c * (1.0 - lam.y) + s0 * s);
+    return vec3(dy, -s0 * dx + c0 * dz, c0 * dx + s0 * dz);
+}
+
+// A vector of the node centre's ENU axes in the camera's (quaternion q).
+vec3 rotate(vec4 q, vec3 v) {
+    vec3 t = cross(q.xyz, v) + v * q.w;
+    return v + 2.0 * cross(q.xyz, t);
+}
+
 void main() {
     int slot = int(a_grid.w);
-    vec4 tile = u_members[2 * slot];
-    vec4 ranges = u_members[2 * slot + 1];
+    vec4 tile = u_members[4 * slot];
+    vec4 ranges = u_members[4 * slot + 1];
     vec2 post = tile.xy + a_grid.xy * tile.z;
-    vec2 position = post * u_posts.xy - u_posts.zw;
     // Linear across every triangle, so the clip at 0 is the data's edge.
     v_beyond = post - u_frame.zw;
     float altitude = u_frame.x;
@@ -47,19 +112,41 @@ void main() {
     bool no_data = a_height.x < -1.0e8;
     float own = no_data ? a_height.y : a_height.x;
     v_void = no_data ? 1.0 : 0.0;
-    float distance = length(vec3(position, own - altitude));
-    float morph = clamp((distance - ranges.x) / (ranges.y - ranges.x), 0.0, 1.0);
-    float height = mix(own, a_height.y, morph);
-    float drop = dot(position, position) * u_frame.y;
     // Edge k hangs its skirt its share of the depth: 4-bit field k-1 of
     // tile.w (an integer below 2^16, exact in a highp float), fifteenths.
     float share = a_grid.z > 0.5 ? mod(floor(tile.w / exp2(4.0 * (a_grid.z - 1.0))), 16.0) : 0.0;
-    float z = height - share / 15.0 * ranges.z - altitude - drop;
-    vec2 n = mix(a_normal.xy, a_normal.zw, morph);
-    v_normal = vec3(n, sqrt(max(1.0 - dot(n, n), 0.0)));
+    vec2 n;
+    vec3 p;
+    float morph;
+    float height;
+    if (u_earth[0].w > 0.5) {
+        vec4 place = u_members[4 * slot + 2];
+        vec4 q = u_members[4 * slot + 3];
+        vec3 up;
+        vec3 surface = earth_local(post, vec2(place.w, ranges.w), up);
+        surface = rotate(q, surface) + place.xyz;
+        up = rotate(q, up);
+        float distance = length(surface + up * own);
+        morph = clamp((distance - ranges.x) / (ranges.y - ranges.x), 0.0, 1.0);
+        height = mix(own, a_height.y, morph);
+        p = surface + up * (height - share / 15.0 * ranges.z);
+        n = mix(a_normal.xy, a_normal.zw, morph);
+        // The tile's normal is in its own ENU axes: turned into the camera's.
+        v_normal = rotate(q, vec3(n, sqrt(max(1.0 - dot(n, n), 0.0))));
+    } else {
+        vec2 position = post * u_posts.xy - u_posts.zw;
+        float distance = length(vec3(position, own - altitude));
+        morph = clamp((distance - ranges.x) / (ranges.y - ranges.x), 0.0, 1.0);
+        height = mix(own, a_height.y, morph);
+        float drop = dot(position, position) * u_frame.y;
+        float z = height - share / 15.0 * ranges.z - altitude - drop;
+        p = vec3(position, z);
+        n = mix(a_normal.xy, a_normal.zw, morph);
+        v_normal = vec3(n, sqrt(max(1.0 - dot(n, n), 0.0)));
+    }
     v_relative_height = height - altitude;
     v_height = height;
-    v_distance = length(vec3(position, z));
-    v_position = vec3(position, z);
-    gl_Position = u_view_projection * vec4(position, z, 1.0);
+    v_distance = length(p);
+    v_position = p;
+    gl_Position = u_view_projection * vec4(p, 1.0);
 }

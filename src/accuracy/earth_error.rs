@@ -32,7 +32,7 @@ use super::earth_rays::{EarthImage, TrueCamera};
 use super::LodSurface;
 use super::PositionImage;
 use crate::camera::Camera;
-use crate::earth::GridPlacement;
+use crate::earth::{EarthFrame, GridPlacement};
 use crate::render::FrameUniforms;
 
 /// How the display maps its drawn, camera-relative points to places and back.
@@ -53,6 +53,18 @@ pub enum DisplayFrame {
         /// Viewport, pixels.
         viewport: [u32; 2],
     },
+    /// The ellipsoid: camera-relative points along the camera's east,
+    /// north and up (the display since issue 26's phase B).
+    Ellipsoid {
+        /// The grid's placement.
+        placement: GridPlacement,
+        /// The eye and its axes.
+        earth: EarthFrame,
+        /// The frame's view-projection, widened.
+        view_projection: DMat4,
+        /// Viewport, pixels.
+        viewport: [u32; 2],
+    },
 }
 
 impl DisplayFrame {
@@ -68,6 +80,21 @@ impl DisplayFrame {
         }
     }
 
+    /// The frame `uniforms` were drawn in: the ellipsoid where they carry
+    /// an [`EarthFrame`], else the planar chart.
+    pub fn of(placement: GridPlacement, camera: &Camera, uniforms: &FrameUniforms) -> Self {
+        let Some(earth) = uniforms.earth else {
+            return DisplayFrame::planar(placement, camera, uniforms);
+        };
+        let m = uniforms.view_projection.to_cols_array().map(f64::from);
+        DisplayFrame::Ellipsoid {
+            placement,
+            earth,
+            view_projection: DMat4::from_cols_array(&m),
+            viewport: uniforms.viewport,
+        }
+    }
+
     /// The level-0 post (the geodetic place) the display drew at
     /// camera-relative point `d`.
     pub fn place_of(&self, d: DVec3) -> [f64; 2] {
@@ -75,13 +102,18 @@ impl DisplayFrame {
             DisplayFrame::Planar { placement, eye, .. } => {
                 placement.post_of_chart([eye.x + d.x, eye.y + d.y])
             }
+            DisplayFrame::Ellipsoid { placement, earth, .. } => {
+                placement.post_of_ecef(earth.ecef_of(d)).0
+            }
         }
     }
 
     /// The chart point of `post`, where the display's surface is looked up.
     pub fn chart_of(&self, post: [f64; 2]) -> [f64; 2] {
         match self {
-            DisplayFrame::Planar { placement, .. } => placement.chart_of_post(post),
+            DisplayFrame::Planar { placement, .. } | DisplayFrame::Ellipsoid { placement, .. } => {
+                placement.chart_of_post(post)
+            }
         }
     }
 
@@ -93,6 +125,9 @@ impl DisplayFrame {
                 let [x, y] = placement.chart_of_post(post);
                 DVec3::new(x - eye.x, y - eye.y, drawn_m - altitude)
             }
+            DisplayFrame::Ellipsoid { placement, earth, .. } => {
+                earth.camera_of(placement.ecef(post[0], post[1], drawn_m))
+            }
         }
     }
 
@@ -100,7 +135,8 @@ impl DisplayFrame {
     /// (column and row from the top left), if in front of the camera.
     pub fn pixel_of(&self, d: DVec3) -> Option<DVec2> {
         match self {
-            DisplayFrame::Planar { view_projection, viewport, .. } => {
+            DisplayFrame::Planar { view_projection, viewport, .. }
+            | DisplayFrame::Ellipsoid { view_projection, viewport, .. } => {
                 let clip: DVec4 = *view_projection * d.extend(1.0);
                 (clip.w > 1e-9).then(|| {
                     let [w, h] = viewport.map(f64::from);

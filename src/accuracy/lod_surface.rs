@@ -48,6 +48,9 @@ pub struct LodSurface {
     /// The shader's f32 altitude and 1 / (2 R) (0 for a flat earth), widened.
     altitude: f64,
     curvature: f64,
+    /// `u_earth` when drawn on the ellipsoid: [`Self::earth_height_at`]
+    /// morphs by the shader's camera-relative points and drops nothing.
+    earth: Option<[f32; 8]>,
 }
 
 impl LodSurface {
@@ -65,6 +68,7 @@ impl LodSurface {
         let triangles = TileTriangles::new(&list.tiles, staging, grid_size);
         let levels = list.tiles.iter().map(|t| t.key.level + 1).max().unwrap_or(0);
         let altitude = list.uniforms.map_or(0.0, |f| f.camera_altitude as f32 as f64);
+        let earth = list.uniforms.and_then(|f| f.earth.map(|e| e.uniforms()));
         let curvature = list.uniforms.map_or(0.0, |f| {
             if f.curvature {
                 (1.0 / (2.0 * EARTH_RADIUS_M)) as f32 as f64
@@ -89,6 +93,7 @@ impl LodSurface {
             last_m,
             altitude,
             curvature,
+            earth,
         }
     }
 
@@ -111,7 +116,24 @@ impl LodSurface {
             return None;
         }
         let (tile, local) = self.locate(x_m, y_m)?;
-        let height = self.tile_surface(staging, tile, local)?;
+        let height = self.tile_surface(staging, tile, local, false)?;
+        height.is_finite().then_some(height)
+    }
+
+    /// [`Self::height_at`] as drawn on the ellipsoid: the height the
+    /// shader raised the point along its geodetic up, morphed by its
+    /// distance there, with no drop (the ellipsoid bends the surface). The
+    /// chart's height where the frame was drawn in the chart.
+    pub fn earth_height_at(&self, staging: &[u8], x_m: f64, y_m: f64) -> Option<f64> {
+        if self.earth.is_none() {
+            return self.height_at(staging, x_m, y_m);
+        }
+        let tolerance = EDGE_TOLERANCE_POSTS * self.spacing_m[0].max(self.spacing_m[1]);
+        if x_m > self.last_m[0] + tolerance || y_m > self.last_m[1] + tolerance {
+            return None;
+        }
+        let (tile, local) = self.locate(x_m, y_m)?;
+        let height = self.tile_surface(staging, tile, local, true)?;
         height.is_finite().then_some(height)
     }
 
@@ -147,7 +169,7 @@ impl LodSurface {
         }
         let tile = &self.drawn[k];
         let source = self.sources.iter().find(|d| d.key == tile.key);
-        let surface = self.tile_surface(staging, k, [u, v]).unwrap_or(f64::NAN);
+        let surface = self.tile_surface(staging, k, [u, v], false).unwrap_or(f64::NAN);
         Some(SkirtProbe {
             pixel,
             error_px,
@@ -231,23 +253,44 @@ impl LodSurface {
     /// Tile `k`'s morphed surface at `local` posts from its south-west
     /// corner: its triangle there, interpolated. NaN where that triangle
     /// touches a vertex without data; `None` where the tile has no triangle.
-    fn tile_surface(&self, staging: &[u8], k: usize, local: [f64; 2]) -> Option<f64> {
+    fn tile_surface(
+        &self,
+        staging: &[u8],
+        k: usize,
+        local: [f64; 2],
+        on_earth: bool,
+    ) -> Option<f64> {
         let tile = &self.drawn[k];
         let block = tile.block(staging);
         let (corners, [_, wb, wc]) = self.triangles.at(k, &block, local)?;
-        let [a, b, c] = corners.map(|(_, v)| self.vertex_height(&block, tile, v));
+        let [a, b, c] = corners.map(|(_, v)| self.vertex_height(&block, tile, v, on_earth));
         Some(a + wb * (b - a) + wc * (c - a))
     }
 
     /// Vertex `v`'s drawn height: the shader's morph
     /// and curvature drop, with its f32 inputs (the altitude is added back).
-    fn vertex_height(&self, block: &TileBlock<'_>, tile: &TileUniforms, v: usize) -> f64 {
+    fn vertex_height(
+        &self,
+        block: &TileBlock<'_>,
+        tile: &TileUniforms,
+        v: usize,
+        on_earth: bool,
+    ) -> f64 {
         let vertex = block.vertex(v);
         if is_no_data(vertex.height) {
             return f64::NAN;
         }
         // The shader's own f32 inputs: the vertex's post and step.
         let [i, j] = vertex.post.map(f32::from);
+        if let Some(earth) = self.earth.as_ref().filter(|_| on_earth) {
+            let post = [
+                tile.first_post[0] + i * tile.vertex_step,
+                tile.first_post[1] + j * tile.vertex_step,
+            ];
+            let distance = tile.place.vertex(earth, post, vertex.height).length() as f64;
+            let factor = morph_factor(distance, tile.morph[0] as f64, tile.morph[1] as f64);
+            return morphed_height(vertex.height, vertex.target, factor);
+        }
         let [x, y] = tile.vertex_position(&self.posts, i, j).map(f64::from);
         let distance = (x * x + y * y + (vertex.height as f64 - self.altitude).powi(2)).sqrt();
         let factor = morph_factor(distance, tile.morph[0] as f64, tile.morph[1] as f64);

@@ -397,6 +397,7 @@ mod tests {
             posts: crate::render::PostFrame::new(camera.position.truncate(), [90.0, 90.0]),
             last_post: [1 << 20; 2],
             slices: crate::render::DepthSlices::new(&camera, 1.0, 1e5, (0.0, 0.0)),
+            earth: None,
         };
         (camera, ViewGeometry::new(&camera, &frame))
     }

@@ -180,6 +180,7 @@ mod tests {
             posts: PostFrame::new(camera.position.truncate(), [30.0, 30.0]),
             last_post: [1 << 30; 2],
             slices: DepthSlices::new(camera, 1.0, 1e6, (0.0, 0.0)),
+            earth: None,
         };
         ViewGeometry::new(camera, &frame)
     }

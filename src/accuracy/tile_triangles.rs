@@ -177,6 +177,8 @@ mod tests {
             index_byte_offset: 8 + counts.vertex_bytes(),
             index_count: counts.indices,
             voids: false,
+            place: crate::earth::NodePlace::default(),
+            ground: None,
         };
         (staging, tile)
     }

@@ -58,6 +58,7 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
     let summary = terrain.summary.clone();
     let mut config = DisplayConfig::new(headless(args.backend), args.view.size);
     config.scene.horizon_culling = terrain.gapless;
+    args.view.configure_earth(&mut config, &terrain);
     config.scene.lod.tau_px = args.view.tau;
     config.fov_x_deg = args.view.fov;
     // Views are far apart: each is a jump, so every view re-tests all tiles.

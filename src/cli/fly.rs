@@ -114,6 +114,9 @@ fn display_config(
     config.scene.warning_above_m = args.warning_above;
     config.scene.caution_below_m = args.caution_below;
     config.scene.curvature = !args.flat_earth;
+    if !args.flat_earth {
+        args.view.configure_earth(&mut config, terrain);
+    }
     match path {
         Some(path) => {
             // Headless frames are evenly spaced along the path; a window is

@@ -8,6 +8,7 @@ use std::path::Path;
 use anyhow::Result;
 use glam::UVec2;
 use ridgeline::display::DisplayConfig;
+use ridgeline::earth::GridPlacement;
 use ridgeline::flight::FlightPath;
 use ridgeline::lod::budget::{BudgetConfig, BudgetTarget};
 
@@ -82,6 +83,12 @@ pub struct ViewArgs {
     /// fastest leg when omitted.
     #[arg(long, allow_hyphen_values = true)]
     pub max_speed: Option<f64>,
+    /// Draw in the planar chart (equirectangular at the grid's centre
+    /// latitude, lowered by d^2 / 2R), as before issue 26's phase B,
+    /// instead of on the WGS 84 ellipsoid: a fallback, and the "before" of
+    /// a comparison. Projected grids are drawn in the chart either way.
+    #[arg(long)]
+    pub chart: bool,
 }
 
 impl ViewArgs {
@@ -114,6 +121,13 @@ impl ViewArgs {
             (None, None) => return None,
         };
         Some(BudgetConfig::new(target))
+    }
+
+    /// Draws on the ellipsoid unless `--chart`: the placement of `terrain`'s grid.
+    fn configure_earth(&self, config: &mut DisplayConfig, terrain: &Terrain) {
+        let layout = terrain.source.layout();
+        let placement = GridPlacement::new(&terrain.georef(), layout.posts, layout.spacing_m);
+        config.scene.earth = (!self.chart).then_some(placement);
     }
 
     /// Applies tau, the field of view, the budget and the valid life's

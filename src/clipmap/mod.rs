@@ -224,6 +224,9 @@ pub struct Clipmap {
     /// Nodes given up after [`READ_ATTEMPTS`] reads failed with I/O errors.
     unreadable_nodes: u64,
     frame: u64,
+    /// Chart metres in one turn of longitude, when the grid wraps: nodes
+    /// across its seam are wanted too ([`Self::set_wrap`]).
+    wrap_m: Option<f64>,
 }
 
 impl Clipmap {
@@ -268,6 +271,7 @@ impl Clipmap {
             last_error: None,
             corrupt_nodes: 0,
             unreadable_nodes: 0,
+            wrap_m: None,
             frame: 0,
         })
     }
@@ -298,11 +302,21 @@ impl Clipmap {
         Ok(())
     }
 
-    /// Room for every view's largest wanted set, so frames never allocate.
+    /// Wants the nodes across the seam of a grid whose columns wrap every
+    /// `period_m` chart metres (a global geographic grid drawn on the
+    /// ellipsoid, where they are next to the viewer); `None`: no wrap.
+    pub fn set_wrap(&mut self, period_m: Option<f64>) {
+        self.wrap_m = period_m.filter(|p| p.is_finite() && *p > 0.0);
+        self.reserve_wanted();
+    }
+
+    /// Room for every view's largest wanted set, so frames never allocate
+    /// (three times that across a seam: the view and its two shifts).
     fn reserve_wanted(&mut self) {
+        let shifts = if self.wrap_m.is_some() { 3 } else { 1 };
         let per_view = |v: &ClippedQuadtree| {
             let across = (2.0 * v.config().load_distance).ceil() as usize + 2;
-            across * across * self.layout.levels as usize
+            shifts * across * across * self.layout.levels as usize
         };
         let most: usize = self.views.iter().map(per_view).sum();
         self.wanted.reserve(most.saturating_sub(self.wanted.len()));
@@ -338,12 +352,17 @@ impl Clipmap {
             view.recenter(&self.layout);
             let wanted = &mut self.wanted;
             let source = &self.source;
-            view.collect_wanted(&self.layout, |id, distance| {
+            let mut want = |id: NodeId, distance: f64| {
                 // An absent node means no finer data here: its ancestor serves.
                 if source.has_node(id) {
                     wanted.entry(id).and_modify(|d| *d = d.min(distance)).or_insert(distance);
                 }
-            });
+            };
+            view.collect_wanted(&self.layout, &mut want);
+            if let Some(period) = self.wrap_m {
+                view.collect_wanted_shifted(&self.layout, -period, &mut want);
+                view.collect_wanted_shifted(&self.layout, period, &mut want);
+            }
         }
     }
 

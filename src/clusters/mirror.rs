@@ -61,6 +61,11 @@ pub fn drawn_tiles(list: &DrawList, vertices: &[u8], indices: &[u8]) -> (DrawLis
                 (0..4).filter(|&e| tile.skirt_shares[e] > 0).fold(0, |b, e| b | 1 << e);
             tile.morph = [u[4], u[5]];
             tile.skirt_depth = u[6];
+            tile.place = crate::earth::NodePlace {
+                centre: [u[11], u[7]],
+                offset: [u[8], u[9], u[10]],
+                rotation: [u[12], u[13], u[14], u[15]],
+            };
             tile.byte_offset = offset;
             tile.index_byte_offset = offset + counts.vertex_bytes();
             tile.index_count = counts.indices;

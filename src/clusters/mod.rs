@@ -218,6 +218,8 @@ mod tests {
             index_byte_offset: 100 * VERTEX_BYTES,
             index_count: 6,
             voids: false,
+            place: crate::earth::NodePlace::default(),
+            ground: None,
         }
     }
 

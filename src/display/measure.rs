@@ -378,8 +378,8 @@ fn measure_one(
     let surface = LodSurface::new(list, staging, grid_size, spacing_m, eye);
     measure_view(&geometry, lod, truth_positions, &surface, staging, exact, errors);
     let earth = passes.earth.map(|earth| {
-        let heights = |x: f64, y: f64| surface.height_at(staging, x, y);
-        let frame = DisplayFrame::planar(earth.placement, camera, &frame);
+        let heights = |x: f64, y: f64| surface.earth_height_at(staging, x, y);
+        let frame = DisplayFrame::of(earth.placement, camera, &frame);
         measure_view_on_earth(earth, &frame, camera, &heights, lod, earth_buffers)
     });
     let mut view_errors: Vec<f32> =

@@ -113,6 +113,19 @@ impl GridPlacement {
         }
     }
 
+    /// For a geographic grid, the longitude and latitude of post (0, 0)
+    /// and between neighbouring posts, east and north, radians: what
+    /// [`super::EarthFrame`] places a geographic grid's tiles with (a
+    /// post's place is linear in its numbers). `None` for projected grids.
+    pub fn geographic_lattice(&self) -> Option<([f64; 2], [f64; 2])> {
+        match self.kind {
+            Kind::Geographic => {
+                Some((self.origin.map(f64::to_radians), self.step.map(f64::to_radians)))
+            }
+            Kind::Projected(_) => None,
+        }
+    }
+
     /// Why the grid is placed by assumption (centred on 0 N 0 E), if it is.
     pub fn assumed(&self) -> Option<&'static str> {
         self.assumed

@@ -45,6 +45,7 @@ struct Locations {
     members: Option<glow::UniformLocation>,
     posts: Option<glow::UniformLocation>,
     frame: Option<glow::UniformLocation>,
+    earth: Option<glow::UniformLocation>,
     sun: Option<glow::UniformLocation>,
     awareness: Option<glow::UniformLocation>,
     haze: Option<glow::UniformLocation>,
@@ -86,6 +87,7 @@ impl TerrainProgram {
             members: program.uniform_location("u_members"),
             posts: program.uniform_location("u_posts"),
             frame: program.uniform_location("u_frame"),
+            earth: program.uniform_location("u_earth"),
             sun: program.uniform_location("u_sun"),
             awareness: program.uniform_location("u_awareness"),
             haze: program.uniform_location("u_haze"),
@@ -516,6 +518,7 @@ fn set_frame_uniforms(calls: Calls<'_>, at: &Locations, frame: &FrameUniforms) {
         );
         let [sx, sy] = posts.spacing;
         calls.uniform_4(at.posts.as_ref(), [sx, sy, posts.offset[0], posts.offset[1]]);
+        calls.uniform_4v(at.earth.as_ref(), &frame.earth_uniforms());
         calls.uniform_3(at.sun.as_ref(), sun.to_array());
         calls.uniform_4(at.awareness.as_ref(), awareness);
         calls.uniform_3(at.haze.as_ref(), palette::SKY_HORIZON);

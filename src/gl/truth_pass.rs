@@ -23,6 +23,7 @@ use std::rc::Rc;
 use super::error::GlError;
 use super::handle::Gl;
 use super::terrain_pass::{TerrainOutput, TerrainPass};
+use crate::earth::NodePlace;
 use crate::lod::TileKey;
 use crate::render::{DrawList, FrameUniforms, TileUniforms};
 use crate::tiles::block::write_block;
@@ -110,6 +111,10 @@ impl TruthPass {
     /// (whose post numbering places the chunks relative to the camera),
     /// writing `output`. Sets the terrain pass's state; does not clear.
     pub fn draw(&self, frame: &FrameUniforms, output: TerrainOutput) -> Result<(), GlError> {
+        // One place for every chunk (the anchor's, next to the camera): the
+        // chunks share their edge posts bit for bit, with f32 rounding of
+        // 1e-7 of the distance (a centimetre at 100 km) on the ellipsoid.
+        let place = frame.earth.map_or(NodePlace::default(), |e| e.place(frame.posts.anchor));
         let tiles = self
             .chunks
             .iter()
@@ -126,6 +131,8 @@ impl TruthPass {
                 index_byte_offset: chunk.index_byte_offset,
                 index_count: self.index_count,
                 voids: chunk.voids,
+                place,
+                ground: None,
             })
             .collect();
         let mut list = DrawList {

@@ -18,6 +18,7 @@ use super::horizon::Horizon;
 use super::life::{LifeStats, ValidLife};
 use super::{LevelRings, LodConfig, TileKey};
 use crate::camera::{curvature_drop, Frustum};
+use crate::earth::{EarthFrame, EllipsoidHorizon};
 use crate::node::{NodeId, NodeLayout};
 use glam::DVec3;
 
@@ -70,6 +71,19 @@ pub struct View<'a> {
     pub curvature: bool,
     /// Cull tiles below this horizon (`None`: no horizon culling).
     pub horizon: Option<Horizon>,
+    /// Boxes, distances and the horizon on the ellipsoid (the display's
+    /// frame when it draws there), instead of the chart's.
+    pub earth: Option<EarthView>,
+}
+
+/// What the selector measures tiles with on the ellipsoid.
+#[derive(Clone, Copy, Debug)]
+pub struct EarthView {
+    /// The frame's eye and the grid's places.
+    pub frame: EarthFrame,
+    /// The ellipsoid's horizon under the data's lowest surface (`None`: no
+    /// horizon culling).
+    pub horizon: Option<EllipsoidHorizon>,
 }
 
 /// Why a tile is not drawn, or how far it is.
@@ -191,6 +205,9 @@ impl TileSelector {
     /// Distance to the tile's box and its height bounds, or why it is not drawn.
     fn visibility(&self, key: TileKey, view: &View<'_>, terrain: &dyn TileBounds) -> Visibility {
         let bounds = terrain.height_bounds(key, self.config.grid_size);
+        if let Some(earth) = &view.earth {
+            return earth_visibility(key, self.config.grid_size, bounds, view.frustum, earth);
+        }
         let (min, max) = box_of(key, self.config.grid_size, terrain.spacing_m(), bounds, view.eye);
         let distance = box_distance(min, max);
         let (mut lo, hi) = (min, max);
@@ -250,6 +267,41 @@ pub fn tile_box(
 }
 
 /// The box of `key` with height `bounds`, relative to `eye`.
+/// [`TileSelector::visibility`] on the ellipsoid: the tile's box in the
+/// camera's axes ([`EarthFrame::camera_box`], the earth's curvature in it),
+/// hidden when its eight corners are behind the ellipsoid's horizon.
+fn earth_visibility(
+    key: TileKey,
+    grid_size: u32,
+    bounds: (f32, f32),
+    frustum: &Frustum,
+    earth: &EarthView,
+) -> Visibility {
+    let span = ((grid_size as u64) << key.level) as f64;
+    let p0 = [key.x as f64 * span, key.y as f64 * span];
+    let p1 = [p0[0] + span, p0[1] + span];
+    let heights = (bounds.0 as f64, bounds.1 as f64);
+    let (min, max) = earth.frame.camera_box(p0, p1, heights);
+    if !frustum.intersects_box(min.as_vec3(), max.as_vec3()) {
+        return Visibility::Outside;
+    }
+    let hidden = earth.horizon.is_some_and(|horizon| {
+        (0..8).all(|k| {
+            let corner = DVec3::new(
+                if k & 1 == 0 { min.x } else { max.x },
+                if k & 2 == 0 { min.y } else { max.y },
+                if k & 4 == 0 { min.z } else { max.z },
+            );
+            horizon.hides(earth.frame.ecef_of(corner))
+        })
+    });
+    if hidden {
+        Visibility::BelowHorizon
+    } else {
+        Visibility::Visible(box_distance(min, max), bounds)
+    }
+}
+
 fn box_of(
     key: TileKey,
     grid_size: u32,

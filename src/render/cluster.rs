@@ -12,7 +12,7 @@
 //! is a vertex array bind (without vertex array objects, three pointers;
 //! clusters of one window share them either way). The vertex
 //! shader takes the member's placement, morph and skirts from
-//! `u_members[2 slot]` and `u_members[2 slot + 1]` (a uniform array indexed
+//! `u_members[4 slot]` to `u_members[4 slot + 3]` (a uniform array indexed
 //! by a vertex attribute: GLSL ES 1.00 allows it in vertex shaders).
 
 use crate::tiles::block::VERTEX_BYTES;
@@ -49,8 +49,10 @@ pub fn window_of(offset: u32) -> u32 {
     offset / WINDOW_STRIDE
 }
 
-/// Floats of one member's uniforms: two vec4.
-pub const MEMBER_FLOATS: usize = 8;
+/// Floats of one member's uniforms: four vec4 (placement, morph and
+/// skirts; the node's place on the ellipsoid). Sixteen members take 64 of
+/// GLES 2.0's 128 vertex uniform vectors; the frame's take 8 more.
+pub const MEMBER_FLOATS: usize = 16;
 
 /// Which morph range each member of a cluster takes.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]

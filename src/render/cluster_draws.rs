@@ -17,15 +17,36 @@ pub fn part_bit(slice: Slice, voids: bool) -> u8 {
 }
 
 impl TileUniforms {
-    /// The tile's two uniform vectors, as `u_members[2 slot]` and
-    /// `u_members[2 slot + 1]` take them: south-west post, vertex step and
-    /// skirt shares (four bits per edge); morph start, end and the deepest
-    /// skirt's depth.
+    /// The tile's four uniform vectors, as `u_members[4 slot]` to
+    /// `u_members[4 slot + 3]` take them: south-west post, vertex step and
+    /// skirt shares (four bits per edge); morph start, end, the deepest
+    /// skirt's depth and its node centre's row; on the ellipsoid, the node
+    /// centre's camera-relative offset and column, and its rotation
+    /// ([`crate::earth::NodePlace::vectors`]; zero in the chart).
     pub fn member_uniforms(&self) -> [f32; MEMBER_FLOATS] {
         let [x, y] = self.first_post;
         let [start, end] = self.morph;
         let shares = self.packed_skirt_shares();
-        [x, y, self.vertex_step, shares, start, end, self.skirt_depth, 0.0]
+        let [ox, oy, oz, cx, qx, qy, qz, qw] = self.place.vectors();
+        let cy = self.place.centre[1];
+        [
+            x,
+            y,
+            self.vertex_step,
+            shares,
+            start,
+            end,
+            self.skirt_depth,
+            cy,
+            ox,
+            oy,
+            oz,
+            cx,
+            qx,
+            qy,
+            qz,
+            qw,
+        ]
     }
 }
 
@@ -48,7 +69,7 @@ impl DrawList {
     /// Whether tile `tile` reaches into depth slice `slice`.
     pub fn tile_in(&self, tile: &TileUniforms, slice: Slice) -> bool {
         let Some(frame) = self.uniforms else { return false };
-        let (near, far) = frame.slices.tile_slices(tile, &frame.posts, self.grid_size as f32);
+        let (near, far) = frame.slices.tile_slices(tile, &frame, self.grid_size as f32);
         match slice {
             Slice::Near => near,
             Slice::Far => far,

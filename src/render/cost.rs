@@ -141,15 +141,15 @@ pub fn sky(model: &CostModel) -> CallStats {
     }
 }
 
-/// The terrain pass: nine state calls, glUseProgram, five frame uniforms, the
+/// The terrain pass: nine state calls, glUseProgram, six frame uniforms, the
 /// VAO bind, the tile buffer bound as index and as vertex buffer, three
 /// attribute enables; then per depth slice one matrix uniform and the
 /// slice's draws, those with voids last, after a switch to the program that
-/// drops their triangles (glUseProgram, five frame uniforms, the matrix) and
+/// drops their triangles (glUseProgram, six frame uniforms, the matrix) and
 /// back to the plain one for the next slice; a depth clear between slices;
 /// three attribute disables and the VAO unbind.
 ///
-/// Per tile: one uniform array write (two vectors), three pointers at the
+/// Per tile: one uniform array write (four vectors), three pointers at the
 /// tile's block and a glDrawElements of its own indices. Per cluster
 /// ([`DrawList::clustered`]): one uniform array write (its members'
 /// vectors), a change of attribute base only when its base differs from
@@ -169,7 +169,7 @@ pub fn terrain(model: &CostModel, list: &DrawList) -> CallStats {
     let mut stats = CallStats {
         state_changes: 9,
         program_binds: 1,
-        uniform_writes: 5,
+        uniform_writes: 6,
         vertex_array_binds: if windows { 1 } else { 2 * model.vertex_arrays as u64 },
         buffer_binds: if windows { 1 } else { 2 },
         attribute_array_toggles: if windows { 0 } else { 6 },
@@ -182,7 +182,7 @@ pub fn terrain(model: &CostModel, list: &DrawList) -> CallStats {
     for &slice in slices {
         let switch = |stats: &mut CallStats| {
             stats.program_binds += 1;
-            stats.uniform_writes += 6;
+            stats.uniform_writes += 7;
         };
         if on_plain {
             stats.uniform_writes += 1;

@@ -10,6 +10,7 @@
 //! and every number stays small however far the camera is from the origin.
 
 use crate::camera::Camera;
+use crate::earth::{EarthFrame, NodePlace};
 use crate::lod::{LevelRings, TileKey};
 use crate::tiles::block::{BLOCK_ALIGNMENT, INDEX_BYTES};
 use crate::tiles::errors::MeshErrors;
@@ -47,6 +48,17 @@ pub struct FrameUniforms {
     pub last_post: [i64; 2],
     /// The depth range cut in two where one 24-bit range cannot resolve it.
     pub slices: DepthSlices,
+    /// Drawn on the ellipsoid (the camera's east-north-up axes, each
+    /// node placed by [`EarthFrame::place`]); `None`: in the planar chart,
+    /// lowered by `d^2 / 2R` where `curvature` is on.
+    pub earth: Option<EarthFrame>,
+}
+
+impl FrameUniforms {
+    /// `u_earth[2]` (zero: the chart).
+    pub fn earth_uniforms(&self) -> [f32; 8] {
+        self.earth.map_or([0.0; 8], |e| e.uniforms())
+    }
 }
 
 /// A 24-bit depth buffer resolves `d^2 / (near 2^24)` metres at distance `d`:
@@ -109,12 +121,16 @@ impl DepthSlices {
     /// least `min_depth_share` of the distance; heights are left out, which
     /// only lowers the distance); the far slice takes every tile that could
     /// reach beyond the split, with any height the data holds.
-    pub fn tile_slices(&self, tile: &TileUniforms, posts: &PostFrame, cells: f32) -> (bool, bool) {
+    pub fn tile_slices(
+        &self,
+        tile: &TileUniforms,
+        frame: &FrameUniforms,
+        cells: f32,
+    ) -> (bool, bool) {
         if self.far.is_none() {
             return (true, false);
         }
-        let [x0, y0] = tile.post_position(posts, 0.0, 0.0);
-        let [x1, y1] = tile.post_position(posts, cells, cells);
+        let ([x0, y0], [x1, y1]) = tile.ground_rectangle(frame, cells);
         // Horizontal distance from the camera to the tile's rectangle, and to its far corner.
         let nearest = |lo: f32, hi: f32| {
             if lo > 0.0 {
@@ -202,6 +218,12 @@ pub struct TileUniforms {
     /// triangles touching them (after the tiles without voids, since that
     /// program cannot use early depth rejection).
     pub voids: bool,
+    /// Its node's placement on the ellipsoid (zero in the chart).
+    pub place: NodePlace,
+    /// On the ellipsoid, its [`Self::ground_rectangle`] computed once when
+    /// the list was built (the draw order's sort and every depth slice's
+    /// filter read it); `None`: computed where asked.
+    pub ground: Option<[[f32; 2]; 2]>,
 }
 
 impl TileUniforms {
@@ -216,6 +238,33 @@ impl TileUniforms {
     /// is the vertex step).
     pub fn vertex_position(&self, posts: &PostFrame, i: f32, j: f32) -> [f32; 2] {
         self.position(posts, self.vertex_step, i, j)
+    }
+
+    /// The lowest and highest camera-relative east and north of the
+    /// tile's ground (height 0) over its `cells` cells: its chart
+    /// rectangle, or on the ellipsoid the rectangle around its corners
+    /// and edge midpoints (a tile's edges bow by far less than a cell).
+    pub fn ground_rectangle(&self, frame: &FrameUniforms, cells: f32) -> ([f32; 2], [f32; 2]) {
+        if let Some([lo, hi]) = self.ground {
+            return (lo, hi);
+        }
+        let Some(earth) = frame.earth else {
+            let [x0, y0] = self.post_position(&frame.posts, 0.0, 0.0);
+            let [x1, y1] = self.post_position(&frame.posts, cells, cells);
+            return ([x0.min(x1), y0.min(y1)], [x0.max(x1), y0.max(y1)]);
+        };
+        let uniforms = earth.uniforms();
+        let (mut lo, mut hi) = ([f32::INFINITY; 2], [f32::NEG_INFINITY; 2]);
+        for i in 0..3 {
+            for j in 0..3 {
+                let [u, v] = [i, j].map(|k| k as f32 * cells / 2.0 * self.post_step);
+                let post = [self.first_post[0] + u, self.first_post[1] + v];
+                let p = self.place.vertex(&uniforms, post, 0.0);
+                lo = [lo[0].min(p.x), lo[1].min(p.y)];
+                hi = [hi[0].max(p.x), hi[1].max(p.y)];
+            }
+        }
+        (lo, hi)
     }
 
     fn position(&self, posts: &PostFrame, step: f32, i: f32, j: f32) -> [f32; 2] {
@@ -370,7 +419,7 @@ impl DrawList {
         let cells = self.grid_size as f32;
         self.tiles.iter().filter(move |tile| {
             let Some(frame) = frame else { return false };
-            let (near, far) = frame.slices.tile_slices(tile, &frame.posts, cells);
+            let (near, far) = frame.slices.tile_slices(tile, &frame, cells);
             match slice {
                 Slice::Near => near,
                 Slice::Far => far,
@@ -416,13 +465,24 @@ impl DrawList {
     /// no allocation.
     pub fn sort_front_to_back(&mut self, grid_size: u32) {
         let Some(frame) = self.uniforms else { return };
-        let half = grid_size as f32 / 2.0;
         let distance = |tile: &TileUniforms| {
-            let [x, y] = tile.post_position(&frame.posts, half, half);
+            let (lo, hi) = tile.ground_rectangle(&frame, grid_size as f32);
+            let [x, y] = [0, 1].map(|k| (lo[k] + hi[k]) / 2.0);
             x * x + y * y
         };
         self.tiles.sort_unstable_by(|a, b| distance(a).total_cmp(&distance(b)));
     }
+}
+
+/// The level-0 post at the centre of the node holding tile `key` (tiles
+/// of `grid_size` cells in nodes of `node_size`): where every tile of the
+/// node is placed from on the ellipsoid, so the posts they share get the
+/// same bits from each.
+pub fn node_centre(key: TileKey, grid_size: u32, node_size: u32) -> [i64; 2] {
+    let node_tiles = (node_size / grid_size.max(1)).max(1) as i64;
+    let span = node_tiles * grid_size as i64;
+    let step = 1i64 << key.level;
+    [key.x, key.y].map(|t| (t as i64 / node_tiles * span + span / 2) * step)
 }
 
 /// `draw`'s uniforms; `drawn` (the frame's tiles, sorted by key) decides
@@ -450,7 +510,7 @@ fn tile_uniforms(
     let reach = MorphReach { frame, ranges: &ranges, grid_size: geometry.grid_size };
     let depths = skirt_depths(draw, drawn, geometry, &reach);
     let (skirt_depth, skirt_shares) = skirt_shares(depths);
-    TileUniforms {
+    let mut tile = TileUniforms {
         key,
         first_post,
         post_step: step as f32,
@@ -463,7 +523,16 @@ fn tile_uniforms(
         index_byte_offset: draw.index_byte_offset,
         index_count: draw.index_count,
         voids: draw.coverage != TileCoverage::Full,
+        place: frame.earth.map_or(NodePlace::default(), |earth| {
+            earth.place(node_centre(key, geometry.grid_size, geometry.node_size))
+        }),
+        ground: None,
+    };
+    if frame.earth.is_some() {
+        let (lo, hi) = tile.ground_rectangle(frame, geometry.grid_size as f32);
+        tile.ground = Some([lo, hi]);
     }
+    tile
 }
 
 /// The deepest of `depths` (metres per edge, 0 for none) and each edge's
@@ -758,6 +827,8 @@ mod tests {
             index_byte_offset: 0,
             index_count: 0,
             voids: false,
+            place: NodePlace::default(),
+            ground: None,
         }
     }
 
@@ -780,6 +851,7 @@ mod tests {
                 min_depth_share: 1.0,
                 max_drop_m: 0.0,
             },
+            earth: None,
         }
     }
 
@@ -808,6 +880,7 @@ mod tests {
         let under = TileUniforms { first_post: [-2.0, -2.0], ..tile(0, [0.0, 0.0]) };
         let ahead = TileUniforms { first_post: [0.0, 200.0], ..tile(1, [0.0, 0.0]) };
         let far = TileUniforms { first_post: [0.0, 10_000.0], ..tile(2, [0.0, 0.0]) };
+        let posts = FrameUniforms { slices, ..frame(posts) };
         assert_eq!(
             slices.tile_slices(&under, &posts, 4.0),
             (true, true),

@@ -17,11 +17,12 @@ pub use terrain::{PreloadedTerrain, TerrainData};
 
 use crate::camera::{Camera, CameraError, Frustum, EARTH_RADIUS_M};
 use crate::clusters::{ClusterCache, ClusterConfig, ClusterError};
+use crate::earth::{EarthFrame, EllipsoidHorizon, GridPlacement};
 use crate::lod::census::{frustum_census, Census, CensusView};
 use crate::lod::horizon::Horizon;
 use crate::lod::life::LifeStats;
 use crate::lod::rings::RingInputs;
-use crate::lod::select::View;
+use crate::lod::select::{EarthView, View};
 use crate::lod::{LevelRings, LodConfig, LodError, TileKey, TileSelector};
 use crate::mesh::code::threshold_code;
 use crate::node::{NodeId, NodeLayout};
@@ -79,6 +80,10 @@ pub struct SceneConfig {
     pub cluster_morph: ClusterMorph,
     /// In which order clusters are drawn.
     pub cluster_order: ClusterOrder,
+    /// Draw on the WGS 84 ellipsoid where the grid is placed by its
+    /// geographic coordinates ([`crate::earth::EarthFrame`]); `None`, or a
+    /// projected grid: in the planar chart (`fly --chart`).
+    pub earth: Option<GridPlacement>,
 }
 
 impl Default for SceneConfig {
@@ -95,6 +100,7 @@ impl Default for SceneConfig {
             clusters: false,
             cluster_morph: ClusterMorph::PerMember,
             cluster_order: ClusterOrder::ByBase,
+            earth: None,
         }
     }
 }
@@ -352,6 +358,7 @@ impl Scene {
         let frustum = Frustum::from_view_projection(camera.projection(near, far) * camera.view());
         let mut report = SceneStats::default();
         let horizon = self.horizon(camera, terrain);
+        let earth_view = self.earth_view(camera, terrain, horizon.is_some());
         // With error maps tau coarsens the meshes; without, only the rings,
         // so Kühnert's view distance shrinks with it.
         let maps = !self.map_errors.is_empty();
@@ -389,6 +396,7 @@ impl Scene {
                 rings: &self.rings,
                 curvature: self.config.curvature,
                 horizon,
+                earth: earth_view,
             };
             let selected = self.selector.select(&view, terrain);
             let retarget = match (&mut search, report.coarsened) {
@@ -573,6 +581,22 @@ impl Scene {
         on.then(|| Horizon::new(p.z, terrain.height_range().0 as f64)).flatten()
     }
 
+    /// What the selector measures tiles with on the ellipsoid, when the
+    /// display draws there: the frame's eye and, when `culling` (the
+    /// chart's conditions for horizon culling hold), the ellipsoid's
+    /// horizon under the data's lowest height.
+    fn earth_view(
+        &self,
+        camera: &Camera,
+        terrain: &dyn TerrainData,
+        culling: bool,
+    ) -> Option<EarthView> {
+        let frame = EarthFrame::new(&self.config.earth?, camera.position, [0, 0])?;
+        let floor = terrain.height_range().0 as f64;
+        let horizon = culling.then(|| EllipsoidHorizon::new(frame.eye(), floor)).flatten();
+        Some(EarthView { frame, horizon })
+    }
+
     /// The level-0 cells a frame for `camera` holds in its frustum, above
     /// and below the horizon (counted, not drawn; see [`frustum_census`]).
     pub fn census(&self, camera: &Camera, terrain: &dyn TerrainData) -> Census {
@@ -617,6 +641,10 @@ pub fn frame_uniforms(
         posts: PostFrame::new(camera.position.truncate(), terrain.layout().spacing_m),
         last_post: terrain.layout().posts.map(|p| p as i64 - 1),
         slices: DepthSlices::new(camera, near, far, terrain.height_range()),
+        earth: config.earth.and_then(|placement| {
+            let anchor = PostFrame::new(camera.position.truncate(), terrain.layout().spacing_m);
+            EarthFrame::new(&placement, camera.position, anchor.anchor)
+        }),
     }
 }
 
