@@ -352,6 +352,20 @@ pub struct DrawnTile {
     pub sub_level: u8,
 }
 
+impl DrawnTile {
+    /// What a neighbour sees of `draw`.
+    pub fn of(draw: &TileDraw) -> DrawnTile {
+        DrawnTile {
+            key: draw.key,
+            source_level: draw.source_level,
+            node_mesh: draw.node_mesh,
+            error_m: draw.error_m,
+            own_error_m: draw.own_error_m,
+            sub_level: draw.sub_level,
+        }
+    }
+}
+
 /// One of a frame's depth slices ([`DepthSlices`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Slice {
@@ -442,14 +456,7 @@ impl DrawList {
         self.clustered = false;
         self.clusters.clear();
         self.members.clear();
-        self.drawn.extend(draws.iter().map(|draw| DrawnTile {
-            key: draw.key,
-            source_level: draw.source_level,
-            node_mesh: draw.node_mesh,
-            error_m: draw.error_m,
-            own_error_m: draw.own_error_m,
-            sub_level: draw.sub_level,
-        }));
+        self.drawn.extend(draws.iter().map(DrawnTile::of));
         self.drawn.sort_unstable_by_key(|d| d.key);
         for draw in draws {
             let tile = tile_uniforms(draw, &frame, rings, &geometry, &self.drawn);
@@ -649,14 +656,7 @@ pub fn skirt_depths(
 ) -> [f64; 4] {
     let node_tiles = (geometry.node_size / geometry.grid_size).max(1);
     let hangs = skirt_edges(draw, drawn, node_tiles);
-    let own = DrawnTile {
-        key: draw.key,
-        source_level: draw.source_level,
-        node_mesh: draw.node_mesh,
-        error_m: draw.error_m,
-        own_error_m: draw.own_error_m,
-        sub_level: draw.sub_level,
-    };
+    let own = DrawnTile::of(draw);
     std::array::from_fn(|edge| {
         if hangs & (1 << edge) == 0 {
             return 0.0;
