@@ -52,6 +52,7 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     let bar = Bar::new();
     let terrain = args.view.open_terrain(&bar)?;
     bar.finish();
+    super::heap::restart_peak();
     // Live runs need the dataset's latitude and longitude; path runs report
     // them where the dataset has them.
     let frame = match args.input {

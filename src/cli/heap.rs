@@ -74,6 +74,15 @@ pub fn peak() -> usize {
     PEAK.load(Ordering::Relaxed)
 }
 
+/// Starts the peak over from what is in use now: the display's budget
+/// covers the display, not a cache built before it opens (a fresh clone's
+/// first `fly` builds the built-in pyramid and its error maps, whose
+/// import buffers peaked at 130 MB of heap and were reported as the
+/// display's own memory).
+pub fn restart_peak() {
+    PEAK.store(in_use(), Ordering::Relaxed);
+}
+
 /// The process's peak and current resident memory, bytes (`VmHWM`, `VmRSS`
 /// of /proc/self/status; `None` where there is no such file).
 pub fn resident() -> Option<(u64, u64)> {
