@@ -130,6 +130,11 @@ fn importing_a_missing_file_names_it() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("no/such/tile.hgt"));
     assert!(!cache.join(FILE_NAME).exists());
+    // A first import that fails leaves no empty cache directory behind.
+    let first = cache.join("first");
+    let out = ridgeline(&["import", "no/such/tile.hgt", "--out"], &first);
+    assert!(!out.status.success());
+    assert!(!first.exists(), "{} was left behind", first.display());
 }
 
 /// A partial SRTM tile (its last 200 columns and southern 200 rows void)

@@ -54,6 +54,17 @@ pub struct ImportArgs {
 }
 
 pub fn run(args: &ImportArgs) -> Result<()> {
+    let existed = args.out.exists();
+    let result = import(args);
+    if result.is_err() && !existed {
+        // A failed first import leaves no empty cache directory behind;
+        // `remove_dir` refuses a directory that holds anything.
+        let _ = std::fs::remove_dir(&args.out);
+    }
+    result
+}
+
+fn import(args: &ImportArgs) -> Result<()> {
     let started = Instant::now();
     if args.memory_mb < MIN_MEMORY_MB {
         bail!("--memory-mb {}: at least {MIN_MEMORY_MB} MB is needed", args.memory_mb);
