@@ -243,19 +243,10 @@ fn the_no_data_hatching_at_the_coverage_edge_matches_its_golden() {
     let config = config(GlBackend::Egl, GlesVersion::Es3);
     let mut display = testkit::render::open_over(&config, pyramid).expect("EGL display");
     let (image, _) = render(&mut display, &camera);
-    let hatching = image.pixels().filter(|p| is_hatching(p.0)).count();
+    let hatching = image.pixels().filter(|p| testkit::render::is_hatching(p.0)).count();
     let share = hatching as f64 / (size.x * size.y) as f64;
     assert!(share > 0.2, "only {:.1} % of the picture shows the no-data hatching", share * 100.0);
     let golden = if updating() { write_golden("edge", image.clone()) } else { read_golden("edge") };
     let difference = assert_similar("golden-egl-edge", &golden, &image, &TOLERANCE);
     println!("EGL edge vs golden: {difference}; hatching {:.1} % of the picture", share * 100.0);
-}
-
-/// The hatching's two greys (`sky_pass::NO_DATA`, 0.22 0.22 0.24, and twice
-/// it), within rounding.
-fn is_hatching([r, g, b, _]: [u8; 4]) -> bool {
-    let near = |[er, eg, eb]: [f32; 3]| {
-        [(r, er), (g, eg), (b, eb)].iter().all(|&(c, e)| (c as f32 - e * 255.0).abs() <= 2.0)
-    };
-    near([0.22, 0.22, 0.24]) || near([0.44, 0.44, 0.48])
 }

@@ -390,6 +390,7 @@ mod tests {
             camera_altitude: 1000.0,
             sun_direction: glam::Vec3::Z,
             curvature: false,
+            horizon_floor_m: 0.0,
             warning_above_m: 0.0,
             caution_below_m: 0.0,
             viewport: camera.viewport,

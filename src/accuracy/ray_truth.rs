@@ -173,6 +173,7 @@ mod tests {
             camera_altitude: camera.position.z,
             sun_direction: glam::Vec3::Z,
             curvature,
+            horizon_floor_m: 0.0,
             warning_above_m: 0.0,
             caution_below_m: 0.0,
             viewport: camera.viewport,

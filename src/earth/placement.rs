@@ -137,6 +137,16 @@ impl GridPlacement {
         self.period
     }
 
+    /// Whether the grid covers the whole earth: it wraps in longitude and
+    /// its rows reach both poles (to within a row).
+    pub fn covers_the_earth(&self) -> bool {
+        let rows = self.posts[1].saturating_sub(1) as f64;
+        let (south, north) = (self.origin[1], self.origin[1] + self.step[1] * rows);
+        let (south, north) = (south.min(north), south.max(north));
+        let row = self.step[1].abs();
+        self.period.is_some() && south <= -90.0 + row && north >= 90.0 - row
+    }
+
     /// Level-0 posts, east and north.
     pub fn posts(&self) -> [u32; 2] {
         self.posts

@@ -59,10 +59,7 @@ impl SkyPass {
     pub fn draw(&self, frame: &FrameUniforms) -> Result<(), GlError> {
         let gl = &self.gl;
         let inverse = frame.view_projection.inverse();
-        // Sine of the dip of the horizon seen from the aircraft's altitude.
-        let r = crate::camera::EARTH_RADIUS_M;
-        let altitude = frame.camera_altitude.max(0.0);
-        let dip = if frame.curvature { (1.0 - (r / (r + altitude)).powi(2)).sqrt() } else { 0.0 };
+        let dip = if frame.curvature { horizon_dip_sine(frame) } else { 0.0 };
         let calls = Calls::new(gl);
         // SAFETY: all objects are live in this context; three vertices are read.
         unsafe {
@@ -89,4 +86,16 @@ impl SkyPass {
         }
         gl_check!(gl)
     }
+}
+
+/// Sine of the dip, below level, of the horizon of a sphere at
+/// `frame.horizon_floor_m` seen from the aircraft's altitude: below it a
+/// pixel no terrain covered is one whose ray would meet terrain the display
+/// does not have (the no-data hatching); above it, one whose ray passes over
+/// every height there can be (the sky).
+fn horizon_dip_sine(frame: &FrameUniforms) -> f64 {
+    let floor = frame.horizon_floor_m as f64;
+    let r = crate::camera::EARTH_RADIUS_M + floor;
+    let height = (frame.camera_altitude - floor).max(0.0);
+    (1.0 - (r / (r + height)).powi(2)).sqrt()
 }

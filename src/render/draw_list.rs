@@ -31,6 +31,13 @@ pub struct FrameUniforms {
     pub sun_direction: Vec3,
     /// Whether to lower vertices by the earth's curvature.
     pub curvature: bool,
+    /// The lowest height terrain can have where the display draws none,
+    /// metres: the sky pass draws the no-data hatching below this sphere's
+    /// horizon. Sea level (0 m), the surface a pilot sees, unless the data
+    /// cover the whole earth and go lower (a bathymetric grid imported with
+    /// its sea floor): then a ray between the two horizons passes over all
+    /// the terrain there is, and is sky ([`crate::scene::horizon_floor_m`]).
+    pub horizon_floor_m: f32,
     /// Terrain-awareness bands, metres relative to the aircraft: terrain above
     /// `warning_above_m` is red, above `-caution_below_m` amber.
     pub warning_above_m: f32,
@@ -838,6 +845,7 @@ mod tests {
             camera_altitude: 0.0,
             sun_direction: Vec3::Z,
             curvature: false,
+            horizon_floor_m: 0.0,
             warning_above_m: 0.0,
             caution_below_m: 0.0,
             viewport: [1, 1],

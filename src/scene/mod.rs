@@ -634,6 +634,7 @@ pub fn frame_uniforms(
         camera_altitude: camera.position.z,
         sun_direction: palette::sun_direction(),
         curvature: config.curvature,
+        horizon_floor_m: horizon_floor_m(config.earth.as_ref(), terrain.height_range().0),
         warning_above_m: config.warning_above_m,
         caution_below_m: config.caution_below_m,
         viewport: camera.viewport,
@@ -645,6 +646,21 @@ pub fn frame_uniforms(
             let anchor = PostFrame::new(camera.position.truncate(), terrain.layout().spacing_m);
             EarthFrame::new(&placement, camera.position, anchor.anchor)
         }),
+    }
+}
+
+/// The lowest height terrain can have where the display draws none (see
+/// [`FrameUniforms::horizon_floor_m`]): sea level, or the data's lowest
+/// height where a grid `placement` puts around the whole earth goes lower.
+/// Only a grid that covers the earth may lower it: past a regional grid's
+/// edge the terrain is unknown, and the earth's surface there (land or the
+/// sea's surface) is at sea level or above it but for a few depressions.
+pub fn horizon_floor_m(placement: Option<&GridPlacement>, lowest_m: f32) -> f32 {
+    let covers = placement.is_some_and(GridPlacement::covers_the_earth);
+    if covers && lowest_m.is_finite() {
+        lowest_m.min(0.0)
+    } else {
+        0.0
     }
 }
 

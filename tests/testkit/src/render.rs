@@ -240,3 +240,12 @@ pub fn measure_accuracy_budgeted(
     ridgeline::display::measure::measure_flight(&mut display, &truth, &exact, layout.spacing_m, views)
         .expect("measured")
 }
+
+/// The hatching's two greys (`sky_pass::NO_DATA`, 0.22 0.22 0.24, and twice
+/// it), within rounding.
+pub fn is_hatching([r, g, b, _]: [u8; 4]) -> bool {
+    let near = |[er, eg, eb]: [f32; 3]| {
+        [(r, er), (g, eg), (b, eb)].iter().all(|&(c, e)| (c as f32 - e * 255.0).abs() <= 2.0)
+    };
+    near([0.22, 0.22, 0.24]) || near([0.44, 0.44, 0.48])
+}
