@@ -21,10 +21,11 @@
 //! | [`symbology`] | the reference symbols over the terrain (zero-pitch line and heading marks, aircraft symbol, flight path marker) and the failure flag, as GL-free geometry; the built-in stroke font |
 //! | [`flight`] | camera paths for `fly`: the `--path` CSV, interpolation, frame times, the built-in approach |
 //! | [`scene`] | one frame of the display, GL-free: rings, selection, tile uploads, draw list, stage times |
+//! | [`pipeline`] | the frame pipeline: owns the clipmap, the scene and the frame budget's tau controller, plans memory, makes one frame per call on any render backend |
 //! | [`dataset`] | which terrain a run uses; the built-in SRTM tile, built into `cache/` on first use |
 //! | [`gl`] | the thin GL layer: contexts (window, EGL, OSMesa), owner types for GL objects, error checks |
 //! | [`input`] | live aircraft state over UDP (FlightGear, X-Plane, GDL 90): decoders, plausibility, the receiver thread, staleness, extrapolation |
-//! | [`display`] | the display put together: GL context and renderer, scene, clipmap; one call per frame |
+//! | [`display`] | the display put together: GL context, renderer and frame pipeline; one call per frame |
 //! | [`node`] | the node pyramid's vocabulary: node ids, layout, node data, the `NodeSource` trait |
 //! | [`pyramid`] | building the node pyramid from a grid (split, downsample, stitch, delta), its checksummed file, writing it atomically, opening it memory-mapped |
 //! | [`spill`] | memory-mapped scratch arrays of an import bigger than memory, and its scratch directory |
