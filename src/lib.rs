@@ -14,7 +14,7 @@
 //! | [`camera`] | the viewer's position and attitude, projection, frustum, earth curvature |
 //! | [`lod`] | UDLOD tiling on the CPU: distance rings with Ulrich's bound, quadtree selection, morph |
 //! | [`mesh`] | adaptive chunk meshes, GL-free: the RTIN error map and extraction, exact mesh delta against level 0, morph-target lookup, view-dependent RTIN refinement |
-//! | [`meshes`] | node meshes (Ulrich's chunks): each stored node's adaptive mesh of the best data under it (RTIN at its level's error, exact delta, morph targets, normals), the mesh file beside the pyramid, and the source that pages nodes with their meshes |
+//! | [`meshes`] | node meshes (Ulrich's chunks): each stored node's RTIN error map of the best data under it, the map file beside the pyramid (one for every tau), and the source that pages nodes with their maps |
 //! | [`tiles`] | per-tile mesh blocks (vertices, then indices), the regular grid mesh, vertex data, the tile cache on the allocator |
 //! | [`clusters`] | cluster batches (Judnich & Ling): the frame's tiles gathered into two-level clusters, each cluster's block (its members' vertices, one 16-bit index list) in the cluster buffer |
 //! | [`render`] | the GL-free half of drawing: draw lists, the backend trait, the counting null backend, the palette |
