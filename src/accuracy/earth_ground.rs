@@ -11,7 +11,7 @@
 //! whose height is above that bound may move a block's width without
 //! meeting the ground, wherever in the block it is).
 //!
-//! And *rings*: the highest height over each strip between two level-0 rows,
+//! And *strip bounds*: the highest height over each strip between two level-0 rows,
 //! all columns, and over strips within `2^k` rows of each. Near a pole, where
 //! a ray crosses thousands of converging meridians in a few hundred metres,
 //! a strip is a small ring around the pole and its highest height is close
@@ -64,9 +64,9 @@ pub struct EarthGround {
     /// east or north, metres; and north only.
     row_spacing_m: Vec<f64>,
     row_north_m: Vec<f64>,
-    /// `rings[k][r]`: the highest height over the strips between level-0
+    /// `strip_levels[k][r]`: the highest height over the strips between level-0
     /// rows `r - 2^k` and `r + 2^k + 1` (all columns), `-inf` without data.
-    rings: Vec<Vec<f32>>,
+    strip_levels: Vec<Vec<f32>>,
     /// The least north-south distance between neighbouring rows anywhere on
     /// the grid, metres (less 1 %).
     least_north_m: f64,
@@ -144,7 +144,7 @@ impl EarthGround {
             levels: Vec::new(),
             row_spacing_m: Vec::new(),
             row_north_m: Vec::new(),
-            rings: Vec::new(),
+            strip_levels: Vec::new(),
             least_north_m: 0.0,
             top_m: f64::NEG_INFINITY,
             bottom_m: f64::INFINITY,
@@ -305,7 +305,7 @@ impl EarthGround {
         }
         (self.row_spacing_m, self.row_north_m) = self.row_spacings(size[1]);
         self.least_north_m = self.row_north_m.iter().copied().fold(f64::INFINITY, f64::min);
-        self.rings = ring_levels(self.strip_tops());
+        self.strip_levels = strip_levels(self.strip_tops());
     }
 
     /// The highest height over every strip between two neighbouring level-0
@@ -337,7 +337,7 @@ impl EarthGround {
     /// The highest height of the ground between level-0 rows `v_lo` and
     /// `v_hi` (any column); `-inf` where no data is loaded there.
     pub fn rows_top(&self, v_lo: f64, v_hi: f64) -> f64 {
-        let Some(strips) = self.rings.first().map(Vec::len) else {
+        let Some(strips) = self.strip_levels.first().map(Vec::len) else {
             return f64::NEG_INFINITY;
         };
         let last = strips as f64 - 1.0;
@@ -346,24 +346,24 @@ impl EarthGround {
         let centre = lo + (hi - lo) / 2;
         let reach = (hi - centre).max(1);
         let k = (usize::BITS - (reach - 1).leading_zeros()) as usize;
-        match self.rings.get(k) {
+        match self.strip_levels.get(k) {
             Some(level) => level[centre] as f64,
             None => self.top_m,
         }
     }
 
     /// How far a ray at grid row `v` and `height_m` may move without meeting
-    /// the ground by the rings around it (the largest clear band of rows, its
+    /// the ground by the strips around it (the largest clear band of rows, its
     /// width or the ray's height over it, whichever is less); `None` when
     /// even the nearest strips reach the ray.
-    pub fn clear_rings(&self, v: f64, height_m: f64) -> Option<f64> {
-        let strips = self.rings.first().map_or(0, Vec::len);
+    pub fn clear_strips(&self, v: f64, height_m: f64) -> Option<f64> {
+        let strips = self.strip_levels.first().map_or(0, Vec::len);
         if strips == 0 || !v.is_finite() {
             return None;
         }
         let row = v.floor().clamp(0.0, strips as f64 - 1.0) as usize;
         let mut found = None;
-        for (k, level) in self.rings.iter().enumerate() {
+        for (k, level) in self.strip_levels.iter().enumerate() {
             let top = level[row] as f64;
             if top >= height_m {
                 break;
@@ -507,7 +507,7 @@ fn dilate(tops: &[f32], [w, h]: [usize; 2], wraps: bool) -> Vec<f32> {
 
 /// `out[k][r]`: the highest of `tops` over `r - 2^k ..= r + 2^k` (clamped
 /// to the strips), for every `k` until one level spans them all.
-fn ring_levels(tops: Vec<f32>) -> Vec<Vec<f32>> {
+fn strip_levels(tops: Vec<f32>) -> Vec<Vec<f32>> {
     let n = tops.len();
     let at = |level: &[f32], r: i64| level[r.clamp(0, n as i64 - 1) as usize];
     let first: Vec<f32> =

@@ -295,7 +295,7 @@ fn march(ground: &EarthGround, eye: DVec3, dir: DVec3, reach_m: f64) -> (Option<
 
 /// How far a ray at grid post `(u, v)` and `height` may move without
 /// meeting the ground: by the clearest 3 x 3 block neighbourhood, or where
-/// blocks are slivers (near a pole) the clearest latitude band or ring of
+/// blocks are slivers (near a pole) the clearest latitude band or strip of
 /// rows, whichever lets it go farthest; `None` when none is clear.
 fn skip(ground: &EarthGround, u: f64, v: f64, height: f64) -> Option<f64> {
     let block = ground.clear_block(u, v, height).map(|(k, top)| {
@@ -306,8 +306,8 @@ fn skip(ground: &EarthGround, u: f64, v: f64, height: f64) -> Option<f64> {
         let side_m = ground.block_side_posts(k) * ground.north_spacing_near(v);
         (height - top).min(side_m)
     });
-    let ring = ground.clear_rings(v, height);
-    [block, band, ring].into_iter().flatten().reduce(f64::max).map(|step| step.max(0.01))
+    let strip = ground.clear_strips(v, height);
+    [block, band, strip].into_iter().flatten().reduce(f64::max).map(|step| step.max(0.01))
 }
 
 /// How far a ray off the grid at `post` may move before it can reach the
