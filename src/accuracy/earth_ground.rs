@@ -10,6 +10,12 @@
 //! at each level the highest over each block's 3 x 3 neighbourhood (a ray
 //! whose height is above that bound may move a block's width without
 //! meeting the ground, wherever in the block it is).
+//!
+//! And *strip bounds*: the highest height over each strip between two level-0 rows,
+//! all columns, and over strips within `2^k` rows of each. Near a pole, where
+//! a ray crosses thousands of converging meridians in a few hundred metres,
+//! a strip is a small ring around the pole and its highest height is close
+//! to the ground's: a ray clear of it needs no lattice crossings checked.
 
 use std::collections::HashMap;
 
@@ -58,6 +64,12 @@ pub struct EarthGround {
     /// east or north, metres; and north only.
     row_spacing_m: Vec<f64>,
     row_north_m: Vec<f64>,
+    /// `strip_levels[k][r]`: the highest height over the strips between level-0
+    /// rows `r - 2^k` and `r + 2^k + 1` (all columns), `-inf` without data.
+    strip_levels: Vec<Vec<f32>>,
+    /// The least north-south distance between neighbouring rows anywhere on
+    /// the grid, metres (less 1 %).
+    least_north_m: f64,
     top_m: f64,
     bottom_m: f64,
 }
@@ -132,6 +144,8 @@ impl EarthGround {
             levels: Vec::new(),
             row_spacing_m: Vec::new(),
             row_north_m: Vec::new(),
+            strip_levels: Vec::new(),
+            least_north_m: 0.0,
             top_m: f64::NEG_INFINITY,
             bottom_m: f64::INFINITY,
         };
@@ -290,6 +304,81 @@ impl EarthGround {
             (level, level_size) = halve(&level, level_size);
         }
         (self.row_spacing_m, self.row_north_m) = self.row_spacings(size[1]);
+        self.least_north_m = self.row_north_m.iter().copied().fold(f64::INFINITY, f64::min);
+        self.strip_levels = strip_levels(self.strip_tops());
+    }
+
+    /// The highest height over every strip between two neighbouring level-0
+    /// rows, all columns: over the posts of every loaded node's cells there
+    /// (a superset of each footprint's best node, so never too low).
+    fn strip_tops(&self) -> Vec<f32> {
+        let strips = self.layout.posts[1].saturating_sub(1).max(1) as usize;
+        let mut tops = vec![f32::NEG_INFINITY; strips];
+        let side = self.layout.node_size as usize + 1;
+        for node in &self.nodes {
+            let stride = 1usize << node.id.level;
+            let y0 = node.id.y as usize * self.layout.span(node.id.level) as usize;
+            let rows: Vec<f32> = node
+                .heights
+                .chunks(side)
+                .map(|row| row.iter().copied().fold(f32::NEG_INFINITY, f32::max))
+                .collect();
+            for (j, pair) in rows.windows(2).enumerate() {
+                let first = (y0 + j * stride).min(strips);
+                let last = (y0 + (j + 1) * stride).min(strips);
+                for top in &mut tops[first..last] {
+                    *top = top.max(pair[0].max(pair[1]));
+                }
+            }
+        }
+        tops
+    }
+
+    /// The highest height of the ground between level-0 rows `v_lo` and
+    /// `v_hi` (any column); `-inf` where no data is loaded there.
+    pub fn rows_top(&self, v_lo: f64, v_hi: f64) -> f64 {
+        let Some(strips) = self.strip_levels.first().map(Vec::len) else {
+            return f64::NEG_INFINITY;
+        };
+        let last = strips as f64 - 1.0;
+        let lo = v_lo.floor().clamp(0.0, last) as usize;
+        let hi = v_hi.floor().clamp(0.0, last) as usize;
+        let centre = lo + (hi - lo) / 2;
+        let reach = (hi - centre).max(1);
+        let k = (usize::BITS - (reach - 1).leading_zeros()) as usize;
+        match self.strip_levels.get(k) {
+            Some(level) => level[centre] as f64,
+            None => self.top_m,
+        }
+    }
+
+    /// How far a ray at grid row `v` and `height_m` may move without meeting
+    /// the ground by the strips around it (the largest clear band of rows, its
+    /// width or the ray's height over it, whichever is less); `None` when
+    /// even the nearest strips reach the ray.
+    pub fn clear_strips(&self, v: f64, height_m: f64) -> Option<f64> {
+        let strips = self.strip_levels.first().map_or(0, Vec::len);
+        if strips == 0 || !v.is_finite() {
+            return None;
+        }
+        let row = v.floor().clamp(0.0, strips as f64 - 1.0) as usize;
+        let mut found = None;
+        for (k, level) in self.strip_levels.iter().enumerate() {
+            let top = level[row] as f64;
+            if top >= height_m {
+                break;
+            }
+            // Within `2^k` rows' least distance the ray stays in the strips
+            // `row - 2^k ..= row + 2^k`.
+            let reach_m = (1u64 << k) as f64 * self.least_north_m;
+            found = Some((height_m - top).min(reach_m));
+        }
+        found
+    }
+
+    /// The least north-south distance between neighbouring rows, metres.
+    pub fn least_north_m(&self) -> f64 {
+        self.least_north_m
     }
 
     /// The highest post of the best data over level-0 block `(col, row)`:
@@ -414,6 +503,24 @@ fn dilate(tops: &[f32], [w, h]: [usize; 2], wraps: bool) -> Vec<f32> {
         }
     }
     out
+}
+
+/// `out[k][r]`: the highest of `tops` over `r - 2^k ..= r + 2^k` (clamped
+/// to the strips), for every `k` until one level spans them all.
+fn strip_levels(tops: Vec<f32>) -> Vec<Vec<f32>> {
+    let n = tops.len();
+    let at = |level: &[f32], r: i64| level[r.clamp(0, n as i64 - 1) as usize];
+    let first: Vec<f32> =
+        (0..n as i64).map(|r| at(&tops, r - 1).max(at(&tops, r)).max(at(&tops, r + 1))).collect();
+    let mut levels = vec![first];
+    while (1usize << (levels.len() - 1)) < n {
+        let k = levels.len() - 1;
+        let below = &levels[k];
+        let step = 1i64 << k;
+        let next = (0..n as i64).map(|r| at(below, r - step).max(at(below, r + step))).collect();
+        levels.push(next);
+    }
+    levels
 }
 
 /// The next level of a max pyramid: each block the highest of its 2 x 2.

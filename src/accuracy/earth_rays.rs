@@ -15,9 +15,13 @@
 //!    blocks around it at some level of the block pyramid, it moves on by that
 //!    height difference or a block's width, whichever is less: a height
 //!    changes by at most a metre a metre, and a block's width on the ground
-//!    cannot be crossed in less.
+//!    cannot be crossed in less. The same with whole rows (rings near a
+//!    pole, where blocks are slivers): the highest ground within `2^k` rows.
 //! 2. *Cells.* Near the ground it moves half a cell of the best data at a
-//!    time, evaluating the height above the surface exactly (ECEF to
+//!    time. A segment that stays above the highest ground of every row it
+//!    can reach is clear as it is (near a pole it would cross thousands of
+//!    converging meridians). Otherwise it evaluates the height above the
+//!    surface exactly (ECEF to
 //!    geodetic, then the triangle there) at both ends and wherever the
 //!    segment crosses a lattice line or a cell's diagonal. Between those
 //!    points both the ray's height and the surface are linear but for the
@@ -268,16 +272,19 @@ fn march(ground: &EarthGround, eye: DVec3, dir: DVec3, reach_m: f64) -> (Option<
             s += off_grid_step(ground, here.post);
             continue;
         };
-        if let Some(step) = skip(ground, u, v, here.height) {
-            s += step;
-            continue;
-        }
         // Half a cell, by its narrower side; near a pole, where cells are
         // slivers east-west, at least a sixteenth of their north side (the
         // lattice crossings between are all checked).
         let cell = ground.cell_posts(u, v).unwrap_or(1.0);
         let side = ground.post_spacing_near(v).max(ground.north_spacing_near(v) / 16.0);
         let length = (0.5 * cell * side).max(0.05);
+        // A skip shorter than a cell's step is not taken: near a pole a
+        // block is a sliver whose width, the most it lets a ray go, is
+        // centimetres, and the cells' check goes farther at no risk.
+        if let Some(step) = skip(ground, u, v, here.height).filter(|&step| step >= length) {
+            s += step;
+            continue;
+        }
         if let Some(hit) = check_segment(&ray, here, s + length) {
             return (Some(ray.hit(hit)), step);
         }
@@ -288,8 +295,8 @@ fn march(ground: &EarthGround, eye: DVec3, dir: DVec3, reach_m: f64) -> (Option<
 
 /// How far a ray at grid post `(u, v)` and `height` may move without
 /// meeting the ground: by the clearest 3 x 3 block neighbourhood, or where
-/// blocks are slivers (near a pole) the clearest latitude band, whichever
-/// lets it go farther; `None` when neither is clear.
+/// blocks are slivers (near a pole) the clearest latitude band or strip of
+/// rows, whichever lets it go farthest; `None` when none is clear.
 fn skip(ground: &EarthGround, u: f64, v: f64, height: f64) -> Option<f64> {
     let block = ground.clear_block(u, v, height).map(|(k, top)| {
         let side_m = ground.block_side_posts(k) * ground.post_spacing_near(v);
@@ -299,10 +306,8 @@ fn skip(ground: &EarthGround, u: f64, v: f64, height: f64) -> Option<f64> {
         let side_m = ground.block_side_posts(k) * ground.north_spacing_near(v);
         (height - top).min(side_m)
     });
-    match (block, band) {
-        (None, None) => None,
-        (a, b) => Some(a.unwrap_or(0.0).max(b.unwrap_or(0.0)).max(0.01)),
-    }
+    let strip = ground.clear_strips(v, height);
+    [block, band, strip].into_iter().flatten().reduce(f64::max).map(|step| step.max(0.01))
 }
 
 /// How far a ray off the grid at `post` may move before it can reach the
@@ -324,6 +329,9 @@ fn off_grid_step(ground: &EarthGround, post: [f64; 2]) -> f64 {
 /// the hit's parameter if it does.
 fn check_segment(ray: &Ray<'_>, from: Sample, to: f64) -> Option<f64> {
     let end = ray.at(to);
+    if clear_of_rows(ray.ground, &from, &end) {
+        return None;
+    }
     let mut cuts = [0.0f64; CROSSINGS];
     let count = lattice_crossings(ray.ground, from.post, end.post, &mut cuts);
     if count == CROSSINGS && to - from.s > 2.0 * HIT_TOLERANCE_M {
@@ -340,6 +348,21 @@ fn check_segment(ray: &Ray<'_>, from: Sample, to: f64) -> Option<f64> {
         previous = next;
     }
     None
+}
+
+/// Whether the ray between samples `a` and `b` stays above the highest
+/// ground of every row it can reach: then no lattice crossing needs a look
+/// (near a pole a short segment crosses thousands of meridians). The ray's
+/// geodetic height is its distance to the ellipsoid, a convex function along
+/// a line that bends by at most `1 / LEAST_RADIUS_M`: it is nowhere below
+/// the lower end by more than `len^2 / (8 R)`. Its row changes by at most
+/// its length over the least distance between rows.
+fn clear_of_rows(ground: &EarthGround, a: &Sample, b: &Sample) -> bool {
+    let length = b.s - a.s;
+    let lowest = a.height.min(b.height) - length * length / (8.0 * LEAST_RADIUS_M) - 0.01;
+    let rows = length / ground.least_north_m().max(1e-3);
+    let (v_lo, v_hi) = (a.post[1].min(b.post[1]) - rows, a.post[1].max(b.post[1]) + rows);
+    v_lo.is_finite() && v_hi.is_finite() && lowest > ground.rows_top(v_lo, v_hi)
 }
 
 /// Parameters in (0, 1) where the straight grid segment `a` to `b` crosses

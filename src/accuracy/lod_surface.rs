@@ -137,6 +137,11 @@ impl LodSurface {
         height.is_finite().then_some(height)
     }
 
+    /// The level of the drawn tile covering `(x_m, y_m)`.
+    pub fn level_at(&self, x_m: f64, y_m: f64) -> Option<u8> {
+        self.locate(x_m, y_m).map(|(tile, _)| self.drawn[tile].key.level)
+    }
+
     /// Whether a drawn tile covers `(x_m, y_m)` (with or without data there).
     pub fn has_tile(&self, x_m: f64, y_m: f64) -> bool {
         self.locate(x_m, y_m).is_some()

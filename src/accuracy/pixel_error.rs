@@ -15,6 +15,7 @@ use rayon::prelude::*;
 
 use super::{LodSurface, PositionImage};
 use crate::camera::{Camera, EARTH_RADIUS_M};
+use crate::earth::{EarthFrame, GridPlacement};
 use crate::node::cell_surface;
 use crate::render::FrameUniforms;
 
@@ -43,6 +44,9 @@ pub struct ViewGeometry {
     pub perspective_scale: f64,
     /// Level-0 post spacing, metres east and north (the frame's, widened).
     pub spacing_m: [f64; 2],
+    /// For a frame drawn on the ellipsoid, where its camera-relative points
+    /// are and the grid's placement ([`Self::on_earth`]); `None`: the chart.
+    pub earth: Option<(EarthFrame, GridPlacement)>,
 }
 
 impl ViewGeometry {
@@ -61,13 +65,40 @@ impl ViewGeometry {
             },
             perspective_scale: camera.perspective_scale(),
             spacing_m: frame.posts.spacing.map(f64::from),
+            earth: None,
         }
+    }
+
+    /// The geometry of a frame drawn on the ellipsoid (`frame.earth`) over
+    /// the grid `placement` places: drawn points are read at their geodetic
+    /// place (their post, in the grid's own turn where it wraps, and their
+    /// height above the ellipsoid), not through the chart. Unchanged for a
+    /// frame drawn in the chart.
+    pub fn on_earth(self, frame: &FrameUniforms, placement: Option<GridPlacement>) -> Self {
+        let earth = frame.earth.zip(placement);
+        ViewGeometry { earth, ..self }
+    }
+
+    /// How far a flat cell of a tile of `level` may sag below the curved
+    /// surface through its posts, metres (its widest side `c`: `c^2 / 2R`,
+    /// more than a triangle's `c^2 / 3R`); 0 in the chart, whose drop the
+    /// mirror models.
+    pub fn sag_m(&self, level: u8) -> f64 {
+        if self.earth.is_none() {
+            return 0.0;
+        }
+        let cell = self.spacing_m[0].max(self.spacing_m[1]) * (1u64 << level.min(40)) as f64;
+        cell * cell / (2.0 * EARTH_RADIUS_M)
     }
 
     /// The ground point a camera-relative drawn point `p` lies over, and
     /// its height with the altitude added back (the curvature drop stays:
     /// both surfaces are compared as drawn).
     pub fn ground(&self, p: DVec3) -> (DVec2, f64) {
+        if let Some((frame, placement)) = &self.earth {
+            let (post, height) = placement.post_of_ecef(frame.ecef_of(p));
+            return (DVec2::from(placement.chart_of_post(post)), height);
+        }
         (self.eye.truncate() + p.truncate(), p.z + self.altitude)
     }
 
@@ -77,6 +108,10 @@ impl ViewGeometry {
     /// sags below the curved earth by `s^2 / 8R`: a tenth of a millimetre
     /// over 90 m posts, but 1.7 m over ETOPO5's 9 km ones, 2 px at 1 km).
     pub fn drawn_truth(&self, g: DVec2, exact: f32) -> f64 {
+        if self.earth.is_some() {
+            // On the ellipsoid heights are read above it: no drop.
+            return exact as f64;
+        }
         let [sx, sy] = self.spacing_m;
         if !(sx > 0.0 && sy > 0.0) {
             // No post lattice given: the curved surface itself.
@@ -327,9 +362,11 @@ impl Pixel<'_> {
     fn at_lod_point(&self, p: Vec3) -> LodSide {
         let p = p.as_dvec3();
         let (ground, drawn) = self.geometry.ground(p);
-        let mirror = self.surface.height_at(self.staging, ground.x, ground.y);
+        let mirror = self.surface.earth_height_at(self.staging, ground.x, ground.y);
+        let level = self.surface.level_at(ground.x, ground.y).unwrap_or(0);
+        let tolerance = SKIRT_TOLERANCE_M + self.geometry.sag_m(level);
         let skirt = mirror.is_some_and(|m| {
-            drawn < m - SKIRT_TOLERANCE_M && self.surface.on_tile_edge(ground.x, ground.y)
+            drawn < m - tolerance && self.surface.on_tile_edge(ground.x, ground.y)
         });
         let shown = match mirror {
             Some(m) if !skirt => m,
@@ -348,7 +385,7 @@ impl Pixel<'_> {
         let t = t.as_dvec3();
         let (ground, _) = self.geometry.ground(t);
         let Some(h) = (self.exact)(ground.x, ground.y) else { return TruthSide::Error(0.0) };
-        match self.surface.height_at(self.staging, ground.x, ground.y) {
+        match self.surface.earth_height_at(self.staging, ground.x, ground.y) {
             Some(lod) => TruthSide::Error(
                 self.geometry.projected_vertical(t, lod - self.geometry.drawn_truth(ground, h)),
             ),

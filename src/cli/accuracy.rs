@@ -98,8 +98,15 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
             // tile, a window of a layered pyramid's level 0 (which spans its
             // whole base).
             let positions = views.iter().map(|(_, c)| [c.position.x, c.position.y]);
-            let region = TruthRegion::around_positions(&layout, grid_size, positions);
-            let mesh = TruthMesh::load(source.as_ref(), region)
+            // On the ellipsoid a global grid's truth is not cut at its seam.
+            let period = config.scene.earth.and_then(|p| p.period_posts()).map(|p| p as u32);
+            let region = match period {
+                Some(period) => {
+                    TruthRegion::around_positions_wrapping(&layout, grid_size, positions, period)
+                }
+                None => TruthRegion::around_positions(&layout, grid_size, positions),
+            };
+            let mesh = TruthMesh::load_wrapped(source.as_ref(), region, period)
                 .with_context(|| format!("{dataset_name}: the full-resolution mesh"))?;
             let truth = TruthPass::new(display.context.gl(), &mesh)
                 .context("uploading the full-resolution mesh")?;

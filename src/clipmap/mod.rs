@@ -26,6 +26,7 @@
 //! loader module for the numbers.
 
 mod atlas;
+mod earth_wanted;
 mod hash;
 mod loader;
 mod lru;
@@ -39,7 +40,9 @@ pub use atlas::{NodeAtlas, SlotState};
 pub use loader::{LoaderMode, READ_ATTEMPTS, RETRY_FIRST_DELAY_FRAMES};
 pub use quadtree::{ClippedQuadtree, Entry};
 
+use crate::earth::GridPlacement;
 use crate::node::{NodeData, NodeError, NodeId, NodeLayout, NodeSource};
+use earth_wanted::EarthMetric;
 use hash::{node_map, NodeMap};
 use loader::{Loaded, Loader, Outcome, Verdict};
 
@@ -224,8 +227,12 @@ pub struct Clipmap {
     /// Nodes given up after [`READ_ATTEMPTS`] reads failed with I/O errors.
     unreadable_nodes: u64,
     frame: u64,
+    /// Distances on the ellipsoid, for a geographic grid drawn on the
+    /// earth ([`Self::set_earth`]); `None`: chart distances.
+    earth: Option<EarthMetric>,
     /// Chart metres in one turn of longitude, when the grid wraps: nodes
-    /// across its seam are wanted too ([`Self::set_wrap`]).
+    /// across its seam are wanted too, and views and lookups are brought
+    /// into the grid's turn.
     wrap_m: Option<f64>,
 }
 
@@ -271,6 +278,7 @@ impl Clipmap {
             last_error: None,
             corrupt_nodes: 0,
             unreadable_nodes: 0,
+            earth: None,
             wrap_m: None,
             frame: 0,
         })
@@ -295,19 +303,36 @@ impl Clipmap {
         Ok(id)
     }
 
-    /// Moves a view; takes effect at the next [`Clipmap::update`].
+    /// Moves a view; takes effect at the next [`Clipmap::update`]. Over a
+    /// grid that wraps, the position is brought into the grid's turn (a
+    /// path across the seam runs on past it in the chart), so the view's
+    /// windows stay over the data and the height under it is found.
     pub fn set_view_position(&mut self, view: ViewId, position: DVec3) -> Result<(), ClipmapError> {
         check_position(position)?;
-        self.views[view.0].set_position(position);
+        let p = self.wrapped(position.truncate());
+        self.views[view.0].set_position(p.extend(position.z));
         Ok(())
     }
 
-    /// Wants the nodes across the seam of a grid whose columns wrap every
-    /// `period_m` chart metres (a global geographic grid drawn on the
-    /// ellipsoid, where they are next to the viewer); `None`: no wrap.
-    pub fn set_wrap(&mut self, period_m: Option<f64>) {
-        self.wrap_m = period_m.filter(|p| p.is_finite() && *p > 0.0);
+    /// Measures the wanted set on the ellipsoid where the grid `placement`
+    /// places is drawn on it (a geographic grid; `None` or a projected grid:
+    /// in the chart). A grid whose columns span 360 degrees wraps: the nodes
+    /// across its seam are wanted next to the viewer, and views and lookups
+    /// are brought into its turn.
+    pub fn set_earth(&mut self, placement: Option<GridPlacement>) {
+        self.earth = placement.and_then(EarthMetric::new);
+        let spacing_m = self.layout.spacing_m[0];
+        let period = self.earth.and_then(|e| e.period_posts()).map(|n| n * spacing_m);
+        self.wrap_m = period.filter(|p| p.is_finite() && *p > 0.0);
         self.reserve_wanted();
+    }
+
+    /// `point` brought into the grid's turn when it wraps.
+    fn wrapped(&self, point: DVec2) -> DVec2 {
+        match self.wrap_m {
+            Some(period) => DVec2::new(point.x.rem_euclid(period), point.y),
+            None => point,
+        }
     }
 
     /// Room for every view's largest wanted set, so frames never allocate
@@ -358,10 +383,9 @@ impl Clipmap {
                     wanted.entry(id).and_modify(|d| *d = d.min(distance)).or_insert(distance);
                 }
             };
-            view.collect_wanted(&self.layout, &mut want);
-            if let Some(period) = self.wrap_m {
-                view.collect_wanted_shifted(&self.layout, -period, &mut want);
-                view.collect_wanted_shifted(&self.layout, period, &mut want);
+            match &self.earth {
+                Some(earth) => earth.collect(view, &self.layout, &mut want),
+                None => view.collect_wanted(&self.layout, &mut want),
             }
         }
     }
@@ -581,6 +605,7 @@ impl Clipmap {
     /// The lookup of Kühnert eq. 4.10 and 4.11 in layer `lod` of a view:
     /// the best resident node covering the point at that level or coarser.
     pub fn lookup(&self, view: ViewId, point: DVec2, lod: u8) -> Result<NodeLookup, LookupError> {
+        let point = self.wrapped(point);
         let outside = LookupError::OutsideData(point.x, point.y);
         let lod = lod.min(self.layout.levels - 1);
         let located = self.layout.locate(lod, point.x, point.y).ok_or(outside)?;
@@ -614,6 +639,7 @@ impl Clipmap {
     /// best resident node (terrain awareness wants the best, not the
     /// distance-appropriate, level).
     pub fn height_at(&self, view: ViewId, point: DVec2) -> Result<HeightSample, LookupError> {
+        let point = self.wrapped(point);
         let quadtree = &self.views[view.0];
         for lod in 0..self.layout.levels {
             let Some(located) = self.layout.locate(lod, point.x, point.y) else {

@@ -137,21 +137,8 @@ impl ClippedQuadtree {
     /// [`Self::ground_m`], the height under the viewer (Kühnert 4.5.2). A wanted
     /// node's parent is always wanted too (its footprint is nearer and its
     /// radius twice as large), and every wanted node lies in its window.
-    pub(crate) fn collect_wanted(&self, layout: &NodeLayout, want: impl FnMut(NodeId, f64)) {
-        self.collect_wanted_shifted(layout, 0.0, want);
-    }
-
-    /// [`Self::collect_wanted`] with the viewer moved `shift_m` east: over
-    /// a grid that wraps, a viewer near its seam is also `period` west and
-    /// east of itself, and the nodes across the seam are wanted (outside
-    /// the window, which only lookups use; tiles read nodes from the atlas).
-    pub(crate) fn collect_wanted_shifted(
-        &self,
-        layout: &NodeLayout,
-        shift_m: f64,
-        mut want: impl FnMut(NodeId, f64),
-    ) {
-        let position = DVec3::new(self.position.x + shift_m, self.position.y, self.position.z);
+    pub(crate) fn collect_wanted(&self, layout: &NodeLayout, mut want: impl FnMut(NodeId, f64)) {
+        let position = self.position;
         let dz = self.position.z - self.ground_m;
         for lod in 0..layout.levels {
             let radius = self.load_radius_m(layout, lod);
@@ -170,10 +157,7 @@ impl ClippedQuadtree {
                     let near = nearest_gap(position.truncate(), x, y, size);
                     let distance = (near.length_squared() + dz * dz).sqrt();
                     if distance < radius {
-                        debug_assert!(
-                            shift_m != 0.0 || self.in_window(lod, x, y),
-                            "wanted node outside the window"
-                        );
+                        debug_assert!(self.in_window(lod, x, y), "wanted node outside the window");
                         want(NodeId::new(lod, x as u32, y as u32), distance);
                     }
                 }

@@ -356,7 +356,8 @@ fn measure_one(
     passes.positions.bind();
     display.renderer.draw_positions(display.pipeline.draw_list())?;
     passes.positions.read_positions(lod)?;
-    let geometry = ViewGeometry::new(camera, &frame);
+    let placement = display.pipeline.scene().config().earth;
+    let geometry = ViewGeometry::new(camera, &frame).on_earth(&frame, placement);
     let truth_stats = match passes.truth {
         Truth::Mesh(truth) => {
             let stats = draw_truth(display, truth)?;

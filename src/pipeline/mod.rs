@@ -191,9 +191,7 @@ impl FramePipeline {
             loader,
         };
         let mut clipmap = Clipmap::new(source, clipmap_config)?;
-        let spacing_m = clipmap.layout().spacing_m[0];
-        let period = config.scene.earth.and_then(|p| p.period_posts()).map(|n| n * spacing_m);
-        clipmap.set_wrap(period);
+        clipmap.set_earth(config.scene.earth);
         let view = clipmap.add_view(view_config, DVec3::ZERO)?;
         let terrain = ClipmapTerrain { clipmap: &clipmap, summary: &summary };
         let scene = Scene::new(scene_config, &terrain)?;

@@ -29,7 +29,8 @@ pub const CHUNK_CELLS: u32 = 128;
 pub const MAX_TRUTH_SIDE: u32 = 31 * CHUNK_CELLS + 1;
 
 /// A rectangle of level-0 posts: `posts` of them east and north from `first`.
-/// It may reach past the data, where heights extend the edge.
+/// It may reach past the data, where heights extend the edge (or, loaded
+/// by [`TruthMesh::load_wrapped`], where they are read a turn back).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TruthRegion {
     /// The south-west post, in level-0 posts east and north of the data's south-west post.
@@ -76,6 +77,32 @@ impl TruthRegion {
             (middle / layout.spacing_m[a]).round() as i64
         });
         Self::covering_tiles(layout, grid_size).around(centre, MAX_TRUTH_SIDE)
+    }
+
+    /// [`Self::around_positions`] over a grid whose columns wrap every
+    /// `period` posts (drawn on the ellipsoid): its columns are a window
+    /// centred on the positions' and not cut at the grid's seam (a turn
+    /// at most; load it with [`TruthMesh::load_wrapped`], which reads
+    /// posts past either edge a turn back), so a flight across the seam
+    /// sees data on both sides.
+    pub fn around_positions_wrapping(
+        layout: &NodeLayout,
+        grid_size: u32,
+        positions: impl IntoIterator<Item = [f64; 2]>,
+        period: u32,
+    ) -> Self {
+        let positions: Vec<[f64; 2]> = positions.into_iter().collect();
+        let region = Self::around_positions(layout, grid_size, positions.iter().copied());
+        let (low, high) = positions
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p[0]), hi.max(p[0])));
+        let middle = if low <= high { 0.5 * (low + high) } else { 0.0 };
+        let centre = (middle / layout.spacing_m[0]).round() as i64;
+        let east = MAX_TRUTH_SIDE.min(period.saturating_add(1));
+        TruthRegion {
+            first: [centre - east as i64 / 2, region.first[1]],
+            posts: [east, region.posts[1]],
+        }
     }
 
     /// The part of this region inside a square of `side` posts centred on
@@ -166,6 +193,17 @@ impl TruthMesh {
     /// the normals) from `source`. Refuses a region larger than
     /// [`MAX_TRUTH_POSTS`] before allocating.
     pub fn load(source: &dyn NodeSource, region: TruthRegion) -> Result<TruthMesh, TruthError> {
+        Self::load_wrapped(source, region, None)
+    }
+
+    /// [`Self::load`] over a grid whose columns wrap every `period` posts
+    /// (`Some`: drawn on the ellipsoid, where post `u` and `u + period` are
+    /// one place): posts past its east or west edge are read a turn back.
+    pub fn load_wrapped(
+        source: &dyn NodeSource,
+        region: TruthRegion,
+        period: Option<u32>,
+    ) -> Result<TruthMesh, TruthError> {
         if region.posts[0] < 2 || region.posts[1] < 2 {
             return Err(TruthError::Degenerate(region.posts));
         }
@@ -177,7 +215,7 @@ impl TruthMesh {
         // Both sides fit u32 now: their product is at most 2^24.
         let region = TruthRegion { first: region.first, posts: [east as u32, north as u32] };
         let layout = *source.layout();
-        let heights = MarginGrid::load(source, &layout, region)?;
+        let heights = MarginGrid::load(source, &layout, region, period)?;
         let starts = |posts: u32| (0..posts / CHUNK_CELLS).map(|k| k * CHUNK_CELLS);
         let chunks = starts(region.posts[1])
             .flat_map(|y| starts(region.posts[0]).map(move |x| [x, y]))
@@ -215,11 +253,24 @@ struct AxisMap {
 }
 
 impl AxisMap {
-    fn new(first: i64, posts: u32, samples: u32, node_size: u32, node_count: u32) -> Self {
+    /// The posts `first - 1 ..= first + posts` of an axis of `samples`
+    /// posts (read a turn back past its ends when it wraps every `period`).
+    fn new(
+        first: i64,
+        posts: u32,
+        samples: u32,
+        layout: &NodeLayout,
+        node_count: u32,
+        period: Option<u32>,
+    ) -> Self {
+        let node_size = layout.node_size;
         let last = samples.saturating_sub(1) as i64;
         let (mut nodes, mut local, mut inside) = (Vec::new(), Vec::new(), Vec::new());
         for k in 0..posts as i64 + 2 {
-            let wanted = first.saturating_sub(1).saturating_add(k);
+            let mut wanted = first.saturating_sub(1).saturating_add(k);
+            if let Some(period) = period.filter(|&p| p > 0) {
+                wanted = wanted.rem_euclid(period as i64);
+            }
             let sample = wanted.clamp(0, last) as u32;
             let node = (sample / node_size).min(node_count - 1);
             nodes.push(node);
@@ -247,12 +298,11 @@ impl MarginGrid {
         source: &dyn NodeSource,
         layout: &NodeLayout,
         region: TruthRegion,
+        period: Option<u32>,
     ) -> Result<MarginGrid, TruthError> {
         let [nx, ny] = layout.nodes_at(0);
-        let x =
-            AxisMap::new(region.first[0], region.posts[0], layout.posts[0], layout.node_size, nx);
-        let y =
-            AxisMap::new(region.first[1], region.posts[1], layout.posts[1], layout.node_size, ny);
+        let x = AxisMap::new(region.first[0], region.posts[0], layout.posts[0], layout, nx, period);
+        let y = AxisMap::new(region.first[1], region.posts[1], layout.posts[1], layout, ny, None);
         let width = x.nodes.len();
         let mut heights = vec![0.0f32; width * y.nodes.len()];
         let mut node = NodeData::with_capacity(layout);
