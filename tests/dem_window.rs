@@ -132,3 +132,70 @@ fn the_committed_files_decode_the_same_in_any_window() {
         check_windows(&assets.join(name), None);
     }
 }
+
+/// Posts a side of the file the memory test imports: 4200^2 heights take
+/// 70 MB as `f32` (plus 35 MB of int16 bytes) decoded whole.
+const BIG_SIDE: u32 = 4200;
+/// The bound the import must hold, as `--memory-mb 64` does.
+const BOUND_MB: u64 = 64;
+
+/// The child of [`a_streaming_import_stays_under_64_mb`]: imports the file
+/// named by `RIDGELINE_MEMORY_CHILD` into spills and a pyramid with a
+/// 64 MB bound (bands of a quarter of it), then prints its `VmHWM`.
+#[test]
+#[ignore = "run by a_streaming_import_stays_under_64_mb in a child process"]
+fn memory_child() {
+    use ridgeline::pyramid::{build_streaming, spilled::spill_layers, BuildOptions, Silent};
+    use ridgeline::pyramid::{StreamOptions, FILE_NAME};
+    let Ok(file) = std::env::var("RIDGELINE_MEMORY_CHILD") else { return };
+    let file = PathBuf::from(file);
+    let out = file.with_extension("cache");
+    std::fs::create_dir_all(&out).unwrap();
+    let scratch = ridgeline::spill::ScratchDir::create(&out).unwrap();
+    let layers = spill_layers(&[file], &scratch, &Silent).unwrap();
+    let views: Vec<_> = layers.iter().map(|l| l.view()).collect();
+    let options =
+        StreamOptions { build: BuildOptions::default(), band_bytes: (BOUND_MB << 20) / 4 };
+    let release = || layers.iter().for_each(|l| l.heights.release());
+    build_streaming(&views, &scratch, &options, &out.join(FILE_NAME), &release, &Silent).unwrap();
+    let status = std::fs::read_to_string("/proc/self/status").unwrap();
+    let hwm = status.lines().find(|l| l.starts_with("VmHWM:")).unwrap();
+    println!("child {hwm}");
+}
+
+/// A file that takes more than 64 MB decoded whole is imported (decoded
+/// window by window into a spill, the pyramid cut in bands) by a child
+/// process whose peak resident memory stays under 64 MB.
+#[test]
+fn a_streaming_import_stays_under_64_mb() {
+    if !Path::new("/proc/self/status").exists() {
+        return;
+    }
+    let dir = TempDir::new("window-memory");
+    let path = dir.path("big.tif");
+    let side = BIG_SIDE;
+    let file: Vec<i16> =
+        (0..side * side).map(|k| ((k % side) / 3 + (k / side) / 5) as i16 % 3000).collect();
+    let geo = GeoTags::geographic([20.0, 11.0], 1.0 / 3600.0, false);
+    write_tiff_strips::<colortype::GrayI16>(
+        &path,
+        [side, side],
+        &file,
+        Compression::Uncompressed,
+        Predictor::None,
+        4,
+        &geo,
+    );
+    drop(file);
+    let output = std::process::Command::new(std::env::current_exe().unwrap())
+        .args(["--exact", "memory_child", "--ignored", "--nocapture", "--test-threads=1"])
+        .env("RIDGELINE_MEMORY_CHILD", &path)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{stdout}{}", String::from_utf8_lossy(&output.stderr));
+    // The harness prints "test memory_child ... " before the child's line.
+    let at = stdout.find("child VmHWM:").expect("the child's peak");
+    let kb: u64 = stdout[at..].split_whitespace().nth(2).unwrap().parse().unwrap();
+    assert!(kb < BOUND_MB << 10, "the import peaked at {} MB, over {BOUND_MB}", kb >> 10);
+}
