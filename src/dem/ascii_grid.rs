@@ -16,13 +16,16 @@
 //! [`Problem::DegreesWithoutPrj`], which says how to add the sidecar: read as
 //! metres it would be a needle a few centimetres wide and kilometres tall.
 //!
-//! The file is read as a stream of tokens, so it is never held in memory.
+//! The file is read as a stream of tokens, so it is never held in memory;
+//! the heights go wherever the caller puts them ([`super::window`]).
 
 use std::io::{BufRead, BufReader};
 use std::path::Path;
 
 use super::error::{ImportError, Problem};
-use super::raw::{check_dimensions, classify, file_len, non_finite, NoData, RawGrid};
+use super::mosaic::Footprint;
+use super::raw::{check_dimensions, classify, file_len, non_finite, NoData};
+use super::window::OpenedFile;
 use crate::geo::{Crs, GeoRef};
 
 /// Cell size below which a grid without `.prj` whose corners fit in
@@ -36,8 +39,17 @@ const MAX_TOKEN_LEN: usize = 256;
 /// Largest `.prj` sidecar read; WKT is a few hundred bytes.
 const MAX_PRJ_LEN: u64 = 64 * 1024;
 
-/// Reads an ESRI ASCII grid.
-pub fn read(path: &Path) -> Result<RawGrid, ImportError> {
+/// An opened ESRI ASCII grid: its header read, the first value in hand.
+pub struct AsciiFile {
+    footprint: Footprint,
+    tokens: Tokens<BufReader<std::fs::File>>,
+    /// The first value (the header parser stopped at it).
+    token: Vec<u8>,
+    nodata: NoData,
+}
+
+/// Opens an ESRI ASCII grid: reads its header and its `.prj` sidecar.
+pub fn open(path: &Path) -> Result<AsciiFile, ImportError> {
     let fail = |problem| ImportError::new(path, problem);
     let file = std::fs::File::open(path).map_err(|e| fail(e.into()))?;
     let mut tokens = Tokens { reader: BufReader::new(file), consumed: 0 };
@@ -63,36 +75,69 @@ pub fn read(path: &Path) -> Result<RawGrid, ImportError> {
         return Err(fail(Problem::DegreesWithoutPrj { x, y, cell_size }));
     }
     let georef = GeoRef { crs, origin: header.origin(), spacing: header.spacing };
-    let mut grid = RawGrid::voids(path, width, height, georef);
-    let mut count = 0u64;
-    // `token` already holds the first value (the header parser stopped at it).
-    while !token.is_empty() {
-        if count < samples {
-            store(&mut grid, count, &token, header.nodata)?;
-        }
-        count += 1;
-        token.clear();
-        tokens.next_into(&mut token).map_err(|e| fail(e.into()))?;
-    }
-    if count != samples {
-        return Err(fail(Problem::ValueCount { expected: samples, found: count }));
-    }
-    grid.debug_check();
-    Ok(grid)
+    let footprint = Footprint { path: path.to_path_buf(), georef, size: [width, height] };
+    Ok(AsciiFile { footprint, tokens, token, nodata: header.nodata })
 }
 
-/// Parses value number `k` (row-major from the north-west) into the grid.
-fn store(grid: &mut RawGrid, k: u64, token: &[u8], nodata: NoData) -> Result<(), ImportError> {
-    let (row, column) = (k / u64::from(grid.width), k % u64::from(grid.width));
+impl OpenedFile for AsciiFile {
+    fn footprint(&self) -> &Footprint {
+        &self.footprint
+    }
+
+    /// The text is a stream of tokens; a window is `window_bytes` of it.
+    fn read_into(
+        self: Box<Self>,
+        out: &mut [f32],
+        window_bytes: usize,
+        window_done: &mut dyn FnMut(),
+    ) -> Result<(), ImportError> {
+        let AsciiFile { footprint, mut tokens, mut token, nodata } = *self;
+        let path = &footprint.path;
+        let [width, height] = footprint.size;
+        let samples = u64::from(width) * u64::from(height);
+        let (mut count, mut window_end) =
+            (0u64, tokens.consumed.saturating_add(window_bytes as u64));
+        while !token.is_empty() {
+            if count < samples {
+                let value = parse(path, width, count, &token, nodata)?;
+                let (row, column) = (count / u64::from(width), count % u64::from(width));
+                let j = u64::from(height) - 1 - row;
+                out[(j * u64::from(width) + column) as usize] = value;
+            }
+            count += 1;
+            token.clear();
+            tokens.next_into(&mut token).map_err(|e| ImportError::new(path, e.into()))?;
+            if tokens.consumed >= window_end {
+                window_done();
+                window_end = tokens.consumed.saturating_add(window_bytes as u64);
+            }
+        }
+        if count != samples {
+            return Err(ImportError::new(
+                path,
+                Problem::ValueCount { expected: samples, found: count },
+            ));
+        }
+        window_done();
+        Ok(())
+    }
+}
+
+/// Parses value number `k` (row-major from the north-west) of a grid
+/// `width` posts wide.
+fn parse(
+    path: &Path,
+    width: u32,
+    k: u64,
+    token: &[u8],
+    nodata: NoData,
+) -> Result<f32, ImportError> {
+    let (row, column) = (k / u64::from(width), k % u64::from(width));
     let text = String::from_utf8_lossy(token);
     let value: f64 = text.parse().map_err(|_| {
-        ImportError::new(&grid.path, Problem::NotANumber { row, column, token: text.to_string() })
+        ImportError::new(path, Problem::NotANumber { row, column, token: text.to_string() })
     })?;
-    let height =
-        classify(value, Some(nodata)).ok_or_else(|| non_finite(&grid.path, row, column, value))?;
-    let index = grid.index(column as u32, grid.height - 1 - row as u32);
-    grid.heights[index] = height;
-    Ok(())
+    classify(value, Some(nodata)).ok_or_else(|| non_finite(path, row, column, value))
 }
 
 /// The header's numbers.

@@ -17,10 +17,13 @@
 //! south-west origin (a post) are read from the UHL. Tape copies may put
 //! 80-byte `VOL` and `HDR` labels before the UHL; they are skipped.
 
+use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 
 use super::error::{ImportError, Problem};
-use super::raw::{check_dimensions, read_bounded, RawGrid};
+use super::mosaic::Footprint;
+use super::raw::check_dimensions;
+use super::window::{rows_per_window, OpenedFile};
 use crate::geo::{Crs, GeoRef};
 
 const UHL_LEN: usize = 80;
@@ -56,15 +59,24 @@ impl DtedHeader {
     }
 }
 
-/// Reads a DTED file of level 0, 1 or 2.
-pub fn read(path: &Path) -> Result<RawGrid, ImportError> {
-    // Headers are 4 KiB at most: read them first so that a header declaring
-    // a size the file does not have is refused before reading the rest.
+/// An opened DTED file: its headers checked against its length.
+pub struct DtedFile {
+    footprint: Footprint,
+    header: DtedHeader,
+    /// Where the first data record starts.
+    records_start: u64,
+}
+
+/// Opens a DTED file of level 0, 1 or 2: its headers (4 KiB at most) are
+/// read first, so a header declaring a size the file does not have is
+/// refused before anything else is read.
+pub fn open(path: &Path) -> Result<DtedFile, ImportError> {
     let prefix = super::raw::read_prefix(path, (2 * LABEL_LEN + HEADERS_LEN) as u64)?;
     let start = skip_tape_labels(&prefix);
     let header = parse_headers(path, prefix.get(start..).unwrap_or_default())?;
     let (columns, rows) = check_dimensions(path, header.columns.into(), header.rows.into())?;
-    let expected = (start + HEADERS_LEN) as u64 + u64::from(columns) * header.record_len() as u64;
+    let records_start = (start + HEADERS_LEN) as u64;
+    let expected = records_start + u64::from(columns) * header.record_len() as u64;
     let actual = super::raw::file_len(path)?;
     if actual != expected {
         let problem = if actual < expected {
@@ -78,20 +90,45 @@ pub fn read(path: &Path) -> Result<RawGrid, ImportError> {
         };
         return Err(ImportError::new(path, problem));
     }
-    let bytes = read_bounded(path, expected)?;
-    let georef = georef(&header);
-    let mut grid = RawGrid::voids(path, columns, rows, georef);
-    let records = bytes[start + HEADERS_LEN..].chunks_exact(header.record_len());
-    for (column, record) in records.enumerate() {
-        let column = column as u32;
-        let heights = check_record(record, column).map_err(|p| ImportError::new(path, p))?;
-        for (j, h) in heights.enumerate() {
-            let index = grid.index(column, j as u32);
-            grid.heights[index] = if h == VOID { f32::NAN } else { h as f32 };
-        }
+    let footprint =
+        Footprint { path: path.to_path_buf(), georef: georef(&header), size: [columns, rows] };
+    Ok(DtedFile { footprint, header, records_start })
+}
+
+impl OpenedFile for DtedFile {
+    fn footprint(&self) -> &Footprint {
+        &self.footprint
     }
-    grid.debug_check();
-    Ok(grid)
+
+    /// Windows of whole data records (columns).
+    fn read_into(
+        self: Box<Self>,
+        out: &mut [f32],
+        window_bytes: usize,
+        window_done: &mut dyn FnMut(),
+    ) -> Result<(), ImportError> {
+        let path = &self.footprint.path;
+        let fail = |problem| ImportError::new(path, problem);
+        let [columns, _] = self.footprint.size;
+        let (width, record_len) = (columns as usize, self.header.record_len());
+        let mut file = std::fs::File::open(path).map_err(|e| fail(e.into()))?;
+        file.seek(SeekFrom::Start(self.records_start)).map_err(|e| fail(e.into()))?;
+        let per_window = rows_per_window(window_bytes, record_len as u64, width);
+        let mut bytes = vec![0u8; per_window * record_len];
+        for first in (0..width).step_by(per_window) {
+            let window = &mut bytes[..per_window.min(width - first) * record_len];
+            file.read_exact(window).map_err(|e| fail(e.into()))?;
+            for (k, record) in window.chunks_exact(record_len).enumerate() {
+                let column = (first + k) as u32;
+                let heights = check_record(record, column).map_err(fail)?;
+                for (j, h) in heights.enumerate() {
+                    out[j * width + column as usize] = if h == VOID { f32::NAN } else { h as f32 };
+                }
+            }
+            window_done();
+        }
+        Ok(())
+    }
 }
 
 fn georef(header: &DtedHeader) -> GeoRef {

@@ -79,6 +79,14 @@ pub enum Problem {
         /// The most posts accepted.
         max: u64,
     },
+    /// A file too large for the in-memory import (the streaming one reads it).
+    #[error("{posts} posts: more than the {max} an in-memory import holds; `ridgeline import` streams it")]
+    TooLargeInMemory {
+        /// Posts the file declares.
+        posts: u64,
+        /// The most the in-memory import takes.
+        max: u64,
+    },
     /// A header field is missing, repeated or malformed.
     #[error("bad header: {0}")]
     Header(String),

@@ -19,9 +19,11 @@ use tiff::ColorType;
 
 use super::error::{ImportError, Problem};
 use super::geotiff_georef::{georef, Placement};
+use super::mosaic::Footprint;
 use super::raw::{
-    check_dimensions, classify, file_len, non_finite, read_prefix, NoData, RawGrid, MAX_SAMPLES,
+    check_dimensions, classify, file_len, non_finite, read_prefix, NoData, MAX_SAMPLES,
 };
+use super::window::OpenedFile;
 
 /// No DEFLATE or LZW stream expands by more than this factor (DEFLATE's
 /// limit is 1032, LZW's about 2700); compressed chunks declaring more data
@@ -31,8 +33,18 @@ const MAX_COMPRESSION_RATIO: u64 = 4096;
 /// TIFF compression code for "none".
 const UNCOMPRESSED: u16 = 1;
 
-/// Reads a GeoTIFF elevation raster.
-pub fn read(path: &Path) -> Result<RawGrid, ImportError> {
+/// An opened GeoTIFF: its tags read and its chunks checked against the
+/// file's length, no chunk decoded.
+pub struct GeoTiffFile {
+    footprint: Footprint,
+    decoder: Decoder<BufReader<File>>,
+    placement: Placement,
+    nodata: Option<NoData>,
+    chunks: u32,
+}
+
+/// Opens a GeoTIFF elevation raster.
+pub fn open(path: &Path) -> Result<GeoTiffFile, ImportError> {
     let fail = |problem| ImportError::new(path, problem);
     check_magic(path)?;
     let file = File::open(path).map_err(|e| fail(e.into()))?;
@@ -44,15 +56,53 @@ pub fn read(path: &Path) -> Result<RawGrid, ImportError> {
     check_chunks(path, &mut decoder, u64::from(width) * u64::from(height) * bytes_per_sample)?;
     let (georef, placement) = georef(&mut decoder, height).map_err(fail)?;
     let nodata = gdal_nodata(&mut decoder).map_err(fail)?;
-    let mut grid = RawGrid::voids(path, width, height, georef);
     let chunks = chunk_count(&mut decoder).map_err(fail)?;
-    for chunk in 0..chunks {
-        let decoded = decoder.read_chunk(chunk).map_err(|e| fail(e.into()))?;
-        let area = chunk_area(&decoder, chunk, width);
-        store_chunk(&mut grid, placement, area, decoded, nodata)?;
+    let footprint = Footprint { path: path.to_path_buf(), georef, size: [width, height] };
+    Ok(GeoTiffFile { footprint, decoder, placement, nodata, chunks })
+}
+
+impl OpenedFile for GeoTiffFile {
+    fn footprint(&self) -> &Footprint {
+        &self.footprint
     }
-    grid.debug_check();
-    Ok(grid)
+
+    /// Windows of whole strips or tiles, as many as `window_bytes` of
+    /// decoded samples hold (at least one).
+    fn read_into(
+        mut self: Box<Self>,
+        out: &mut [f32],
+        window_bytes: usize,
+        window_done: &mut dyn FnMut(),
+    ) -> Result<(), ImportError> {
+        let path = &self.footprint.path;
+        let [width, height] = self.footprint.size;
+        let mut target = Target { path, width, height, heights: out };
+        let mut decoded_since = 0usize;
+        for chunk in 0..self.chunks {
+            let decoded = self.decoder.read_chunk(chunk).map_err(|e| tiff_error(path, e))?;
+            let area = chunk_area(&self.decoder, chunk, width);
+            decoded_since += area.width as usize * area.height as usize * 8;
+            store_chunk(&mut target, self.placement, area, decoded, self.nodata)?;
+            if decoded_since >= window_bytes {
+                window_done();
+                decoded_since = 0;
+            }
+        }
+        window_done();
+        Ok(())
+    }
+}
+
+fn tiff_error(path: &Path, error: tiff::TiffError) -> ImportError {
+    ImportError::new(path, error.into())
+}
+
+/// Where decoded chunks go: the grid's heights, row 0 southern.
+struct Target<'a> {
+    path: &'a Path,
+    width: u32,
+    height: u32,
+    heights: &'a mut [f32],
 }
 
 /// Refuses anything that does not start like a TIFF or BigTIFF file.
@@ -165,7 +215,7 @@ fn chunk_area(decoder: &Decoder<BufReader<File>>, chunk: u32, image_width: u32) 
 
 /// Converts a decoded chunk to heights and stores it in the grid.
 fn store_chunk(
-    grid: &mut RawGrid,
+    grid: &mut Target,
     placement: Placement,
     area: ChunkArea,
     decoded: DecodingResult,
@@ -177,15 +227,16 @@ fn store_chunk(
         DecodingResult::F32(_) => nodata.map(|nd| NoData(f64::from(nd.0 as f32))),
         _ => nodata,
     };
-    let values = as_f64(decoded).map_err(|p| ImportError::new(&grid.path, p))?;
+    let values = as_f64(decoded).map_err(|p| ImportError::new(grid.path, p))?;
     let expected = area.width as usize * area.height as usize;
     debug_assert!(values.len() >= expected, "the decoder returns the unpadded chunk");
     for (k, &value) in values.iter().take(expected).enumerate() {
         let row = area.first_row + (k / area.width as usize) as u32;
         let column = area.first_column + (k % area.width as usize) as u32;
         let height = classify(value, nodata)
-            .ok_or_else(|| non_finite(&grid.path, row.into(), column.into(), value))?;
-        let index = grid.index(column, placement.grid_row(row));
+            .ok_or_else(|| non_finite(grid.path, row.into(), column.into(), value))?;
+        debug_assert!(column < grid.width && row < grid.height);
+        let index = placement.grid_row(row) as usize * grid.width as usize + column as usize;
         grid.heights[index] = height;
     }
     Ok(())

@@ -4,10 +4,12 @@
 //! name says the south-west corner (`N39E040.hgt`: 39 N, 40 E). Posts sit on
 //! whole-degree multiples, so the south-west post is exactly that corner.
 
+use std::io::Read;
 use std::path::Path;
 
 use super::error::{ImportError, Problem};
-use super::raw::{read_bounded, RawGrid};
+use super::mosaic::Footprint;
+use super::window::{rows_per_window, OpenedFile};
 use crate::geo::{Crs, GeoRef};
 
 /// The value SRTM uses for a void.
@@ -16,33 +18,65 @@ pub const VOID: i16 = -32768;
 /// Posts per side of the two SRTM products.
 const SIDES: [u32; 2] = [1201, 3601];
 
-/// Reads an SRTM `.hgt` tile.
-pub fn read(path: &Path) -> Result<RawGrid, ImportError> {
+/// An opened `.hgt` tile: placed by its name, sized by its length.
+pub struct HgtFile {
+    footprint: Footprint,
+}
+
+/// Opens an SRTM `.hgt` tile (its name and length; nothing is decoded).
+pub fn open(path: &Path) -> Result<HgtFile, ImportError> {
     let corner = corner_from_name(path)?;
     let len = super::raw::file_len(path)?;
     let side = SIDES
         .into_iter()
         .find(|&n| u64::from(n) * u64::from(n) * 2 == len)
         .ok_or_else(|| ImportError::new(path, Problem::HgtSize { actual: len }))?;
-    let bytes = read_bounded(path, len)?;
-    if bytes.len() as u64 != len {
-        // The file changed under us; report what we got.
-        return Err(ImportError::new(path, Problem::HgtSize { actual: bytes.len() as u64 }));
-    }
     let spacing = 1.0 / f64::from(side - 1);
     let georef = GeoRef { crs: Crs::Geographic, origin: corner, spacing: [spacing, spacing] };
-    let mut grid = RawGrid::voids(path, side, side, georef);
-    for (file_row, row) in bytes.chunks_exact(2 * side as usize).enumerate() {
-        // File row 0 is the northern row; grid row 0 is the southern one.
-        let j = side - 1 - file_row as u32;
-        for (i, pair) in row.chunks_exact(2).enumerate() {
-            let raw = i16::from_be_bytes([pair[0], pair[1]]);
-            let index = grid.index(i as u32, j);
-            grid.heights[index] = if raw == VOID { f32::NAN } else { f32::from(raw) };
-        }
+    Ok(HgtFile { footprint: Footprint { path: path.to_path_buf(), georef, size: [side, side] } })
+}
+
+impl OpenedFile for HgtFile {
+    fn footprint(&self) -> &Footprint {
+        &self.footprint
     }
-    grid.debug_check();
-    Ok(grid)
+
+    fn read_into(
+        self: Box<Self>,
+        out: &mut [f32],
+        window_bytes: usize,
+        window_done: &mut dyn FnMut(),
+    ) -> Result<(), ImportError> {
+        let path = &self.footprint.path;
+        let side = self.footprint.size[0] as usize;
+        debug_assert_eq!(out.len(), side * side);
+        let mut file = std::fs::File::open(path).map_err(|e| ImportError::new(path, e.into()))?;
+        let rows = rows_per_window(window_bytes, 2 * side as u64, side);
+        let mut bytes = vec![0u8; rows * 2 * side];
+        for first in (0..side).step_by(rows) {
+            let window = &mut bytes[..rows.min(side - first) * 2 * side];
+            if let Err(e) = file.read_exact(window) {
+                // The file shrank since it was opened: say how far it got.
+                let actual = super::raw::file_len(path)?;
+                let problem = match e.kind() {
+                    std::io::ErrorKind::UnexpectedEof => Problem::HgtSize { actual },
+                    _ => e.into(),
+                };
+                return Err(ImportError::new(path, problem));
+            }
+            for (k, row) in window.chunks_exact(2 * side).enumerate() {
+                // File row 0 is the northern row; grid row 0 is the southern one.
+                let j = side - 1 - (first + k);
+                let to = &mut out[j * side..(j + 1) * side];
+                for (to, pair) in to.iter_mut().zip(row.chunks_exact(2)) {
+                    let raw = i16::from_be_bytes([pair[0], pair[1]]);
+                    *to = if raw == VOID { f32::NAN } else { f32::from(raw) };
+                }
+            }
+            window_done();
+        }
+        Ok(())
+    }
 }
 
 /// The south-west corner `[longitude, latitude]` named by the first seven

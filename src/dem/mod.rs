@@ -9,7 +9,8 @@
 //! | [`hgt`] | SRTM `.hgt` tiles |
 //! | [`dted`] | DTED levels 0, 1, 2 |
 //! | [`ascii_grid`] | ESRI ASCII grids |
-//! | [`netcdf`] | netCDF-3 classic grids (ETOPO5) |
+//! | [`netcdf`] | netCDF-3 classic grids (ETOPO5); `netcdf_header`: where a variable's values start |
+//! | [`window`] | opening a file (its header) and decoding it window by window into any slice |
 //! | [`raw`] | the pre-fill grid with voids and the checks importers share |
 //! | [`mosaic`] | joining several files on one lattice |
 //! | [`voids`] | the documented void fill |
@@ -28,8 +29,10 @@ pub mod geotiff_georef;
 pub mod hgt;
 pub mod mosaic;
 pub mod netcdf;
+mod netcdf_header;
 pub mod raw;
 pub mod voids;
+pub mod window;
 
 pub use error::{ImportError, Problem};
 pub use format::Format;
@@ -91,15 +94,11 @@ impl ElevationGrid {
     }
 }
 
-/// Reads one file of any supported format, voids still marked.
+/// Reads one file of any supported format onto the heap, voids still
+/// marked (at most [`raw::MAX_SAMPLES`] posts; [`window`] decodes larger
+/// ones into spills).
 pub fn read_raw(path: &Path) -> Result<RawGrid, ImportError> {
-    match format::detect(path)? {
-        Format::GeoTiff => geotiff::read(path),
-        Format::Hgt => hgt::read(path),
-        Format::Dted => dted::read(path),
-        Format::AsciiGrid => ascii_grid::read(path),
-        Format::NetCdf => netcdf::read(path),
-    }
+    window::read_whole(window::open(path)?)
 }
 
 /// Imports one file and fills its small voids (large ones stay NaN, see

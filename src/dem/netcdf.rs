@@ -26,7 +26,9 @@ use std::path::Path;
 use netcdf3::{DataSet, DataType, DataVector, FileReader, ReadError, Variable};
 
 use super::error::{ImportError, Problem};
-use super::raw::{check_dimensions, classify, file_len, non_finite, NoData, RawGrid};
+use super::mosaic::Footprint;
+use super::raw::{check_dimensions, classify, file_len, non_finite, NoData};
+use super::window::{rows_per_window, OpenedFile};
 use crate::geo::{Crs, GeoRef};
 
 /// The start of every netCDF-3 file: `CDF` and the version byte (1 classic,
@@ -38,8 +40,20 @@ const SNAP_TOLERANCE: f64 = 1e-2;
 /// Largest distance, in spacings, of a stored coordinate from its post.
 const COORDINATE_TOLERANCE: f64 = 0.25;
 
-/// Reads the elevation variable of a netCDF-3 file.
-pub fn read(path: &Path) -> Result<RawGrid, ImportError> {
+/// An opened netCDF-3 grid: its header and coordinates read and checked,
+/// the heights not yet.
+pub struct NetCdfFile {
+    footprint: Footprint,
+    /// Where the height variable's values start.
+    begin: u64,
+    data_type: DataType,
+    /// Latitudes run south first (else rows are turned).
+    south_first: bool,
+    nodata: NoData,
+}
+
+/// Opens a netCDF-3 file: reads its header and its coordinate variables.
+pub fn open(path: &Path) -> Result<NetCdfFile, ImportError> {
     let fail = |problem| ImportError::new(path, problem);
     let start = super::raw::read_prefix(path, 4)?;
     if !MAGIC.iter().any(|m| start == *m) {
@@ -51,7 +65,7 @@ pub fn read(path: &Path) -> Result<RawGrid, ImportError> {
     }
     let actual = file_len(path)?;
     let mut reader = FileReader::open(path).map_err(|e| fail(netcdf_problem(e, actual)))?;
-    let (name, lat_dim, lon_dim, rows, columns, nodata, needed) = {
+    let (name, lat_dim, lon_dim, rows, columns, nodata, data_type, needed) = {
         let data_set = reader.data_set();
         let variable = elevation_variable(data_set).map_err(fail)?;
         let dims = variable.get_dims();
@@ -65,7 +79,8 @@ pub fn read(path: &Path) -> Result<RawGrid, ImportError> {
             .sum::<u64>();
         let name = variable.name().to_string();
         let (rows, columns) = (dims[0].size() as u64, dims[1].size() as u64);
-        (name, lat_dim, lon_dim, rows, columns, fill_value(variable), needed)
+        let data_type = variable.data_type();
+        (name, lat_dim, lon_dim, rows, columns, fill_value(variable), data_type, needed)
     };
     let (width, height) = check_dimensions(path, columns, rows)?;
     if needed > actual {
@@ -85,18 +100,73 @@ pub fn read(path: &Path) -> Result<RawGrid, ImportError> {
     if let Some(problem) = georef.problem([width, height]) {
         return Err(fail(Problem::Header(problem)));
     }
-    let values = read_f64(&mut reader, &name, actual).map_err(fail)?;
-    let mut grid = RawGrid::voids(path, width, height, georef);
-    for (k, &value) in values.iter().enumerate() {
-        let (file_row, column) = ((k as u64) / columns, (k as u64) % columns);
-        let h = classify(value, Some(nodata))
-            .ok_or_else(|| non_finite(path, file_row, column, value))?;
-        let j = if south_first { file_row } else { rows - 1 - file_row } as u32;
-        let index = grid.index(column as u32, j);
-        grid.heights[index] = h;
+    let begin = super::netcdf_header::data_offset(path, &name).map_err(fail)?;
+    let bytes = rows * columns * data_type.size_of() as u64;
+    if begin.saturating_add(bytes) > actual {
+        let what = format!("{columns} x {rows} values of {name} from byte {begin}");
+        return Err(fail(Problem::Truncated { what, needed: begin + bytes, actual }));
     }
-    grid.debug_check();
-    Ok(grid)
+    let footprint = Footprint { path: path.to_path_buf(), georef, size: [width, height] };
+    Ok(NetCdfFile { footprint, begin, data_type, south_first, nodata })
+}
+
+impl OpenedFile for NetCdfFile {
+    fn footprint(&self) -> &Footprint {
+        &self.footprint
+    }
+
+    /// Windows of whole rows, read at their place in the file.
+    fn read_into(
+        self: Box<Self>,
+        out: &mut [f32],
+        window_bytes: usize,
+        window_done: &mut dyn FnMut(),
+    ) -> Result<(), ImportError> {
+        let path = &self.footprint.path;
+        let fail = |problem| ImportError::new(path, problem);
+        let [width, height] = self.footprint.size.map(|s| s as usize);
+        let size = self.data_type.size_of();
+        let file = std::fs::File::open(path).map_err(|e| fail(e.into()))?;
+        let rows = rows_per_window(window_bytes, (width * size) as u64, height);
+        let mut bytes = vec![0u8; rows * width * size];
+        for first in (0..height).step_by(rows) {
+            let window = &mut bytes[..rows.min(height - first) * width * size];
+            let at = self.begin + (first * width * size) as u64;
+            read_exact_at(&file, window, at).map_err(|e| fail(e.into()))?;
+            for (k, row) in window.chunks_exact(width * size).enumerate() {
+                let file_row = first + k;
+                let j = if self.south_first { file_row } else { height - 1 - file_row };
+                let to = &mut out[j * width..(j + 1) * width];
+                for (column, (to, value)) in to.iter_mut().zip(row.chunks_exact(size)).enumerate() {
+                    let value = big_endian(&self.data_type, value);
+                    *to = classify(value, Some(self.nodata))
+                        .ok_or_else(|| non_finite(path, file_row as u64, column as u64, value))?;
+                }
+            }
+            window_done();
+        }
+        Ok(())
+    }
+}
+
+/// One big-endian value of `data_type` as `f64`.
+fn big_endian(data_type: &DataType, bytes: &[u8]) -> f64 {
+    match data_type {
+        DataType::I8 => f64::from(bytes[0] as i8),
+        DataType::U8 => f64::from(bytes[0]),
+        DataType::I16 => f64::from(i16::from_be_bytes([bytes[0], bytes[1]])),
+        DataType::I32 => f64::from(i32::from_be_bytes(bytes.try_into().expect("4 bytes"))),
+        DataType::F32 => f64::from(f32::from_be_bytes(bytes.try_into().expect("4 bytes"))),
+        DataType::F64 => f64::from_be_bytes(bytes.try_into().expect("8 bytes")),
+    }
+}
+
+/// Fills `buf` from `file` at `offset`.
+fn read_exact_at(file: &std::fs::File, buf: &mut [u8], offset: u64) -> std::io::Result<()> {
+    use std::io::{Read, Seek, SeekFrom};
+    let mut file = file;
+    file.seek(SeekFrom::Start(offset))?;
+    file.read_exact(buf)
 }
 
 /// The one two-dimensional numeric variable whose dimensions both have

@@ -8,10 +8,18 @@ use std::path::{Path, PathBuf};
 use super::error::{ImportError, Problem};
 use crate::geo::GeoRef;
 
-/// The most samples one grid (a file or a whole mosaic) may have: 2^28, a
-/// 16384 x 16384 grid, 1 GiB of `f32`. Larger declarations are refused before
-/// anything is allocated; they are corrupt headers or inputs to tile first.
+/// The most samples a grid held on the heap (a file read whole, an
+/// in-memory mosaic) may have: 2^28, a 16384 x 16384 grid, 1 GiB of `f32`.
+/// The streaming import ([`crate::pyramid::spilled`]) decodes larger files
+/// window by window into spills.
 pub const MAX_SAMPLES: u64 = 1 << 28;
+
+/// The most posts one file may declare: 2^33 (a 15" world grid is 2^31.8),
+/// 32 GiB of spill. Larger declarations are refused before anything is
+/// allocated or created: they are corrupt headers (every format's length
+/// check refuses most of them first; a compressed GeoTIFF may declare
+/// 4096 times its bytes).
+pub const MAX_FILE_POSTS: u64 = 1 << 33;
 
 /// One imported file (or a mosaic of several) with its voids still in place.
 ///
@@ -37,7 +45,7 @@ impl RawGrid {
     /// A grid of `width x height` voids; the caller has checked the dimensions.
     pub fn voids(path: &Path, width: u32, height: u32, georef: GeoRef) -> Self {
         let count = width as usize * height as usize;
-        debug_assert!(count as u64 <= MAX_SAMPLES);
+        debug_assert!(count as u64 <= MAX_FILE_POSTS);
         RawGrid { path: path.to_path_buf(), width, height, heights: vec![f32::NAN; count], georef }
     }
 
@@ -64,8 +72,8 @@ impl RawGrid {
 /// returns them as `u32`.
 pub fn check_dimensions(path: &Path, width: u64, height: u64) -> Result<(u32, u32), ImportError> {
     let absurd =
-        || ImportError::new(path, Problem::AbsurdDimensions { width, height, max: MAX_SAMPLES });
-    if width == 0 || height == 0 || width.saturating_mul(height) > MAX_SAMPLES {
+        || ImportError::new(path, Problem::AbsurdDimensions { width, height, max: MAX_FILE_POSTS });
+    if width == 0 || height == 0 || width.saturating_mul(height) > MAX_FILE_POSTS {
         return Err(absurd());
     }
     Ok((u32::try_from(width).map_err(|_| absurd())?, u32::try_from(height).map_err(|_| absurd())?))

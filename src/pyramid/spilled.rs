@@ -1,13 +1,16 @@
 //! Elevation files into layers that live in spills ([`crate::spill`]), for
-//! imports larger than memory: each file is decoded once (one at a time)
-//! and written into its layer's spill at its place on the mosaic's
-//! lattice, so no layer is ever whole on the heap. The rules are those of
+//! imports larger than memory: each file is decoded once (one at a time),
+//! window by window ([`crate::dem::window`]), into a spill, and written into
+//! its layer's spill at its place on the mosaic's lattice, so neither a
+//! file nor a layer is ever whole on the heap. The rules are those of
 //! [`crate::dem::import_layers`] (grouping by spacing, the mosaic's first valid
 //! height wins, a global grid's closing column), with one difference in
-//! void filling: small voids are filled per file, over the file's posts
-//! and [`FILL_HALO`] posts around them, instead of over the whole mosaic.
-//! For a layer of one file that is the same thing; in a mosaic it differs
-//! only for a void that reaches farther than the halo across a seam.
+//! void filling: small voids are filled per file (per piece of at most
+//! [`FILL_PIECE`] posts a side of a larger file), over its posts and
+//! [`FILL_HALO`] posts around them, instead of over the whole mosaic.
+//! For a layer of one file of at most [`FILL_PIECE`] a side that is the
+//! same thing; otherwise it differs only for a void that reaches farther
+//! than the halo across a seam.
 
 use std::path::{Path, PathBuf};
 
@@ -16,7 +19,7 @@ use rayon::prelude::*;
 use super::progress::Progress;
 use crate::dem::mosaic::{plan, Footprint};
 use crate::dem::{
-    check_same_crs, read_raw, same_spacing, voids, GridView, ImportError, Problem, RawGrid,
+    check_same_crs, same_spacing, voids, window, GridView, ImportError, Problem, RawGrid,
 };
 use crate::geo::GeoRef;
 use crate::spill::{ScratchDir, Spill};
@@ -73,18 +76,23 @@ pub fn spill_layers(
     let mut groups: Vec<Vec<Decoded>> = Vec::new();
     progress.phase("reading files", paths.len() as u64);
     for path in paths {
-        let grid = read_raw(path)?;
+        let opened = window::open(path)?;
+        let footprint = opened.footprint().clone();
         if let Some(first) = groups.first().and_then(|g| g.first()) {
             let first = &first.footprint;
-            check_same_crs(&first.path, &first.georef, path, &grid.georef)?;
+            check_same_crs(&first.path, &first.georef, path, &footprint.georef)?;
         }
+        let [width, height] = footprint.size.map(|s| s as usize);
         let mut heights = scratch
-            .spill("file", grid.heights.len(), 0.0f32)
+            .spill("file", width * height, 0.0f32)
             .map_err(|e| ImportError::new(path, e.into()))?;
-        heights.as_mut_slice().copy_from_slice(&grid.heights);
+        // Windows of the file go straight to the spill, its pages dropped
+        // behind each one: no file is ever whole in memory.
+        let releaser = heights.releaser();
+        opened
+            .read_into(heights.as_mut_slice(), window::WINDOW_BYTES, &mut || releaser.release())?;
         heights.release();
-        let decoded = Decoded { footprint: Footprint::of(&grid), heights };
-        drop(grid);
+        let decoded = Decoded { footprint, heights };
         let same_spacing =
             |g: &Vec<Decoded>| same_spacing(&g[0].footprint.georef, &decoded.footprint.georef);
         match groups.iter_mut().position(|g| same_spacing(g)) {
@@ -126,26 +134,57 @@ fn spill_layer(
     let rects: Vec<[u32; 4]> = footprints
         .iter()
         .zip(&plan.offsets)
-        .map(|(f, o)| [o[0], o[1], o[0] + f.size[0], o[1] + f.size[1]])
+        .flat_map(|(f, o)| pieces([o[0], o[1], o[0] + f.size[0], o[1] + f.size[1]]))
         .collect();
     fill_voids(&mut layer, &rects, progress)?;
     close_global(layer, scratch)
 }
 
+/// Largest side, in posts, of the piece of a file whose voids are filled
+/// at once: a larger file (a world grid) is filled piece by piece, each
+/// with [`FILL_HALO`] around it, like the files of a mosaic, so the fill's
+/// scratch (about 14 bytes a post of the piece and its halo, some 90 MB)
+/// does not grow with the file.
+pub const FILL_PIECE: u32 = 2048;
+
+/// `rect` (`[x0, y0, x1, y1)` in posts) cut into pieces of at most
+/// [`FILL_PIECE`] a side.
+fn pieces(rect: [u32; 4]) -> Vec<[u32; 4]> {
+    let starts = |from: u32, to: u32| (from..to).step_by(FILL_PIECE as usize);
+    let mut out = Vec::new();
+    for y in starts(rect[1], rect[3]) {
+        for x in starts(rect[0], rect[2]) {
+            out.push([x, y, (x + FILL_PIECE).min(rect[2]), (y + FILL_PIECE).min(rect[3])]);
+        }
+    }
+    out
+}
+
 /// Copies a file's heights into the layer at `offset`, keeping heights
-/// already there (the first file given wins).
+/// already there (the first file given wins), [`PASTE_ROWS`] rows at a
+/// time, dropping the layer's pages behind each band: a file's rows lie a
+/// whole layer row apart, so pasting one file touched a page run per row
+/// (230 MB of a 4 x 4 tile mosaic for one tile).
 fn paste(layer: &mut Spill<f32>, width: u32, file: &Footprint, heights: &[f32], offset: [u32; 2]) {
     let (w, fw) = (width as usize, file.size[0] as usize);
-    let rows = layer.as_mut_slice()[offset[1] as usize * w..].par_chunks_mut(w);
-    rows.zip(heights.par_chunks(fw)).for_each(|(row, source)| {
-        let row = &mut row[offset[0] as usize..offset[0] as usize + fw];
-        for (to, &from) in row.iter_mut().zip(source) {
-            if to.is_nan() {
-                *to = from;
+    let releaser = layer.releaser();
+    let start = offset[1] as usize * w;
+    let layer_rows = layer.as_mut_slice()[start..].chunks_mut(w * PASTE_ROWS);
+    for (band, source) in layer_rows.zip(heights.chunks(fw * PASTE_ROWS)) {
+        band.par_chunks_mut(w).zip(source.par_chunks(fw)).for_each(|(row, source)| {
+            let row = &mut row[offset[0] as usize..offset[0] as usize + fw];
+            for (to, &from) in row.iter_mut().zip(source) {
+                if to.is_nan() {
+                    *to = from;
+                }
             }
-        }
-    });
+        });
+        releaser.release();
+    }
 }
+
+/// Rows of a file pasted between two releases of the layer's pages.
+const PASTE_ROWS: usize = 256;
 
 /// Fills the layer's small voids window by window (each file's rectangle
 /// and [`FILL_HALO`] around it), counting them; refuses a layer without
@@ -173,7 +212,7 @@ fn fill_voids(
     let one_file = rects.len() == 1;
     let mut fills: Vec<(usize, f32)> = Vec::new();
     for rect in rects {
-        // A layer of one file is filled whole, as before mosaicking.
+        // A layer of one piece is filled whole, as before mosaicking.
         let grow =
             |v: u32, by: u32, max: u32| if one_file { v } else { v.saturating_add(by).min(max) };
         let shrink = |v: u32, by: u32| if one_file { v } else { v.saturating_sub(by) };

@@ -91,7 +91,7 @@ pub fn build_streaming(
             (4 * row_bytes).div_ceil(1 << 20)
         )));
     }
-    let rows_per_band = (options.band_bytes / row_bytes).max(1) as u32;
+    let rows_per_band = (band_target(options.band_bytes) / row_bytes).max(1) as u32;
     let mut info = None;
     replace_file(
         path,
@@ -289,8 +289,21 @@ fn cut_band(
 /// nodes as `band_bytes` of area allows, at least one per core.
 fn nodes_per_step(layout: &NodeLayout, lod: u8, band_bytes: u64) -> usize {
     let area = 4 * layout.span(lod).pow(2);
-    ((band_bytes / area.max(1)) as usize).max(rayon::current_num_threads()).max(1)
+    ((band_target(band_bytes) / area.max(1)) as usize).max(rayon::current_num_threads()).max(1)
 }
+
+/// Bytes a band of nodes, and the layer pages one step of it touches, aim
+/// at: [`BAND_TARGET_BYTES`], less if `band_bytes` is smaller.
+fn band_target(band_bytes: u64) -> u64 {
+    band_bytes.min(BAND_TARGET_BYTES)
+}
+
+/// What a band aims at whatever `--memory-mb` allows. Bands bound memory;
+/// they do not batch work (one row of nodes keeps every core busy), so a
+/// larger band only makes an import hold more of its input at once: with
+/// bands of a quarter of 1024 MB, one SRTM1 tile was cut in one band and
+/// sixteen touched 256 MB of layer pages per step, twice one tile's peak.
+const BAND_TARGET_BYTES: u64 = 32 << 20;
 
 /// Bytes of the header and node table at the start of the file.
 fn header_len_of(layout: &NodeLayout) -> u64 {

@@ -1,0 +1,71 @@
+//! Windowed decoding: every importer first *opens* a file (reads and checks
+//! its header against the file's length, decodes no height), then decodes
+//! its heights a *window* at a time (a few rows, records, strips or tiles,
+//! about [`WINDOW_BYTES`] of the file) straight into a slice the caller
+//! provides: a `Vec` for the in-memory import, a memory-mapped
+//! [`crate::spill::Spill`] for the streaming one, whose pages the
+//! `window_done` callback drops. So no format holds a whole file in
+//! memory; what one window holds is the format's unit (a GeoTIFF strip or
+//! tile is decoded whole, as the `tiff` crate does).
+
+use std::path::Path;
+
+use super::error::{ImportError, Problem};
+use super::format::{self, Format};
+use super::mosaic::Footprint;
+use super::raw::{RawGrid, MAX_SAMPLES};
+use super::{ascii_grid, dted, geotiff, hgt, netcdf};
+
+/// Bytes of a file decoded per window (a multiple of any format's row
+/// stays under a few MB of decoded heights).
+pub const WINDOW_BYTES: usize = 4 << 20;
+
+/// A file whose header is read and checked, its heights not yet decoded.
+pub trait OpenedFile {
+    /// The file, its georeference and its size in posts.
+    fn footprint(&self) -> &Footprint;
+
+    /// Decodes every post into `out` (`width * height` heights, row 0
+    /// southern, voids NaN), writing each post once, about `window_bytes`
+    /// of the file (at least one row, record, strip or tile) at a time,
+    /// and calls `window_done` after every window.
+    fn read_into(
+        self: Box<Self>,
+        out: &mut [f32],
+        window_bytes: usize,
+        window_done: &mut dyn FnMut(),
+    ) -> Result<(), ImportError>;
+}
+
+/// Opens a file of any supported format: its header only.
+pub fn open(path: &Path) -> Result<Box<dyn OpenedFile>, ImportError> {
+    Ok(match format::detect(path)? {
+        Format::GeoTiff => Box::new(geotiff::open(path)?),
+        Format::Hgt => Box::new(hgt::open(path)?),
+        Format::Dted => Box::new(dted::open(path)?),
+        Format::AsciiGrid => Box::new(ascii_grid::open(path)?),
+        Format::NetCdf => Box::new(netcdf::open(path)?),
+    })
+}
+
+/// Decodes the whole of an opened file onto the heap, refusing one of
+/// more than [`MAX_SAMPLES`] posts (the streaming import,
+/// [`crate::pyramid::spilled`], takes those).
+pub fn read_whole(opened: Box<dyn OpenedFile>) -> Result<RawGrid, ImportError> {
+    let Footprint { path, georef, size: [width, height] } = opened.footprint().clone();
+    let posts = u64::from(width) * u64::from(height);
+    if posts > MAX_SAMPLES {
+        let problem = Problem::TooLargeInMemory { posts, max: MAX_SAMPLES };
+        return Err(ImportError::new(&path, problem));
+    }
+    let mut grid = RawGrid::voids(&path, width, height, georef);
+    opened.read_into(&mut grid.heights, WINDOW_BYTES, &mut || {})?;
+    grid.debug_check();
+    Ok(grid)
+}
+
+/// Rows of `row_bytes` each in a window of `window_bytes`: at least one,
+/// at most the file's `rows`.
+pub fn rows_per_window(window_bytes: usize, row_bytes: u64, rows: usize) -> usize {
+    (window_bytes as u64 / row_bytes.max(1)).clamp(1, rows.max(1) as u64) as usize
+}
