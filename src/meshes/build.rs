@@ -23,52 +23,86 @@ use crate::mesh::{Diagonal, HeightGrid, Metric, Rtin, RtinOptions};
 use crate::node::{ErrorMap, NodeId, NodeLayout, NodeSource};
 use crate::tiles::extract::forced_step;
 
-/// Builds node `id`'s error map (the node must be stored).
+/// What a node's map is built on: the level of its reference lattice and
+/// whether it is a leaf (dense).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MapPlan {
+    /// The level whose lattice the map's posts are on.
+    pub post_level: u8,
+    /// No finer node lies under the node.
+    pub leaf: bool,
+    /// The lattice is coarser than the finest data under the node.
+    pub hierarchy_leaves: bool,
+}
+
+impl MapPlan {
+    /// Node `id`'s plan (the node must be stored).
+    pub fn of(source: &dyn NodeSource, id: NodeId, options: &MeshOptions) -> MapPlan {
+        let finest = finest_stored_level(source, id);
+        let post_level = (id.level - id.level.min(options.depth)).max(finest);
+        // Half cells are drawn along the data's diagonal only on the data's
+        // own lattice (see `RtinOptions::hierarchy_leaves`).
+        MapPlan { post_level, leaf: finest == id.level, hierarchy_leaves: post_level > finest }
+    }
+}
+
+/// Builds node `id`'s error map (the node must be stored) from its own
+/// reference grid and RTIN.
 pub fn build_map(
     source: &dyn NodeSource,
     id: NodeId,
     options: &MeshOptions,
 ) -> Result<ErrorMap, MeshesError> {
-    let layout = *source.layout();
-    let finest = finest_stored_level(source, id);
-    let leaf = finest == id.level;
-    let post_level = (id.level - id.level.min(options.depth)).max(finest);
-    let reference = reference_grid(source, id, post_level)?;
+    let plan = MapPlan::of(source, id, options);
+    let reference = reference_grid(source, id, plan.post_level)?;
     let grid = HeightGrid::with_voids(reference.side, &reference.heights)
         .map_err(|e| MeshesError::Mesh { id, source: e })?;
-    // Half cells are drawn along the data's diagonal only on the data's own
-    // lattice (see `RtinOptions::hierarchy_leaves`).
-    let hierarchy_leaves = post_level > finest;
     let rtin_options = RtinOptions {
         metric: Metric::Surface,
         diagonal: Diagonal::of_node(id.x, id.y),
-        hierarchy_leaves,
+        hierarchy_leaves: plan.hierarchy_leaves,
         ..RtinOptions::default()
     };
     let rtin = Rtin::new(&grid, rtin_options).map_err(|e| MeshesError::Mesh { id, source: e })?;
+    let side = reference.side;
+    let codes: Vec<u8> =
+        (0..side * side).map(|k| error_code(rtin.error_at(k % side, k / side) as f64)).collect();
+    Ok(map_from_codes(source.layout(), id, options, plan, &reference, codes))
+}
+
+/// Node `id`'s map from its reference grid and the error code of every
+/// post of it (row-major): dense for a leaf, else the posts above the
+/// floor and those every mesh has.
+pub fn map_from_codes(
+    layout: &NodeLayout,
+    id: NodeId,
+    options: &MeshOptions,
+    plan: MapPlan,
+    reference: &ReferenceGrid,
+    codes: Vec<u8>,
+) -> ErrorMap {
+    debug_assert_eq!(codes.len(), reference.heights.len());
     let cells = reference.side - 1;
     let mut map = ErrorMap {
-        post_level,
+        post_level: plan.post_level,
         cells,
         floor_m: 0.0,
         reference_delta: reference.delta,
-        hierarchy_leaves,
+        hierarchy_leaves: plan.hierarchy_leaves,
         ..ErrorMap::default()
     };
-    let side = reference.side;
-    let code_at = |i: u32, j: u32| error_code(rtin.error_at(i, j) as f64);
-    if leaf {
-        map.codes = (0..side * side).map(|k| code_at(k % side, k / side)).collect();
+    if plan.leaf {
+        map.codes = codes;
     } else {
-        map.floor_m = options.floor_m(&layout, id.level) as f32;
-        let tile_posts = options.tile_cells << (id.level - post_level);
-        let forced = forced_step(&layout, post_level, cells, tile_posts, map.floor_m as f64);
-        keep_sparse(&mut map, &reference, &layout, forced, code_at);
+        map.floor_m = options.floor_m(layout, id.level) as f32;
+        let tile_posts = options.tile_cells << (id.level - plan.post_level);
+        let forced = forced_step(layout, plan.post_level, cells, tile_posts, map.floor_m as f64);
+        keep_sparse(&mut map, reference, layout, forced, &codes);
     }
     map.count_codes();
     map.index_rows();
     map.debug_check();
-    Ok(map)
+    map
 }
 
 /// Keeps the posts a sparse map needs: codes above the floor's, and the
@@ -78,7 +112,7 @@ fn keep_sparse(
     reference: &ReferenceGrid,
     layout: &NodeLayout,
     forced: u32,
-    code_at: impl Fn(u32, u32) -> u8,
+    codes: &[u8],
 ) {
     let side = reference.side;
     let floor_code = threshold_code(map.floor_m as f64);
@@ -86,7 +120,7 @@ fn keep_sparse(
     let spacing = [layout.spacing_m[0] * scale, layout.spacing_m[1] * scale];
     for j in 0..side {
         for i in 0..side {
-            let code = code_at(i, j);
+            let code = codes[(j * side + i) as usize];
             let on_forced = i % forced == 0 && j % forced == 0;
             if code > floor_code || on_forced {
                 map.keys.push(j * side + i);

@@ -32,9 +32,8 @@ use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use memmap2::Mmap;
-use rayon::prelude::*;
 
-use super::build::build_map;
+use super::block::{build_blocks, record_order};
 use super::{MeshOptions, MeshesError};
 use crate::mesh::code::{code_error, ALWAYS};
 use crate::node::{ErrorMap, NodeError, NodeId, NodeLayout, NodeSource};
@@ -59,9 +58,6 @@ const DENSE: u32 = 0;
 const SPARSE: u32 = 1;
 /// Bytes of the pyramid file its identity covers.
 const PYRAMID_ID_BYTES: u64 = 64 * 1024;
-/// Node reads between two releases of the source's pages: some tens of
-/// MB of a pyramid's records.
-const RELEASE_AFTER_READS: u64 = 2048;
 /// Bytes a decoded map takes beside its arrays: `above`'s 4 x 256 counts.
 const ABOVE_BYTES: u64 = 4 * 256 * 4;
 
@@ -287,35 +283,15 @@ pub fn build_store(
             let mut writer = StoreWriter::new(file, &layout);
             writer.start(&info).map_err(|e| io(temporary, e))?;
             let mut table = initial_table(source, &layout);
-            let chunk = 4 * rayon::current_num_threads().max(1);
-            let mut read = 0u64;
-            for ids in nodes.chunks(chunk) {
-                let built: Vec<Result<(u64, ErrorMap), MeshesError>> = ids
-                    .par_iter()
-                    .map(|&id| {
-                        let map = build_map(source, id, &options)?;
-                        progress.advance(1);
-                        Ok((layout.node_index(id).expect("a node of the layout"), map))
-                    })
-                    .collect();
-                for result in built {
-                    let (index, map) = result?;
-                    note_level(&mut info, nodes_level(&layout, index), &map);
-                    let entry = writer.append(index, &map).map_err(|e| io(temporary, e))?;
-                    table[index as usize] = entry;
-                }
-                // The nodes read stay mapped; memory must not grow with
-                // the pyramid. A map of level l reads up to 4^min(l, depth)
-                // nodes: release after that many reads, not every chunk (the
-                // call walks the map).
-                let depth = u32::from(options.depth);
-                read +=
-                    ids.iter().map(|id| 1u64 << (2 * u32::from(id.level).min(depth))).sum::<u64>();
-                if read >= RELEASE_AFTER_READS {
-                    source.release_pages();
-                    read = 0;
-                }
-            }
+            let mut emit = |id: NodeId, map: ErrorMap| {
+                let index = layout.node_index(id).expect("a node of the layout");
+                note_level(&mut info, id.level, &map);
+                let entry = writer.append(index, &map).map_err(|e| io(temporary, e))?;
+                table[index as usize] = entry;
+                progress.advance(1);
+                Ok(())
+            };
+            build_blocks(source, nodes, &options, &mut emit)?;
             writer.finish(&info, &table).map_err(|e| io(temporary, e))
         },
         io,
@@ -326,28 +302,21 @@ pub fn build_store(
 /// The table before any record: absent where the pyramid stores no node,
 /// not built elsewhere.
 fn initial_table(source: &dyn NodeSource, layout: &NodeLayout) -> Vec<Entry> {
-    let mut table = Vec::with_capacity(layout.node_count() as usize);
-    for level in 0..layout.levels {
-        let [nx, ny] = layout.nodes_at(level);
-        for y in 0..ny {
-            for x in 0..nx {
-                let stored = source.has_node(NodeId::new(level, x, y));
-                table.push(if stored { Entry::NOT_BUILT } else { Entry::ABSENT });
-            }
-        }
-    }
-    table
+    let stored = |id: NodeId| source.has_node(id);
+    all_nodes(layout)
+        .into_iter()
+        .map(|id| if stored(id) { Entry::NOT_BUILT } else { Entry::ABSENT })
+        .collect()
 }
 
-fn nodes_level(layout: &NodeLayout, index: u64) -> u8 {
-    let mut before = 0;
+/// Every node of the layout, in its node order.
+fn all_nodes(layout: &NodeLayout) -> Vec<NodeId> {
+    let mut ids = Vec::with_capacity(layout.node_count() as usize);
     for level in 0..layout.levels {
-        before += layout.nodes_at_count(level);
-        if index < before {
-            return level;
-        }
+        let [nx, ny] = layout.nodes_at(level);
+        ids.extend((0..ny).flat_map(|y| (0..nx).map(move |x| NodeId::new(level, x, y))));
     }
-    layout.levels - 1
+    ids
 }
 
 fn note_level(info: &mut StoreInfo, level: u8, map: &ErrorMap) {
@@ -635,11 +604,13 @@ pub fn merge_stores(
             let file = File::create(temporary).map_err(|e| io(temporary, e))?;
             let mut writer = StoreWriter::new(file, layout);
             writer.start(&info).map_err(|e| io(temporary, e))?;
-            let mut table = Vec::with_capacity(layout.node_count() as usize);
-            for index in 0..layout.node_count() {
-                let entry = merged_entry(&files, index, &mut writer)
+            let mut table = vec![Entry::ABSENT; layout.node_count() as usize];
+            let mut ids = all_nodes(layout);
+            record_order(layout, info.options.depth, &mut ids);
+            for id in ids {
+                let index = layout.node_index(id).expect("a node of the layout");
+                table[index as usize] = merged_entry(&files, index, &mut writer)
                     .map_err(|e| e.into_meshes_error(temporary))?;
-                table.push(entry);
             }
             writer.finish(&info, &table).map_err(|e| io(temporary, e))
         },
