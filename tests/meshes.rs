@@ -237,7 +237,7 @@ fn every_map_of_the_block_build_is_the_map_built_alone() {
         let bits = |h: &[f32]| h.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
         for &id in &nodes {
             let mut read = NodeData::default();
-            file.read(&layout, id, &mut read.map).expect("reads");
+            file.read(pyramid.as_ref(), id, &mut read.map).expect("reads");
             let alone = build_map(pyramid.as_ref(), id, &options).expect("builds alone");
             let what = format!("{id:?} at depth {depth}");
             assert_eq!(
@@ -250,6 +250,7 @@ fn every_map_of_the_block_build_is_the_map_built_alone() {
             assert_eq!(bits(&read.map.heights), bits(&alone.heights), "{what}");
             assert_eq!(read.map.normals, alone.normals, "{what}");
             assert_eq!(read.map.reference_delta, alone.reference_delta, "{what}");
+            assert_eq!(read.map.height_step, alone.height_step, "{what}");
             assert_eq!(read.map.floor_m, alone.floor_m, "{what}");
         }
     }
@@ -279,7 +280,7 @@ fn the_map_file_reads_back_and_refuses_damage() {
     let identity = pyramid_identity(pyramid.path()).expect("identity");
     let damaged = MapFile::open(&path, &layout, identity).expect("the header is intact");
     let before = (data.map.keys.clone(), bits(&data.map.heights));
-    let error = damaged.read(&layout, root, &mut data.map).expect_err("damage is found");
+    let error = damaged.read(pyramid.as_ref(), root, &mut data.map).expect_err("damage is found");
     assert!(matches!(error, NodeError::Corrupt { .. }), "{error}");
     assert!(error.to_string().contains(".rlm"), "{error}");
     let after = (data.map.keys.clone(), bits(&data.map.heights));

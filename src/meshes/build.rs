@@ -19,6 +19,7 @@
 use super::reference::{reference_grid, ReferenceGrid};
 use super::{MeshOptions, MeshesError};
 use crate::mesh::code::{error_code, threshold_code};
+use crate::mesh::rtin::round_up_to_f32;
 use crate::mesh::{Diagonal, HeightGrid, Metric, Rtin, RtinOptions};
 use crate::node::{ErrorMap, NodeId, NodeLayout, NodeSource};
 use crate::tiles::extract::forced_step;
@@ -97,7 +98,11 @@ pub fn map_from_codes(
         map.floor_m = options.floor_m(layout, id.level) as f32;
         let tile_posts = options.tile_cells << (id.level - plan.post_level);
         let forced = forced_step(layout, plan.post_level, cells, tile_posts, map.floor_m as f64);
-        keep_sparse(&mut map, reference, layout, forced, &codes);
+        keep_sparse(&mut map, reference, forced, &codes);
+        fill_posts(&mut map, reference, layout);
+        if id.level - plan.post_level > HEIGHTS_FROM_PYRAMID_SHIFT {
+            quantise_heights(&mut map);
+        }
     }
     map.count_codes();
     map.index_rows();
@@ -105,19 +110,24 @@ pub fn map_from_codes(
     map
 }
 
-/// Keeps the posts a sparse map needs: codes above the floor's, and the
-/// corners of the squares every mesh of the node splits to.
-fn keep_sparse(
-    map: &mut ErrorMap,
-    reference: &ReferenceGrid,
-    layout: &NodeLayout,
-    forced: u32,
-    codes: &[u8],
-) {
+/// A sparse map at most this many levels finer than its node stores no
+/// heights or normals: they are the pyramid's, and page-in reads them
+/// from the at most 4^2 nodes of its lattice under the node
+/// ([`fill_posts`]). Those maps (levels 1 and 2 over level-0 data) keep
+/// most of their posts, and their heights and normals were 60 % of the
+/// map file. Coarser maps keep few posts from many nodes: they store
+/// their heights, quantised ([`quantise_heights`]).
+pub const HEIGHTS_FROM_PYRAMID_SHIFT: u8 = 2;
+
+/// Steps a stored map's heights span: `u16` codes, the last one NaN.
+const HEIGHT_STEPS: f64 = 65_534.0;
+
+/// Keeps the posts a sparse map needs (codes above the floor's, and the
+/// corners of the squares every mesh of the node splits to) with their
+/// codes.
+fn keep_sparse(map: &mut ErrorMap, reference: &ReferenceGrid, forced: u32, codes: &[u8]) {
     let side = reference.side;
     let floor_code = threshold_code(map.floor_m as f64);
-    let scale = (1u64 << map.post_level) as f64;
-    let spacing = [layout.spacing_m[0] * scale, layout.spacing_m[1] * scale];
     for j in 0..side {
         for i in 0..side {
             let code = codes[(j * side + i) as usize];
@@ -125,11 +135,59 @@ fn keep_sparse(
             if code > floor_code || on_forced {
                 map.keys.push(j * side + i);
                 map.codes.push(code);
-                map.heights.push(reference.heights[(j * side + i) as usize]);
-                map.normals.push(reference.normal(i, j, spacing));
             }
         }
     }
+}
+
+/// Fills a sparse map's heights and normals at its keys from its
+/// reference grid: at build, and at page-in for a map that stores none.
+pub fn fill_posts(map: &mut ErrorMap, reference: &ReferenceGrid, layout: &NodeLayout) {
+    debug_assert_eq!(reference.side, map.side());
+    let side = reference.side;
+    let scale = (1u64 << map.post_level) as f64;
+    let spacing = [layout.spacing_m[0] * scale, layout.spacing_m[1] * scale];
+    map.heights.clear();
+    map.normals.clear();
+    map.heights.reserve_exact(map.keys.len());
+    map.normals.reserve_exact(map.keys.len());
+    for &key in &map.keys {
+        map.heights.push(reference.heights[key as usize]);
+        map.normals.push(reference.normal(key % side, key / side, spacing));
+    }
+}
+
+/// Rounds a map's heights to `HEIGHT_STEPS` even steps over their range
+/// (what the file stores, two bytes a post) and adds the half step to its
+/// reference delta, so every mesh's error bound covers the rounding.
+fn quantise_heights(map: &mut ErrorMap) {
+    let finite = map.heights.iter().filter(|h| h.is_finite());
+    let (lo, hi) =
+        finite.fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &h| (lo.min(h), hi.max(h)));
+    if lo > hi {
+        return; // No data: NaN is stored as is.
+    }
+    // At least 2^3 units in the last place of the largest height, so that
+    // a stored height codes back to its own step (the file round-trips).
+    let ulps = lo.abs().max(hi.abs()) as f64 * (f32::EPSILON as f64) * 8.0;
+    let step = ((hi - lo) as f64 / HEIGHT_STEPS).max(ulps).max(f32::MIN_POSITIVE as f64) as f32;
+    map.height_step = step;
+    for h in map.heights.iter_mut().filter(|h| h.is_finite()) {
+        *h = dequantise(lo, step, quantise(lo, step, *h));
+    }
+    // Half a step, and the f32 rounding of the stepped height.
+    let rounding = step as f64 / 2.0 + ulps / 8.0;
+    map.reference_delta = round_up_to_f32(map.reference_delta as f64 + rounding);
+}
+
+/// The step code of height `h` over `base` (finite, within the range).
+pub fn quantise(base: f32, step: f32, h: f32) -> u16 {
+    ((h as f64 - base as f64) / step as f64).round().clamp(0.0, HEIGHT_STEPS) as u16
+}
+
+/// The height of step code `q`.
+pub fn dequantise(base: f32, step: f32, q: u16) -> f32 {
+    (base as f64 + q as f64 * step as f64) as f32
 }
 
 /// The finest level with a node stored under node `id` (`id.level` for a

@@ -13,13 +13,11 @@
 //! table   per node of the pyramid's layout, in its node order (24 bytes):
 //!         offset u64 (u64::MAX: absent from the pyramid, u64::MAX - 1:
 //!         not built by this shard), len u32, count u32, shape u32 (the
-//!         record's kind, plus twice its cells), crc32
+//!         record's kind, plus 4 times its cells), crc32
 //!         of (node index, record)
-//! records kind u8 (0 dense, 1 sparse), post_level u8,
-//!         hierarchy_leaves u8, 0, cells u32, floor_m f32,
-//!         reference_delta f32, count u32; dense: count codes (u8);
-//!         sparse: count keys (u32), heights (f32), codes (u8), normals
-//!         ([i8; 2]); zero padding to 4 bytes
+//! records block by block (`super::block::record_order`), each as
+//!         `super::record` lays it out (format 2: compact keys, heights
+//!         quantised or read from the pyramid at page-in)
 //! ```
 //!
 //! `pyramid` is the CRC-32 of the first 64 KiB of the pyramid file (its
@@ -34,6 +32,9 @@ use std::path::{Path, PathBuf};
 use memmap2::Mmap;
 
 use super::block::{build_blocks, record_order};
+use super::build::fill_posts;
+use super::record;
+use super::reference::reference_grid;
 use super::{MeshOptions, MeshesError};
 use crate::mesh::code::{code_error, ALWAYS};
 use crate::node::{ErrorMap, NodeError, NodeId, NodeLayout, NodeSource};
@@ -46,16 +47,13 @@ compile_error!("the map file is read by casting little-endian bytes");
 pub const MAP_FILE_NAME: &str = "meshes.rlm";
 
 const MAGIC: [u8; 8] = *b"RIDGEMAP";
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
 const FIXED_LEN: usize = 48;
 /// Bytes of one level's summary in the header.
 const LEVEL_LEN: usize = 12;
 const ENTRY_LEN: usize = 24;
-const RECORD_HEAD: usize = 20;
 const ABSENT: u64 = u64::MAX;
 const NOT_BUILT: u64 = u64::MAX - 1;
-const DENSE: u32 = 0;
-const SPARSE: u32 = 1;
 /// Bytes of the pyramid file its identity covers.
 const PYRAMID_ID_BYTES: u64 = 64 * 1024;
 /// Bytes a decoded map takes beside its arrays: `above`'s 4 x 256 counts.
@@ -149,7 +147,7 @@ impl Entry {
     }
 
     fn kind(&self) -> u32 {
-        self.shape & 1
+        self.shape & 3
     }
 
     /// The heap a decoded map of this record takes, bytes: its arrays,
@@ -158,9 +156,9 @@ impl Entry {
         if !self.is_record() {
             return 0;
         }
-        let cells = (self.shape >> 1) as u64;
+        let cells = (self.shape >> 2) as u64;
         match self.kind() {
-            DENSE => self.count as u64 + ABOVE_BYTES,
+            record::DENSE => self.count as u64 + ABOVE_BYTES,
             _ => 11 * self.count as u64 + ABOVE_BYTES + 4 * (cells + 2),
         }
     }
@@ -175,77 +173,49 @@ fn record_crc(index: u64, record: &[u8]) -> u32 {
 
 /// A node's record and its entry (offset still to be set).
 fn encode_record(index: u64, map: &ErrorMap) -> (Vec<u8>, Entry) {
-    let dense = map.is_dense();
-    let count = if dense { map.codes.len() } else { map.keys.len() };
-    let mut bytes = Vec::with_capacity(RECORD_HEAD + 11 * count + 3);
-    bytes.extend_from_slice(&[u8::from(!dense), map.post_level, map.hierarchy_leaves as u8, 0]);
-    bytes.extend_from_slice(&map.cells.to_le_bytes());
-    bytes.extend_from_slice(&map.floor_m.to_le_bytes());
-    bytes.extend_from_slice(&map.reference_delta.to_le_bytes());
-    bytes.extend_from_slice(&(count as u32).to_le_bytes());
-    if !dense {
-        bytes.extend_from_slice(bytemuck::cast_slice(&map.keys));
-        bytes.extend_from_slice(bytemuck::cast_slice(&map.heights));
-    }
-    bytes.extend_from_slice(&map.codes);
-    if !dense {
-        bytes.extend_from_slice(bytemuck::cast_slice(&map.normals));
-    }
-    bytes.resize(bytes.len().next_multiple_of(4), 0);
-    let kind = if dense { DENSE } else { SPARSE };
+    let (bytes, count) = record::encode(map);
     let entry = Entry {
         offset: 0,
         len: bytes.len() as u32,
-        count: count as u32,
-        shape: kind | map.cells << 1,
+        count,
+        shape: record::kind_of(map) | map.cells << 2,
         crc: record_crc(index, &bytes),
     };
     (bytes, entry)
 }
 
-/// Decodes a record into `out`, reusing its buffers and reserving exactly
-/// (a buffer is counted at what the node needs, as the memory budget plans).
-fn decode_record(record: &[u8], entry: &Entry, out: &mut ErrorMap) -> Result<(), String> {
-    let u32_at = |k: usize| u32::from_le_bytes(record[k..k + 4].try_into().expect("4 bytes"));
-    let (kind, post_level, leaves) = (record[0] as u32, record[1], record[2] != 0);
-    let (cells, count) = (u32_at(4), u32_at(16) as usize);
-    let side = cells as u64 + 1;
-    let per_post = if kind == DENSE { 1 } else { 11 };
-    let fits = RECORD_HEAD + per_post * count <= record.len();
-    let shape = kind | cells << 1 == entry.shape
-        && count == entry.count as usize
-        && cells.is_power_of_two()
-        && cells <= 1 << 15
-        && (kind == SPARSE || count as u64 == side * side);
-    if !(fits && shape) {
-        return Err(format!("map record does not fit its entry ({entry:?})"));
+/// Decodes node `id`'s record into `out` (a fresh map), reading the heights
+/// and normals of a map that stores none from its reference grid in
+/// `source`; buffers are reserved exactly (a buffer is counted at what the
+/// node needs, as the memory budget plans).
+fn decode_record(
+    source: &dyn NodeSource,
+    id: NodeId,
+    bytes: &[u8],
+    entry: &Entry,
+    out: &mut ErrorMap,
+) -> Result<(), NodeError> {
+    let corrupt = |problem: String| NodeError::Corrupt { path: PathBuf::new(), id, problem };
+    let head = record::head(bytes);
+    if head.kind | head.cells << 2 != entry.shape || head.count != entry.count as usize {
+        return Err(corrupt(format!("map record does not fit its entry ({entry:?})")));
     }
-    out.post_level = post_level;
-    out.cells = cells;
-    out.hierarchy_leaves = leaves;
-    out.floor_m = f32::from_bits(u32_at(8));
-    out.reference_delta = f32::from_bits(u32_at(12));
-    if !(out.floor_m >= 0.0 && out.reference_delta >= 0.0) {
-        return Err("map record's floor or reference delta is not a distance".into());
+    record::decode(bytes, out).map_err(corrupt)?;
+    let layout = source.layout();
+    let lattice = out.post_level <= id.level
+        && (layout.node_size as u64) << (id.level - out.post_level) == out.cells as u64;
+    if !lattice {
+        return Err(corrupt(format!(
+            "map record's lattice of level {} does not fit",
+            out.post_level
+        )));
     }
-    let body = &record[RECORD_HEAD..];
-    if kind == DENSE {
-        out.codes = body[..count].to_vec();
-    } else {
-        let (keys, rest) = body.split_at(4 * count);
-        let (heights, rest) = rest.split_at(4 * count);
-        let (codes, rest) = rest.split_at(count);
-        out.keys = bytemuck::pod_collect_to_vec(keys);
-        out.heights = bytemuck::pod_collect_to_vec(heights);
-        out.codes = codes.to_vec();
-        out.normals = bytemuck::pod_collect_to_vec(&rest[..2 * count]);
-        let ascending = out.keys.windows(2).all(|w| w[0] < w[1]);
-        if !ascending || out.keys.last().is_some_and(|&k| k as u64 >= side * side) {
-            return Err("map record's posts are not ascending inside the node".into());
-        }
-        if out.heights.iter().any(|h| h.is_infinite()) {
-            return Err("map record has an infinite height".into());
-        }
+    if head.kind == record::FROM_PYRAMID {
+        let reference = reference_grid(source, id, out.post_level)?;
+        fill_posts(out, &reference, layout);
+    }
+    if out.heights.iter().any(|h| h.is_infinite()) {
+        return Err(corrupt("map record has an infinite height".into()));
     }
     out.count_codes();
     out.index_rows();
@@ -403,7 +373,10 @@ fn decode_header(bytes: &[u8], layout: &NodeLayout) -> Result<(StoreInfo, usize)
     let u32_at = |k: usize| u32::from_le_bytes(bytes[k..k + 4].try_into().expect("4 bytes"));
     let version = u32_at(8);
     if version != VERSION {
-        return Err(format!("map file version {version}, this build reads {VERSION}"));
+        return Err(format!(
+            "map file version {version}, this build reads {VERSION}: rebuild it (opening the \
+             pyramid with `fly` or `accuracy` rebuilds it beside it)"
+        ));
     }
     let levels = u32_at(12) as usize;
     let nodes = u64::from_le_bytes(bytes[16..24].try_into().expect("8 bytes"));
@@ -525,15 +498,17 @@ impl MapFile {
         (0..self.nodes).all(|index| self.entry(index).offset != NOT_BUILT)
     }
 
-    /// Reads node `id`'s map into `out`, reusing its buffers; a damaged
-    /// record is [`NodeError::Corrupt`] and leaves `out` as it was. A node
-    /// absent from the pyramid is [`NodeError::Absent`].
+    /// Reads node `id`'s map into `out`; a map that stores no heights
+    /// takes them from `source` (the pyramid the file belongs to). A
+    /// damaged record is [`NodeError::Corrupt`] and leaves `out` as it was.
+    /// A node absent from the pyramid is [`NodeError::Absent`].
     pub fn read(
         &self,
-        layout: &NodeLayout,
+        source: &dyn NodeSource,
         id: NodeId,
         out: &mut ErrorMap,
     ) -> Result<(), NodeError> {
+        let layout = source.layout();
         let index = layout.node_index(id).ok_or(NodeError::OutOfRange { id })?;
         let corrupt = |problem: String| NodeError::Corrupt { path: self.path.clone(), id, problem };
         let entry = self.entry(index);
@@ -548,7 +523,10 @@ impl MapFile {
         // Decoded apart, so a damaged record leaves `out` as it was; the
         // buffers are exactly the node's size (what the budget plans).
         let mut decoded = ErrorMap::default();
-        decode_record(record, &entry, &mut decoded).map_err(corrupt)?;
+        decode_record(source, id, record, &entry, &mut decoded).map_err(|e| match e {
+            NodeError::Corrupt { problem, .. } => corrupt(problem),
+            other => other,
+        })?;
         *out = decoded;
         Ok(())
     }
@@ -561,7 +539,7 @@ impl MapFile {
             return Err(format!("map record past the end of the file ({entry:?})"));
         };
         let record = &self.map[entry.offset as usize..end as usize];
-        if record.len() < RECORD_HEAD || record_crc(index, record) != entry.crc {
+        if record.len() < record::RECORD_HEAD || record_crc(index, record) != entry.crc {
             return Err("map record checksum mismatch".into());
         }
         Ok(record)
