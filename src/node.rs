@@ -297,6 +297,10 @@ pub struct ErrorMap {
     pub heights: Vec<f32>,
     /// Sparse: each kept post's data normal, x and y scaled to -127..127.
     pub normals: Vec<[i8; 2]>,
+    /// Sparse: the spacing of the heights' quantisation steps, metres (the
+    /// map file stores them so; half of it is in `reference_delta`), or 0:
+    /// the heights are the pyramid's own, read again at page-in.
+    pub height_step: f32,
     /// `above[256 q + c]`: posts of quadrant `q` (`x + 2 y`, south-west
     /// first; posts on a quadrant's north or east edge belong to the next)
     /// whose code is above `c`: what a frame budget estimates a tile's

@@ -1,12 +1,13 @@
 //! Property tests of `ridgeline::mesh` against simple models: the extracted
 //! mesh errs by at most its threshold, its triangles tile the square once
 //! with no T-junction, the delta and the mesh lookup equal brute force, and
-//! view refinement never adds triangles as tau grows.
+//! view refinement never adds triangles as tau grows, and the restricted
+//! RTIN gives every aligned square the codes of the square's own RTIN.
 
 use proptest::prelude::*;
 use ridgeline::mesh::{
-    max_post_distance, max_surface_distance, view_refine, HeightGrid, Mesh, MeshSampler, Metric,
-    Rtin, RtinOptions, ViewParams,
+    code::error_code, max_post_distance, max_surface_distance, view_refine, Diagonal, HeightGrid,
+    Mesh, MeshSampler, Metric, OwnCodes, Rtin, RtinOptions, ViewParams,
 };
 
 /// A grid of `2^k + 1` posts a side with random heights: rough noise or a
@@ -216,6 +217,49 @@ proptest! {
         prop_assert!(n_coarse <= n_fine, "{} at 2 tau > {} at tau", n_coarse, n_fine);
         prop_assert_eq!(n_fine as usize, fine.len());
         assert_tiles_and_conforms(&mesh_of(side, &fine));
+    }
+    /// The restricted RTIN against the simple model, the full RTIN of each
+    /// aligned square's own grid: the same code at every post of the square,
+    /// its edge posts included (the edge rule: a square's edge post takes
+    /// only the triangles inside the square, never the block's outside it).
+    /// Posts without data (NaN) are mixed in.
+    #[test]
+    fn restricted_rtin_equals_each_squares_own((side, mut heights) in grid(), voids in prop::collection::vec(any::<u16>(), 0..4), south_east in any::<bool>(), surface in any::<bool>()) {
+        for v in voids {
+            let k = v as usize % heights.len();
+            heights[k] = f32::NAN;
+        }
+        let grid = HeightGrid::with_voids(side, &heights).unwrap();
+        let metric = if surface { Metric::Surface } else { Metric::Posts };
+        let block_diagonal = if south_east { Diagonal::SouthEast } else { Diagonal::SouthWest };
+        let own = OwnCodes::new(&grid, block_diagonal, metric);
+        let cells = side - 1;
+        let mut size = cells;
+        let mut level = 0u32;
+        while size >= 2 {
+            for y in 0..cells / size {
+                for x in 0..cells / size {
+                    // Sub-squares keep the block's hierarchy: a block split
+                    // south-east is square (1, 0) of a grid split south-west.
+                    let shift = u32::from(south_east) << level;
+                    let diagonal = Diagonal::of_node(x + shift, y);
+                    let n = size + 1;
+                    let sub: Vec<f32> = (0..n * n)
+                        .map(|k| heights[((y * size + k / n) * side + x * size + k % n) as usize])
+                        .collect();
+                    let sub_grid = HeightGrid::with_voids(n, &sub).unwrap();
+                    let options = RtinOptions { metric, diagonal, ..RtinOptions::default() };
+                    let rtin = Rtin::new(&sub_grid, options).unwrap();
+                    let codes = own.restrict([x * size, y * size], size, diagonal);
+                    for k in 0..n * n {
+                        let expected = error_code(rtin.error_at(k % n, k / n) as f64);
+                        prop_assert_eq!(codes[k as usize], expected, "square {}x{} at ({}, {}), post {}", size, size, x, y, k);
+                    }
+                }
+            }
+            size /= 2;
+            level += 1;
+        }
     }
 }
 

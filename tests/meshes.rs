@@ -219,6 +219,43 @@ fn a_child_refines_its_parent_and_morphs_onto_its_surface() {
     }
 }
 
+/// The block build (one scan per block, each node's map cut from it)
+/// against each node's map built alone: equal for every node, at the
+/// test's depth and at one whose blocks span every level.
+#[test]
+fn every_map_of_the_block_build_is_the_map_built_alone() {
+    let dir = testkit::fresh_dir("meshes-blocks");
+    let pyramid = pyramid_in(&dir);
+    let layout = *pyramid.layout();
+    let identity = pyramid_identity(pyramid.path()).expect("identity");
+    let nodes = ridgeline::meshes::source::stored_nodes(pyramid.as_ref());
+    for depth in [2, 5] {
+        let options = MeshOptions { depth, ..OPTIONS };
+        let path = dir.join(format!("depth-{depth}.rlm"));
+        build_store(pyramid.as_ref(), identity, &nodes, options, &path, &Silent).expect("builds");
+        let file = MapFile::open(&path, &layout, identity).expect("opens");
+        let bits = |h: &[f32]| h.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        for &id in &nodes {
+            let mut read = NodeData::default();
+            file.read(pyramid.as_ref(), id, &mut read.map).expect("reads");
+            let alone = build_map(pyramid.as_ref(), id, &options).expect("builds alone");
+            let what = format!("{id:?} at depth {depth}");
+            assert_eq!(
+                (read.map.post_level, read.map.cells),
+                (alone.post_level, alone.cells),
+                "{what}"
+            );
+            assert_eq!(read.map.codes, alone.codes, "{what}");
+            assert_eq!(read.map.keys, alone.keys, "{what}");
+            assert_eq!(bits(&read.map.heights), bits(&alone.heights), "{what}");
+            assert_eq!(read.map.normals, alone.normals, "{what}");
+            assert_eq!(read.map.reference_delta, alone.reference_delta, "{what}");
+            assert_eq!(read.map.height_step, alone.height_step, "{what}");
+            assert_eq!(read.map.floor_m, alone.floor_m, "{what}");
+        }
+    }
+}
+
 #[test]
 fn the_map_file_reads_back_and_refuses_damage() {
     let dir = testkit::fresh_dir("meshes-file");
@@ -243,7 +280,7 @@ fn the_map_file_reads_back_and_refuses_damage() {
     let identity = pyramid_identity(pyramid.path()).expect("identity");
     let damaged = MapFile::open(&path, &layout, identity).expect("the header is intact");
     let before = (data.map.keys.clone(), bits(&data.map.heights));
-    let error = damaged.read(&layout, root, &mut data.map).expect_err("damage is found");
+    let error = damaged.read(pyramid.as_ref(), root, &mut data.map).expect_err("damage is found");
     assert!(matches!(error, NodeError::Corrupt { .. }), "{error}");
     assert!(error.to_string().contains(".rlm"), "{error}");
     let after = (data.map.keys.clone(), bits(&data.map.heights));

@@ -25,11 +25,19 @@ pub fn error_code(error_m: f64) -> u8 {
     }
     let steps = (CODES_PER_OCTAVE * (error_m / ERROR_UNIT_M).log2()).ceil();
     let mut code = steps.clamp(1.0, 254.0) as u8;
-    // log2 rounds: make sure the code's error is not below the bound.
-    while code < 254 && code_error(code) < error_m {
+    // log2 rounds: make sure the code's error is not below the bound (from
+    // a table: the maps code every triangle, and exp2 was a tenth of it).
+    let errors = code_errors();
+    while code < 254 && errors[code as usize] < error_m {
         code += 1;
     }
     code
+}
+
+/// [`code_error`] of every code, computed once.
+fn code_errors() -> &'static [f64; 256] {
+    static TABLE: std::sync::OnceLock<[f64; 256]> = std::sync::OnceLock::new();
+    TABLE.get_or_init(|| std::array::from_fn(|c| code_error(c as u8)))
 }
 
 /// The error a code stands for, metres (infinite for [`ALWAYS`]).

@@ -14,6 +14,7 @@
 //! | module | owns |
 //! |---|---|
 //! | [`rtin`] | the per-post error map, computed once, and `extract(max_error)` |
+//! | [`restrict`] | one block's own error codes, and every aligned square's error map read from them |
 //! | [`delta`] | the exact maximum vertical distance from a mesh to the level-0 posts under it; `height_on_mesh` |
 //! | [`mod@view_refine`] | RTIN refinement for a camera: split while error > tau D / K |
 //! | [`error`] | [`MeshError`]: why a grid or a mesh is refused |
@@ -21,12 +22,14 @@
 pub mod code;
 pub mod delta;
 pub mod error;
+pub mod restrict;
 pub mod rtin;
 mod scan;
 pub mod view_refine;
 
 pub use delta::{max_post_distance, max_surface_distance, MeshSampler};
 pub use error::MeshError;
+pub use restrict::OwnCodes;
 pub use rtin::{Diagonal, Metric, Rtin, RtinOptions};
 pub use view_refine::{view_refine, ViewParams};
 

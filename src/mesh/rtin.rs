@@ -456,23 +456,7 @@ impl Rtin {
     /// and a forced split where the boundary must keep its posts.
     fn record(&mut self, grid: &HeightGrid, t: Triangle, options: RtinOptions) {
         let corners = t.ccw();
-        let h = corners.map(|[i, j]| grid.at(i, j) as f64);
-        // Posts without data (NaN, see `HeightGrid::with_voids`): a triangle
-        // with none needs no vertex; one with some but not all is split down
-        // to half cells, so that the mesh has data exactly where the grid has.
-        let scan = scan_triangle(grid, corners, h);
-        let (mut worst, with_data, without, z) = (scan.worst, scan.with_data, scan.without, scan.z);
-        if options.metric == Metric::Surface && without == 0 {
-            for (p, q) in [(0, 1), (1, 2), (2, 0)] {
-                let crossing = anti_diagonal_crossings(grid, corners[p], h[p], corners[q], h[q]);
-                worst = worst.max(crossing);
-            }
-        }
-        let mut error = match (with_data, without) {
-            (0, _) => 0.0,
-            (_, 0) => round_up_to_f32(worst),
-            _ => f32::INFINITY,
-        };
+        let (mut error, z) = own_error(grid, t, options.metric);
         let forced = options.edge_step.is_some_and(|step| {
             t.hypotenuse_on_boundary(self.side - 1) && t.axis_hypotenuse() >= 2 * step
         });
@@ -496,6 +480,33 @@ impl Rtin {
             all[m] = all[m].union(bounds);
         }
     }
+}
+
+/// Triangle `t`'s own error, before its children's are taken in: the
+/// largest vertical distance from its plane to the posts it covers (and,
+/// with [`Metric::Surface`], to the data's cell centres its edges cross),
+/// rounded up; 0 without any post with data, infinite when it mixes posts
+/// with and without data (it is then split down to half cells, so that the
+/// mesh has data exactly where the grid has). Also the height range of its
+/// posts with data. It depends on the heights under `t` alone, so a grid
+/// holding `t` anywhere gives the same value.
+pub(crate) fn own_error(grid: &HeightGrid, t: Triangle, metric: Metric) -> (f32, [f32; 2]) {
+    let corners = t.ccw();
+    let h = corners.map(|[i, j]| grid.at(i, j) as f64);
+    let scan = scan_triangle(grid, corners, h);
+    let (mut worst, with_data, without) = (scan.worst, scan.with_data, scan.without);
+    if metric == Metric::Surface && without == 0 {
+        for (p, q) in [(0, 1), (1, 2), (2, 0)] {
+            let crossing = anti_diagonal_crossings(grid, corners[p], h[p], corners[q], h[q]);
+            worst = worst.max(crossing);
+        }
+    }
+    let error = match (with_data, without) {
+        (0, _) => 0.0,
+        (_, 0) => round_up_to_f32(worst),
+        _ => f32::INFINITY,
+    };
+    (error, scan.z)
 }
 
 /// The smallest `f32` not below `value`: error maps and the pyramid's node

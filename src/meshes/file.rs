@@ -13,13 +13,11 @@
 //! table   per node of the pyramid's layout, in its node order (24 bytes):
 //!         offset u64 (u64::MAX: absent from the pyramid, u64::MAX - 1:
 //!         not built by this shard), len u32, count u32, shape u32 (the
-//!         record's kind, plus twice its cells), crc32
+//!         record's kind, plus 4 times its cells), crc32
 //!         of (node index, record)
-//! records kind u8 (0 dense, 1 sparse), post_level u8,
-//!         hierarchy_leaves u8, 0, cells u32, floor_m f32,
-//!         reference_delta f32, count u32; dense: count codes (u8);
-//!         sparse: count keys (u32), heights (f32), codes (u8), normals
-//!         ([i8; 2]); zero padding to 4 bytes
+//! records block by block (`super::block::record_order`), each as
+//!         `super::record` lays it out (format 2: compact keys, heights
+//!         quantised or read from the pyramid at page-in)
 //! ```
 //!
 //! `pyramid` is the CRC-32 of the first 64 KiB of the pyramid file (its
@@ -32,9 +30,11 @@ use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use memmap2::Mmap;
-use rayon::prelude::*;
 
-use super::build::build_map;
+use super::block::{build_blocks, record_order};
+use super::build::fill_posts;
+use super::record;
+use super::reference::reference_grid;
 use super::{MeshOptions, MeshesError};
 use crate::mesh::code::{code_error, ALWAYS};
 use crate::node::{ErrorMap, NodeError, NodeId, NodeLayout, NodeSource};
@@ -47,21 +47,15 @@ compile_error!("the map file is read by casting little-endian bytes");
 pub const MAP_FILE_NAME: &str = "meshes.rlm";
 
 const MAGIC: [u8; 8] = *b"RIDGEMAP";
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
 const FIXED_LEN: usize = 48;
 /// Bytes of one level's summary in the header.
 const LEVEL_LEN: usize = 12;
 const ENTRY_LEN: usize = 24;
-const RECORD_HEAD: usize = 20;
 const ABSENT: u64 = u64::MAX;
 const NOT_BUILT: u64 = u64::MAX - 1;
-const DENSE: u32 = 0;
-const SPARSE: u32 = 1;
 /// Bytes of the pyramid file its identity covers.
 const PYRAMID_ID_BYTES: u64 = 64 * 1024;
-/// Node reads between two releases of the source's pages: some tens of
-/// MB of a pyramid's records.
-const RELEASE_AFTER_READS: u64 = 2048;
 /// Bytes a decoded map takes beside its arrays: `above`'s 4 x 256 counts.
 const ABOVE_BYTES: u64 = 4 * 256 * 4;
 
@@ -153,7 +147,7 @@ impl Entry {
     }
 
     fn kind(&self) -> u32 {
-        self.shape & 1
+        self.shape & 3
     }
 
     /// The heap a decoded map of this record takes, bytes: its arrays,
@@ -162,9 +156,9 @@ impl Entry {
         if !self.is_record() {
             return 0;
         }
-        let cells = (self.shape >> 1) as u64;
+        let cells = (self.shape >> 2) as u64;
         match self.kind() {
-            DENSE => self.count as u64 + ABOVE_BYTES,
+            record::DENSE => self.count as u64 + ABOVE_BYTES,
             _ => 11 * self.count as u64 + ABOVE_BYTES + 4 * (cells + 2),
         }
     }
@@ -179,77 +173,49 @@ fn record_crc(index: u64, record: &[u8]) -> u32 {
 
 /// A node's record and its entry (offset still to be set).
 fn encode_record(index: u64, map: &ErrorMap) -> (Vec<u8>, Entry) {
-    let dense = map.is_dense();
-    let count = if dense { map.codes.len() } else { map.keys.len() };
-    let mut bytes = Vec::with_capacity(RECORD_HEAD + 11 * count + 3);
-    bytes.extend_from_slice(&[u8::from(!dense), map.post_level, map.hierarchy_leaves as u8, 0]);
-    bytes.extend_from_slice(&map.cells.to_le_bytes());
-    bytes.extend_from_slice(&map.floor_m.to_le_bytes());
-    bytes.extend_from_slice(&map.reference_delta.to_le_bytes());
-    bytes.extend_from_slice(&(count as u32).to_le_bytes());
-    if !dense {
-        bytes.extend_from_slice(bytemuck::cast_slice(&map.keys));
-        bytes.extend_from_slice(bytemuck::cast_slice(&map.heights));
-    }
-    bytes.extend_from_slice(&map.codes);
-    if !dense {
-        bytes.extend_from_slice(bytemuck::cast_slice(&map.normals));
-    }
-    bytes.resize(bytes.len().next_multiple_of(4), 0);
-    let kind = if dense { DENSE } else { SPARSE };
+    let (bytes, count) = record::encode(map);
     let entry = Entry {
         offset: 0,
         len: bytes.len() as u32,
-        count: count as u32,
-        shape: kind | map.cells << 1,
+        count,
+        shape: record::kind_of(map) | map.cells << 2,
         crc: record_crc(index, &bytes),
     };
     (bytes, entry)
 }
 
-/// Decodes a record into `out`, reusing its buffers and reserving exactly
-/// (a buffer is counted at what the node needs, as the memory budget plans).
-fn decode_record(record: &[u8], entry: &Entry, out: &mut ErrorMap) -> Result<(), String> {
-    let u32_at = |k: usize| u32::from_le_bytes(record[k..k + 4].try_into().expect("4 bytes"));
-    let (kind, post_level, leaves) = (record[0] as u32, record[1], record[2] != 0);
-    let (cells, count) = (u32_at(4), u32_at(16) as usize);
-    let side = cells as u64 + 1;
-    let per_post = if kind == DENSE { 1 } else { 11 };
-    let fits = RECORD_HEAD + per_post * count <= record.len();
-    let shape = kind | cells << 1 == entry.shape
-        && count == entry.count as usize
-        && cells.is_power_of_two()
-        && cells <= 1 << 15
-        && (kind == SPARSE || count as u64 == side * side);
-    if !(fits && shape) {
-        return Err(format!("map record does not fit its entry ({entry:?})"));
+/// Decodes node `id`'s record into `out` (a fresh map), reading the heights
+/// and normals of a map that stores none from its reference grid in
+/// `source`; buffers are reserved exactly (a buffer is counted at what the
+/// node needs, as the memory budget plans).
+fn decode_record(
+    source: &dyn NodeSource,
+    id: NodeId,
+    bytes: &[u8],
+    entry: &Entry,
+    out: &mut ErrorMap,
+) -> Result<(), NodeError> {
+    let corrupt = |problem: String| NodeError::Corrupt { path: PathBuf::new(), id, problem };
+    let head = record::head(bytes);
+    if head.kind | head.cells << 2 != entry.shape || head.count != entry.count as usize {
+        return Err(corrupt(format!("map record does not fit its entry ({entry:?})")));
     }
-    out.post_level = post_level;
-    out.cells = cells;
-    out.hierarchy_leaves = leaves;
-    out.floor_m = f32::from_bits(u32_at(8));
-    out.reference_delta = f32::from_bits(u32_at(12));
-    if !(out.floor_m >= 0.0 && out.reference_delta >= 0.0) {
-        return Err("map record's floor or reference delta is not a distance".into());
+    record::decode(bytes, out).map_err(corrupt)?;
+    let layout = source.layout();
+    let lattice = out.post_level <= id.level
+        && (layout.node_size as u64) << (id.level - out.post_level) == out.cells as u64;
+    if !lattice {
+        return Err(corrupt(format!(
+            "map record's lattice of level {} does not fit",
+            out.post_level
+        )));
     }
-    let body = &record[RECORD_HEAD..];
-    if kind == DENSE {
-        out.codes = body[..count].to_vec();
-    } else {
-        let (keys, rest) = body.split_at(4 * count);
-        let (heights, rest) = rest.split_at(4 * count);
-        let (codes, rest) = rest.split_at(count);
-        out.keys = bytemuck::pod_collect_to_vec(keys);
-        out.heights = bytemuck::pod_collect_to_vec(heights);
-        out.codes = codes.to_vec();
-        out.normals = bytemuck::pod_collect_to_vec(&rest[..2 * count]);
-        let ascending = out.keys.windows(2).all(|w| w[0] < w[1]);
-        if !ascending || out.keys.last().is_some_and(|&k| k as u64 >= side * side) {
-            return Err("map record's posts are not ascending inside the node".into());
-        }
-        if out.heights.iter().any(|h| h.is_infinite()) {
-            return Err("map record has an infinite height".into());
-        }
+    if head.kind == record::FROM_PYRAMID {
+        let reference = reference_grid(source, id, out.post_level)?;
+        fill_posts(out, &reference, layout);
+    }
+    if out.heights.iter().any(|h| h.is_infinite()) {
+        return Err(corrupt("map record has an infinite height".into()));
     }
     out.count_codes();
     out.index_rows();
@@ -287,35 +253,15 @@ pub fn build_store(
             let mut writer = StoreWriter::new(file, &layout);
             writer.start(&info).map_err(|e| io(temporary, e))?;
             let mut table = initial_table(source, &layout);
-            let chunk = 4 * rayon::current_num_threads().max(1);
-            let mut read = 0u64;
-            for ids in nodes.chunks(chunk) {
-                let built: Vec<Result<(u64, ErrorMap), MeshesError>> = ids
-                    .par_iter()
-                    .map(|&id| {
-                        let map = build_map(source, id, &options)?;
-                        progress.advance(1);
-                        Ok((layout.node_index(id).expect("a node of the layout"), map))
-                    })
-                    .collect();
-                for result in built {
-                    let (index, map) = result?;
-                    note_level(&mut info, nodes_level(&layout, index), &map);
-                    let entry = writer.append(index, &map).map_err(|e| io(temporary, e))?;
-                    table[index as usize] = entry;
-                }
-                // The nodes read stay mapped; memory must not grow with
-                // the pyramid. A map of level l reads up to 4^min(l, depth)
-                // nodes: release after that many reads, not every chunk (the
-                // call walks the map).
-                let depth = u32::from(options.depth);
-                read +=
-                    ids.iter().map(|id| 1u64 << (2 * u32::from(id.level).min(depth))).sum::<u64>();
-                if read >= RELEASE_AFTER_READS {
-                    source.release_pages();
-                    read = 0;
-                }
-            }
+            let mut emit = |id: NodeId, map: ErrorMap| {
+                let index = layout.node_index(id).expect("a node of the layout");
+                note_level(&mut info, id.level, &map);
+                let entry = writer.append(index, &map).map_err(|e| io(temporary, e))?;
+                table[index as usize] = entry;
+                progress.advance(1);
+                Ok(())
+            };
+            build_blocks(source, nodes, &options, &mut emit)?;
             writer.finish(&info, &table).map_err(|e| io(temporary, e))
         },
         io,
@@ -326,28 +272,21 @@ pub fn build_store(
 /// The table before any record: absent where the pyramid stores no node,
 /// not built elsewhere.
 fn initial_table(source: &dyn NodeSource, layout: &NodeLayout) -> Vec<Entry> {
-    let mut table = Vec::with_capacity(layout.node_count() as usize);
-    for level in 0..layout.levels {
-        let [nx, ny] = layout.nodes_at(level);
-        for y in 0..ny {
-            for x in 0..nx {
-                let stored = source.has_node(NodeId::new(level, x, y));
-                table.push(if stored { Entry::NOT_BUILT } else { Entry::ABSENT });
-            }
-        }
-    }
-    table
+    let stored = |id: NodeId| source.has_node(id);
+    all_nodes(layout)
+        .into_iter()
+        .map(|id| if stored(id) { Entry::NOT_BUILT } else { Entry::ABSENT })
+        .collect()
 }
 
-fn nodes_level(layout: &NodeLayout, index: u64) -> u8 {
-    let mut before = 0;
+/// Every node of the layout, in its node order.
+fn all_nodes(layout: &NodeLayout) -> Vec<NodeId> {
+    let mut ids = Vec::with_capacity(layout.node_count() as usize);
     for level in 0..layout.levels {
-        before += layout.nodes_at_count(level);
-        if index < before {
-            return level;
-        }
+        let [nx, ny] = layout.nodes_at(level);
+        ids.extend((0..ny).flat_map(|y| (0..nx).map(move |x| NodeId::new(level, x, y))));
     }
-    layout.levels - 1
+    ids
 }
 
 fn note_level(info: &mut StoreInfo, level: u8, map: &ErrorMap) {
@@ -434,7 +373,10 @@ fn decode_header(bytes: &[u8], layout: &NodeLayout) -> Result<(StoreInfo, usize)
     let u32_at = |k: usize| u32::from_le_bytes(bytes[k..k + 4].try_into().expect("4 bytes"));
     let version = u32_at(8);
     if version != VERSION {
-        return Err(format!("map file version {version}, this build reads {VERSION}"));
+        return Err(format!(
+            "map file version {version}, this build reads {VERSION}: rebuild it (opening the \
+             pyramid with `fly` or `accuracy` rebuilds it beside it)"
+        ));
     }
     let levels = u32_at(12) as usize;
     let nodes = u64::from_le_bytes(bytes[16..24].try_into().expect("8 bytes"));
@@ -556,15 +498,17 @@ impl MapFile {
         (0..self.nodes).all(|index| self.entry(index).offset != NOT_BUILT)
     }
 
-    /// Reads node `id`'s map into `out`, reusing its buffers; a damaged
-    /// record is [`NodeError::Corrupt`] and leaves `out` as it was. A node
-    /// absent from the pyramid is [`NodeError::Absent`].
+    /// Reads node `id`'s map into `out`; a map that stores no heights
+    /// takes them from `source` (the pyramid the file belongs to). A
+    /// damaged record is [`NodeError::Corrupt`] and leaves `out` as it was.
+    /// A node absent from the pyramid is [`NodeError::Absent`].
     pub fn read(
         &self,
-        layout: &NodeLayout,
+        source: &dyn NodeSource,
         id: NodeId,
         out: &mut ErrorMap,
     ) -> Result<(), NodeError> {
+        let layout = source.layout();
         let index = layout.node_index(id).ok_or(NodeError::OutOfRange { id })?;
         let corrupt = |problem: String| NodeError::Corrupt { path: self.path.clone(), id, problem };
         let entry = self.entry(index);
@@ -579,7 +523,10 @@ impl MapFile {
         // Decoded apart, so a damaged record leaves `out` as it was; the
         // buffers are exactly the node's size (what the budget plans).
         let mut decoded = ErrorMap::default();
-        decode_record(record, &entry, &mut decoded).map_err(corrupt)?;
+        decode_record(source, id, record, &entry, &mut decoded).map_err(|e| match e {
+            NodeError::Corrupt { problem, .. } => corrupt(problem),
+            other => other,
+        })?;
         *out = decoded;
         Ok(())
     }
@@ -592,7 +539,7 @@ impl MapFile {
             return Err(format!("map record past the end of the file ({entry:?})"));
         };
         let record = &self.map[entry.offset as usize..end as usize];
-        if record.len() < RECORD_HEAD || record_crc(index, record) != entry.crc {
+        if record.len() < record::RECORD_HEAD || record_crc(index, record) != entry.crc {
             return Err("map record checksum mismatch".into());
         }
         Ok(record)
@@ -635,11 +582,13 @@ pub fn merge_stores(
             let file = File::create(temporary).map_err(|e| io(temporary, e))?;
             let mut writer = StoreWriter::new(file, layout);
             writer.start(&info).map_err(|e| io(temporary, e))?;
-            let mut table = Vec::with_capacity(layout.node_count() as usize);
-            for index in 0..layout.node_count() {
-                let entry = merged_entry(&files, index, &mut writer)
+            let mut table = vec![Entry::ABSENT; layout.node_count() as usize];
+            let mut ids = all_nodes(layout);
+            record_order(layout, info.options.depth, &mut ids);
+            for id in ids {
+                let index = layout.node_index(id).expect("a node of the layout");
+                table[index as usize] = merged_entry(&files, index, &mut writer)
                     .map_err(|e| e.into_meshes_error(temporary))?;
-                table.push(entry);
             }
             writer.finish(&info, &table).map_err(|e| io(temporary, e))
         },

@@ -17,11 +17,15 @@
 //! |---|---|
 //! | [`mod@reference`] | the best data under a node on a finer level's lattice |
 //! | [`mod@build`] | one node's error map |
+//! | [`mod@block`] | maps a block at a time: one scan of the block's triangles for every node under it |
 //! | [`mod@file`] | the map file: versioned, checksummed, memory-mapped, written atomically, built streaming and in shards |
+//! | [`mod@record`] | one node's record in the map file: compact keys, quantised or no heights |
 //! | [`mod@source`] | [`MeshedSource`]: a pyramid whose nodes come with their maps |
 
+pub mod block;
 pub mod build;
 pub mod file;
+pub mod record;
 pub mod reference;
 pub mod source;
 

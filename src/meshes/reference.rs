@@ -27,6 +27,10 @@ pub struct ReferenceGrid {
     /// reference surface may be from the best data (0 at level 0, and
     /// where a block came from an ancestor, which is the best data there).
     pub delta: f32,
+    /// Each block's delta (the reference-level nodes the node is cut
+    /// into, row-major; 0 where read from an ancestor): what a member's
+    /// grid cut from this one takes its delta from.
+    pub block_deltas: Vec<f32>,
 }
 
 /// Reads the reference grid of node `id` on the lattice of `post_level`
@@ -37,58 +41,135 @@ pub fn reference_grid(
     post_level: u8,
 ) -> Result<ReferenceGrid, NodeError> {
     debug_assert!(post_level <= id.level);
-    let layout = *source.layout();
-    let shift = id.level - post_level;
-    let blocks = 1u32 << shift;
-    let n = layout.node_size;
-    let side = n * blocks + 1;
-    let wide = side as usize + 2;
-    let mut grid = ReferenceGrid {
-        side,
-        heights: Vec::new(),
-        bordered: vec![f32::NAN; wide * wide],
-        post_level,
-        delta: 0.0,
-    };
-    let mut data = NodeData::with_capacity(&layout);
-    let mut loaded: Option<NodeId> = None;
-    for by in 0..blocks {
-        for bx in 0..blocks {
-            let block = NodeId::new(post_level, id.x * blocks + bx, id.y * blocks + by);
-            let from = stored_ancestor(source, &layout, block, id);
-            if loaded != Some(from) {
-                source.read_node(from, &mut data)?;
-                loaded = Some(from);
-            }
-            // A block read from an ancestor has no finer data (presence is
-            // hierarchical): the ancestor's surface is the best data there,
-            // so it adds no error; its own delta covers other places.
-            if from == block {
-                grid.delta = grid.delta.max(data.delta);
-            }
-            let key = TileKey::new(post_level, block.x, block.y);
-            let reader = PostReader::new(&layout, key, n, from, &data);
-            // Block posts -1..=n+1 (the outer ones only on the node's edge).
-            let first = |b: u32| if b == 0 { -1 } else { 0 };
-            let end = |b: u32| if b + 1 == blocks { n as i64 + 1 } else { n as i64 };
-            let (x0, y0) = ((bx * n) as i64 + 1, (by * n) as i64 + 1);
-            for j in first(by)..=end(by) {
-                let row = (y0 + j) as usize * wide;
-                for i in first(bx)..=end(bx) {
-                    grid.bordered[row + (x0 + i) as usize] = reader.post(i, j);
+    let mut grid = ReferenceGrid::unread(source.layout(), id, post_level);
+    grid.read_blocks(source, id, false)?;
+    grid.heights = grid.centre();
+    Ok(grid)
+}
+
+impl ReferenceGrid {
+    /// A grid of NaN for node `id` on the lattice of `post_level`.
+    fn unread(layout: &NodeLayout, id: NodeId, post_level: u8) -> ReferenceGrid {
+        let blocks = 1u32 << (id.level - post_level);
+        let side = layout.node_size * blocks + 1;
+        let wide = side as usize + 2;
+        ReferenceGrid {
+            side,
+            heights: Vec::new(),
+            bordered: vec![f32::NAN; wide * wide],
+            post_level,
+            delta: 0.0,
+            block_deltas: vec![0.0; blocks as usize * blocks as usize],
+        }
+    }
+
+    /// The grid without its border, row-major.
+    fn centre(&self) -> Vec<f32> {
+        let wide = self.side as usize + 2;
+        self.bordered
+            .chunks_exact(wide)
+            .skip(1)
+            .take(self.side as usize)
+            .flat_map(|row| &row[1..wide - 1])
+            .copied()
+            .collect()
+    }
+
+    /// Reads node `id`'s blocks (the reference-level nodes it is cut into)
+    /// into `bordered`, each from itself or its deepest stored ancestor;
+    /// later blocks win on shared edges. `frame_only`: only the blocks on
+    /// the node's edge, and only the outer two posts of the bordered grid
+    /// (what the node's own read puts there, where a larger grid cut down
+    /// holds its neighbours' posts instead).
+    fn read_blocks(
+        &mut self,
+        source: &dyn NodeSource,
+        id: NodeId,
+        frame_only: bool,
+    ) -> Result<(), NodeError> {
+        let layout = *source.layout();
+        let post_level = self.post_level;
+        let blocks = 1u32 << (id.level - post_level);
+        let n = layout.node_size;
+        let wide = self.side as usize + 2;
+        let in_frame = |k: usize| k < 2 || k + 2 >= wide;
+        let mut data = NodeData::with_capacity(&layout);
+        let mut loaded: Option<NodeId> = None;
+        for by in 0..blocks {
+            for bx in 0..blocks {
+                let edge = bx == 0 || by == 0 || bx + 1 == blocks || by + 1 == blocks;
+                if frame_only && !edge {
+                    continue;
+                }
+                let block = NodeId::new(post_level, id.x * blocks + bx, id.y * blocks + by);
+                let from = stored_ancestor(source, &layout, block, id);
+                if loaded != Some(from) {
+                    source.read_node(from, &mut data)?;
+                    loaded = Some(from);
+                }
+                // A block read from an ancestor has no finer data (presence
+                // is hierarchical): the ancestor's surface is the best data
+                // there, so it adds no error; its own delta covers other places.
+                if from == block {
+                    self.block_deltas[(by * blocks + bx) as usize] = data.delta;
+                    self.delta = self.delta.max(data.delta);
+                }
+                let key = TileKey::new(post_level, block.x, block.y);
+                let reader = PostReader::new(&layout, key, n, from, &data);
+                // Block posts -1..=n+1 (the outer ones only on the node's edge).
+                let first = |b: u32| if b == 0 { -1 } else { 0 };
+                let end = |b: u32| if b + 1 == blocks { n as i64 + 1 } else { n as i64 };
+                let (x0, y0) = ((bx * n) as i64 + 1, (by * n) as i64 + 1);
+                for j in first(by)..=end(by) {
+                    let y = (y0 + j) as usize;
+                    for i in first(bx)..=end(bx) {
+                        let x = (x0 + i) as usize;
+                        if !frame_only || in_frame(x) || in_frame(y) {
+                            self.bordered[y * wide + x] = reader.post(i, j);
+                        }
+                    }
                 }
             }
         }
+        Ok(())
     }
-    grid.heights = grid
-        .bordered
-        .chunks_exact(wide)
-        .skip(1)
-        .take(side as usize)
-        .flat_map(|row| &row[1..wide - 1])
-        .copied()
-        .collect();
-    Ok(grid)
+
+    /// The reference grid of `member`, a node under `top` (this grid's node)
+    /// on the same lattice, cut from this one: exactly what
+    /// [`reference_grid`] reads for it, with only its frame read again.
+    pub fn cut(
+        &self,
+        source: &dyn NodeSource,
+        top: NodeId,
+        member: NodeId,
+    ) -> Result<ReferenceGrid, NodeError> {
+        debug_assert!(member.level <= top.level && member.level >= self.post_level);
+        let layout = source.layout();
+        let mut grid = ReferenceGrid::unread(layout, member, self.post_level);
+        let up = top.level - member.level;
+        let posts = (layout.node_size << (member.level - self.post_level)) as usize;
+        let off = [member.x - (top.x << up), member.y - (top.y << up)].map(|v| v as usize * posts);
+        let (wide, big) = (grid.side as usize + 2, self.side as usize + 2);
+        for j in 0..wide {
+            let from = (off[1] + j) * big + off[0];
+            grid.bordered[j * wide..(j + 1) * wide]
+                .copy_from_slice(&self.bordered[from..from + wide]);
+        }
+        grid.read_blocks(source, member, true)?;
+        let blocks = 1usize << (member.level - self.post_level);
+        let (big_blocks, b0) =
+            (1usize << (top.level - self.post_level), off.map(|o| o / layout.node_size as usize));
+        grid.delta = 0.0;
+        for by in 0..blocks {
+            for bx in 0..blocks {
+                let d = self.block_deltas[(b0[1] + by) * big_blocks + b0[0] + bx];
+                grid.block_deltas[by * blocks + bx] = d;
+                grid.delta = grid.delta.max(d);
+            }
+        }
+        grid.heights = grid.centre();
+        Ok(grid)
+    }
 }
 
 /// `block` itself if the source stores it, else its deepest stored

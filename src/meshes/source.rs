@@ -118,7 +118,7 @@ impl NodeSource for MeshedSource {
     /// must hold what is drawn.
     fn read_node(&self, id: NodeId, out: &mut NodeData) -> Result<(), NodeError> {
         self.pyramid.read_node(id, out)?;
-        self.file.read(self.pyramid.layout(), id, &mut out.map)?;
+        self.file.read(self.pyramid.as_ref(), id, &mut out.map)?;
         out.delta = out.map.floor_m + out.map.reference_delta;
         for &h in out.map.heights.iter().filter(|h| h.is_finite()) {
             out.min = out.min.min(h);
