@@ -6,13 +6,19 @@
 //! `ridgeline::pyramid::layers`), writes `cache/NAME/pyramid.rlp`
 //! atomically as it goes, then each node's error map beside it
 //! (`meshes.rlm`, see `ridgeline::meshes`).
+//!
+//! `--shard K/N` builds only shard K's parts (`cache/NAME/shard-K-of-N.rlp`
+//! and `.rlm`), `--merge-shards N` merges the N shards' parts into the
+//! same two files one process writes (see `ridgeline::pyramid::shard`).
 
 use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use ridgeline::dem::GridView;
+use ridgeline::meshes::shards::{self, ShardOptions};
 use ridgeline::meshes::{MeshOptions, MeshedSource};
+use ridgeline::pyramid::shard::Shard;
 use ridgeline::pyramid::spilled::{spill_layers, SpilledLayer};
 use ridgeline::pyramid::{
     self, BuildOptions, Pyramid, StreamOptions, FILE_NAME, MAX_SYNTHETIC_SIZE,
@@ -51,11 +57,27 @@ pub struct ImportArgs {
     /// files (scale tests and benchmarks).
     #[arg(long, hide = true, conflicts_with = "files")]
     pub synthetic: Option<u32>,
+    /// Build only shard K of N (K from 0 to N-1): its part of the pyramid
+    /// and error maps, written to OUT/shard-K-of-N.rlp and .rlm. Run all N
+    /// (on any machines, in any order, each restartable), then
+    /// `--merge-shards N` with the same files and options.
+    #[arg(long, value_name = "K/N", conflicts_with = "merge_shards")]
+    pub shard: Option<Shard>,
+    /// Merge the parts of N shards in OUT into OUT/pyramid.rlp and
+    /// meshes.rlm (the bytes one process writes); give the same files and
+    /// options as the shards. The levels above the shards' split are built
+    /// here. The previous dataset stays until the merge is complete.
+    #[arg(long, value_name = "N")]
+    pub merge_shards: Option<u32>,
 }
 
 pub fn run(args: &ImportArgs) -> Result<()> {
     let existed = args.out.exists();
     let result = import(args);
+    if let Some(shard) = args.shard {
+        // Its scratch is gone by now; the directory goes if empty.
+        let _ = std::fs::remove_dir(shard_scratch(args, shard));
+    }
     if result.is_err() && !existed {
         // A failed first import leaves no empty cache directory behind;
         // `remove_dir` refuses a directory that holds anything.
@@ -64,15 +86,35 @@ pub fn run(args: &ImportArgs) -> Result<()> {
     result
 }
 
+/// Where the import's scratch goes: OUT, or for a shard OUT/.shard-K-of-N,
+/// so that a shard clears only its own stale scratch, never that of a
+/// shard running on another machine over a shared directory.
+fn scratch_parent(args: &ImportArgs) -> Result<PathBuf> {
+    let Some(shard) = args.shard else { return Ok(args.out.clone()) };
+    let dir = shard_scratch(args, shard);
+    std::fs::create_dir_all(&dir)
+        .with_context(|| format!("{}: cannot create the shard's scratch", dir.display()))?;
+    Ok(dir)
+}
+
+fn shard_scratch(args: &ImportArgs, shard: Shard) -> PathBuf {
+    args.out.join(format!(".shard-{}-of-{}", shard.index, shard.count))
+}
+
 fn import(args: &ImportArgs) -> Result<()> {
     let started = Instant::now();
     if args.memory_mb < MIN_MEMORY_MB {
         bail!("--memory-mb {}: at least {MIN_MEMORY_MB} MB is needed", args.memory_mb);
     }
+    if let Some(count) = args.merge_shards {
+        // Before the sources are read: a merge without its parts is refused at once.
+        shards::check_parts_exist(&args.out, count).context("--merge-shards")?;
+    }
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("{}: cannot create the cache", args.out.display()))?;
-    let scratch = ScratchDir::create(&args.out)
-        .with_context(|| format!("{}: cannot create the import's scratch", args.out.display()))?;
+    let scratch_in = scratch_parent(args)?;
+    let scratch = ScratchDir::create(&scratch_in)
+        .with_context(|| format!("{}: cannot create the import's scratch", scratch_in.display()))?;
     let bar = Bar::new();
     let synthetic = match args.synthetic {
         Some(size) => Some(pyramid::synthetic_grid(size).with_context(|| {
@@ -92,21 +134,55 @@ fn import(args: &ImportArgs) -> Result<()> {
         build: BuildOptions { node_size: args.node_size, border: args.border },
         band_bytes: args.memory_mb << 20 >> 2,
     };
-    let path = args.out.join(FILE_NAME);
     let release = || spilled.iter().for_each(|l| l.heights.release());
-    let info = pyramid::build_streaming(&views, &scratch, &options, &path, &release, &bar)
-        .context("building the node pyramid")?;
     let input_bytes: usize = views.iter().map(|l| l.heights.len() * 4).sum();
-    drop(views);
-    drop(spilled);
-    drop(scratch);
-    let opened = std::sync::Arc::new(Pyramid::open(&args.out)?);
-    MeshedSource::open_or_build(opened, MeshOptions::default(), &bar)
-        .context("building the error maps")?;
+    let sharded = ShardOptions { stream: options, meshes: MeshOptions::default() };
+    if let Some(shard) = args.shard {
+        let report =
+            shards::build_shard(&views, &scratch, &sharded, shard, &args.out, &release, &bar)
+                .with_context(|| format!("building shard {shard}"))?;
+        bar.finish();
+        println!(
+            "ridgeline import --shard {shard}: wrote {} and {} ({} nodes under {} of the {} nodes \
+             of level {}) in {:.1} s; merge all {} with --merge-shards {}",
+            report.paths.pyramid.display(),
+            report.paths.meshes.display(),
+            report.nodes,
+            report.split_nodes[0],
+            report.split_nodes[1],
+            report.split_level,
+            started.elapsed().as_secs_f64(),
+            shard.count,
+            shard.count
+        );
+        return Ok(());
+    }
+    let path = args.out.join(FILE_NAME);
+    let info = match args.merge_shards {
+        Some(count) => {
+            shards::merge_shards(&views, &scratch, &sharded, count, &args.out, &release, &bar)
+                .with_context(|| format!("merging {count} shards in {}", args.out.display()))?
+        }
+        None => {
+            let info = pyramid::build_streaming(&views, &scratch, &options, &path, &release, &bar)
+                .context("building the node pyramid")?;
+            drop(views);
+            drop(spilled);
+            drop(scratch);
+            let opened = std::sync::Arc::new(Pyramid::open(&args.out)?);
+            MeshedSource::open_or_build(opened, sharded.meshes, &bar)
+                .context("building the error maps")?;
+            info
+        }
+    };
     bar.finish();
     let present: u64 = info.levels.iter().map(|l| l.present).sum();
+    let command = match args.merge_shards {
+        Some(count) => format!("ridgeline import --merge-shards {count}"),
+        None => "ridgeline import".into(),
+    };
     println!(
-        "ridgeline import: wrote {} ({} layers, {} levels, {} of {} nodes stored, {:.1} MB of heights in) in {:.1} s",
+        "{command}: wrote {} ({} layers, {} levels, {} of {} nodes stored, {:.1} MB of heights in) in {:.1} s",
         path.display(),
         info.layers,
         info.layout.levels,

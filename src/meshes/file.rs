@@ -30,6 +30,7 @@ use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use memmap2::Mmap;
+use rayon::prelude::*;
 
 use super::block::{build_blocks, record_order};
 use super::build::fill_posts;
@@ -437,8 +438,9 @@ impl MapFile {
         Ok(file)
     }
 
-    /// Opens a map file or a shard's part of one, whatever its pyramid.
-    fn open_part(path: &Path, layout: &NodeLayout) -> Result<MapFile, MeshesError> {
+    /// Opens a map file or a shard's part of one, whatever its pyramid
+    /// (its header's identity is the caller's to check).
+    pub fn open_part(path: &Path, layout: &NodeLayout) -> Result<MapFile, MeshesError> {
         let io = |source| MeshesError::Io { path: path.to_path_buf(), source };
         let file = File::open(path).map_err(io)?;
         let map = map_file(&file).map_err(io)?;
@@ -491,6 +493,20 @@ impl MapFile {
     /// The path the file was opened from.
     pub fn path(&self) -> &Path {
         &self.path
+    }
+
+    /// Checks every record against its entry (bounds and checksum), in
+    /// parallel, naming the first damaged node found.
+    pub fn verify(&self) -> Result<(), MeshesError> {
+        let damaged = (0..self.nodes).into_par_iter().find_map_any(|index| {
+            let entry = self.entry(index);
+            let problem = entry.is_record().then(|| self.record(index, &entry).err()).flatten();
+            problem.map(|problem| format!("node {index}: {problem}"))
+        });
+        match damaged {
+            None => Ok(()),
+            Some(problem) => Err(MeshesError::Corrupt { path: self.path.clone(), problem }),
+        }
     }
 
     /// Whether every stored node has its map (not a shard's part).
@@ -559,12 +575,31 @@ pub fn merge_stores(
     let Some(first) = files.first() else {
         return Err(MeshesError::Options("no map file parts to merge".into()));
     };
-    let mut info = first.info.clone();
+    let pyramid = first.info.pyramid;
+    if let Some(other) = files.iter().find(|f| f.info.pyramid != pyramid) {
+        let problem = format!("built for another pyramid than {}", parts[0].display());
+        return Err(MeshesError::Corrupt { path: other.path.clone(), problem });
+    }
+    merge_parts(&files, layout, pyramid, out)
+}
+
+/// Merges opened parts of one map file (built with the same options, each
+/// node by exactly one part, their identities checked by the caller) into
+/// `out`, atomically, for the pyramid of identity `pyramid`: the same
+/// bytes a single process writes for the same nodes.
+pub fn merge_parts(
+    files: &[MapFile],
+    layout: &NodeLayout,
+    pyramid: u32,
+    out: &Path,
+) -> Result<StoreInfo, MeshesError> {
+    let Some(first) = files.first() else {
+        return Err(MeshesError::Options("no map file parts to merge".into()));
+    };
+    let mut info = StoreInfo { pyramid, ..first.info.clone() };
     for file in &files[1..] {
-        let same = file.info.pyramid == info.pyramid && file.info.options == info.options;
-        if !same {
-            let problem =
-                format!("built for another pyramid or options than {}", parts[0].display());
+        if file.info.options != info.options {
+            let problem = format!("built with other options than {}", first.path.display());
             return Err(MeshesError::Corrupt { path: file.path.clone(), problem });
         }
         for l in 0..info.floor_per_level.len() {
@@ -587,7 +622,7 @@ pub fn merge_stores(
             record_order(layout, info.options.depth, &mut ids);
             for id in ids {
                 let index = layout.node_index(id).expect("a node of the layout");
-                table[index as usize] = merged_entry(&files, index, &mut writer)
+                table[index as usize] = merged_entry(files, index, &mut writer)
                     .map_err(|e| e.into_meshes_error(temporary))?;
             }
             writer.finish(&info, &table).map_err(|e| io(temporary, e))

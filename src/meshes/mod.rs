@@ -21,16 +21,20 @@
 //! | [`mod@file`] | the map file: versioned, checksummed, memory-mapped, written atomically, built streaming and in shards |
 //! | [`mod@record`] | one node's record in the map file: compact keys, quantised or no heights |
 //! | [`mod@source`] | [`MeshedSource`]: a pyramid whose nodes come with their maps |
+//! | [`mod@shards`] | a dataset built by N shards and merged: their parts, the merge |
 
 pub mod block;
 pub mod build;
 pub mod file;
 pub mod record;
 pub mod reference;
+pub mod shards;
 pub mod source;
 
 pub use build::build_map;
-pub use file::{build_store, merge_stores, MapFile, StoreInfo, MAP_FILE_NAME};
+pub use file::{
+    build_store, merge_parts, merge_stores, pyramid_identity, MapFile, StoreInfo, MAP_FILE_NAME,
+};
 pub use source::MeshedSource;
 
 use crate::mesh::MeshError;

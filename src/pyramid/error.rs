@@ -25,6 +25,9 @@ pub enum StreamError {
     /// The memory bound is too small for one band of this input.
     #[error("memory: {0}")]
     Memory(String),
+    /// A shard's part could not be read (it names the file and node).
+    #[error(transparent)]
+    Part(crate::node::NodeError),
 }
 
 /// Why a pyramid file could not be written or opened. Every variant names

@@ -98,7 +98,7 @@ fn write_file(
 
 /// Makes the rename durable: on Unix a directory entry reaches the disk only
 /// when the directory itself is flushed.
-fn sync_dir(dir: &Path) -> std::io::Result<()> {
+pub fn sync_dir(dir: &Path) -> std::io::Result<()> {
     #[cfg(unix)]
     File::open(dir).and_then(|d| d.sync_all())?;
     #[cfg(not(unix))]
