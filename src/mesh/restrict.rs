@@ -5,7 +5,7 @@
 //!
 //! A square of the block split along [`Diagonal::of_node`] is the root of
 //! a subtree of the block's hierarchy, so its triangles are the block's.
-//! A triangle's own error ([`own_error`]) depends on the posts under it
+//! A triangle's own error (`own_error`) depends on the posts under it
 //! alone, so it is computed once per triangle of the block and kept as a
 //! code ([`error_code`] keeps order, so the code of a maximum is the
 //! maximum of the codes). What differs between the square's own map and
@@ -28,7 +28,7 @@ use super::{Diagonal, HeightGrid, Metric};
 /// Every triangle's own error code of one block's hierarchy. A post is the
 /// midpoint of at most two triangles (one each side of their shared
 /// hypotenuse): `slots[s]` holds the code of the one on side `s`
-/// ([`slot`]), 0 where none.
+/// (`slot`), 0 where none.
 #[derive(Clone, Debug)]
 pub struct OwnCodes {
     side: u32,
@@ -114,7 +114,7 @@ fn half_way(p: [u32; 2], q: [u32; 2]) -> [u32; 2] {
 impl OwnCodes {
     /// Scans every non-leaf triangle of the hierarchy of `grid` whose roots
     /// split it along `diagonal`, in parallel over the squares of
-    /// [`part_cells`], the few triangles above them after.
+    /// `part_cells`, the few triangles above them after.
     pub fn new(grid: &HeightGrid, diagonal: Diagonal, metric: Metric) -> OwnCodes {
         let (side, cells) = (grid.side(), grid.cells());
         let posts = side as usize * side as usize;

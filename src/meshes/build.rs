@@ -116,7 +116,7 @@ pub fn map_from_codes(
 /// ([`fill_posts`]). Those maps (levels 1 and 2 over level-0 data) keep
 /// most of their posts, and their heights and normals were 60 % of the
 /// map file. Coarser maps keep few posts from many nodes: they store
-/// their heights, quantised ([`quantise_heights`]).
+/// their heights, quantised (`quantise_heights`).
 pub const HEIGHTS_FROM_PYRAMID_SHIFT: u8 = 2;
 
 /// Steps a stored map's heights span: `u16` codes, the last one NaN.

@@ -12,7 +12,7 @@
 //!   ([`Split`]). A shard owns the whole subtrees under its split nodes.
 //! - **A part** holds the shard's nodes of the split level and finer, cut
 //!   from the layers (the windows they cover) with their deltas: a delta
-//!   looks only at the node's own subtree ([`super::delta`]), so they are
+//!   looks only at the node's own subtree (`pyramid::delta`), so they are
 //!   a single process's. It is a pyramid file like any other (its other
 //!   nodes absent, its statistics its own), written atomically.
 //! - **The merge** copies the parts' nodes level by level in node order
