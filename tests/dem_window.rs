@@ -6,7 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
-use ridgeline::dem::window::{open, read_whole};
+use ridgeline::dem::open::{open, read_whole};
 use testkit::dem::*;
 use tiff::encoder::{colortype, Compression, DeflateLevel, Predictor};
 

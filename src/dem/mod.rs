@@ -10,7 +10,8 @@
 //! | [`dted`] | DTED levels 0, 1, 2 |
 //! | [`ascii_grid`] | ESRI ASCII grids |
 //! | [`netcdf`] | netCDF-3 classic grids (ETOPO5); `netcdf_header`: where a variable's values start |
-//! | [`window`] | opening a file (its header) and decoding it window by window into any slice |
+//! | [`window`] | decoding an opened file window by window into any slice (the formats use it) |
+//! | [`mod@open`] | opening a file of any format (its header) and decoding one whole |
 //! | [`raw`] | the pre-fill grid with voids and the checks importers share |
 //! | [`mosaic`] | joining several files on one lattice |
 //! | [`voids`] | the documented void fill |
@@ -30,6 +31,7 @@ pub mod hgt;
 pub mod mosaic;
 pub mod netcdf;
 mod netcdf_header;
+pub mod open;
 pub mod raw;
 pub mod voids;
 pub mod window;
@@ -98,7 +100,7 @@ impl ElevationGrid {
 /// marked (at most [`raw::MAX_SAMPLES`] posts; [`window`] decodes larger
 /// ones into spills).
 pub fn read_raw(path: &Path) -> Result<RawGrid, ImportError> {
-    window::read_whole(window::open(path)?)
+    open::read_whole(open::open(path)?)
 }
 
 /// Imports one file and fills its small voids (large ones stay NaN, see

@@ -8,13 +8,12 @@
 //! memory; what one window holds is the format's unit (a GeoTIFF strip or
 //! tile is decoded whole, as the `tiff` crate does).
 
-use std::path::Path;
+//! Opening a file of any format and decoding it whole are in
+//! [`super::open`], which depends on every format; this module depends on
+//! none, so the formats can use it.
 
-use super::error::{ImportError, Problem};
-use super::format::{self, Format};
+use super::error::ImportError;
 use super::mosaic::Footprint;
-use super::raw::{RawGrid, MAX_SAMPLES};
-use super::{ascii_grid, dted, geotiff, hgt, netcdf};
 
 /// Bytes of a file decoded per window (a multiple of any format's row
 /// stays under a few MB of decoded heights).
@@ -35,33 +34,6 @@ pub trait OpenedFile {
         window_bytes: usize,
         window_done: &mut dyn FnMut(),
     ) -> Result<(), ImportError>;
-}
-
-/// Opens a file of any supported format: its header only.
-pub fn open(path: &Path) -> Result<Box<dyn OpenedFile>, ImportError> {
-    Ok(match format::detect(path)? {
-        Format::GeoTiff => Box::new(geotiff::open(path)?),
-        Format::Hgt => Box::new(hgt::open(path)?),
-        Format::Dted => Box::new(dted::open(path)?),
-        Format::AsciiGrid => Box::new(ascii_grid::open(path)?),
-        Format::NetCdf => Box::new(netcdf::open(path)?),
-    })
-}
-
-/// Decodes the whole of an opened file onto the heap, refusing one of
-/// more than [`MAX_SAMPLES`] posts (the streaming import,
-/// [`crate::pyramid::spilled`], takes those).
-pub fn read_whole(opened: Box<dyn OpenedFile>) -> Result<RawGrid, ImportError> {
-    let Footprint { path, georef, size: [width, height] } = opened.footprint().clone();
-    let posts = u64::from(width) * u64::from(height);
-    if posts > MAX_SAMPLES {
-        let problem = Problem::TooLargeInMemory { posts, max: MAX_SAMPLES };
-        return Err(ImportError::new(&path, problem));
-    }
-    let mut grid = RawGrid::voids(&path, width, height, georef);
-    opened.read_into(&mut grid.heights, WINDOW_BYTES, &mut || {})?;
-    grid.debug_check();
-    Ok(grid)
 }
 
 /// Rows of `row_bytes` each in a window of `window_bytes`: at least one,

@@ -76,7 +76,7 @@ pub fn spill_layers(
     let mut groups: Vec<Vec<Decoded>> = Vec::new();
     progress.phase("reading files", paths.len() as u64);
     for path in paths {
-        let opened = window::open(path)?;
+        let opened = crate::dem::open::open(path)?;
         let footprint = opened.footprint().clone();
         if let Some(first) = groups.first().and_then(|g| g.first()) {
             let first = &first.footprint;
