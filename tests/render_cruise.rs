@@ -15,12 +15,11 @@
 
 use std::sync::Arc;
 
-use glam::{DVec2, DVec3};
+use glam::DVec3;
 use ridgeline::accuracy::TrueCamera;
 use ridgeline::camera::Camera;
 use ridgeline::dem::ElevationGrid;
 use ridgeline::display::{DisplayConfig, DisplayParts};
-use ridgeline::earth::ellipsoid::{A, B};
 use ridgeline::earth::GridPlacement;
 use ridgeline::geo::{Crs, GeoRef};
 use ridgeline::gl::{GlBackend, GlesVersion};
@@ -59,17 +58,6 @@ fn globe() -> Arc<Pyramid> {
     let dir = testkit::fresh_dir("cruise-globe");
     testkit::pyramid::build_and_write(&grid, BuildOptions::default(), &dir);
     Arc::new(Pyramid::open(&dir).expect("the globe's pyramid"))
-}
-
-/// The topmost row whose pixel-centre ray meets the ellipsoid, in `column`.
-fn geometric_horizon_row(eye: &TrueCamera, column: u32) -> Option<u32> {
-    let scale = DVec3::new(1.0 / A, 1.0 / A, 1.0 / B);
-    let p = eye.eye * scale;
-    (0..VIEWPORT[1]).find(|&row| {
-        let d = eye.ray(DVec2::new(column as f64 + 0.5, row as f64 + 0.5)) * scale;
-        let (a, b, c) = (d.length_squared(), 2.0 * p.dot(d), p.length_squared() - 1.0);
-        b < 0.0 && b * b - 4.0 * a * c >= 0.0
-    })
 }
 
 /// Pixels below the geometric horizon that show the no-data hatching,
@@ -111,7 +99,8 @@ fn hatching_below_horizon(
     let eye = TrueCamera::new(&camera, &placement);
     let (mut pixels, mut band) = (0, 0);
     for column in (4..VIEWPORT[0]).step_by(8) {
-        let horizon = geometric_horizon_row(&eye, column).expect("the earth is in view");
+        let horizon = testkit::render::geometric_horizon_row(&eye, column, VIEWPORT[1])
+            .expect("the earth is in view");
         let hatched: Vec<u32> = (horizon..VIEWPORT[1])
             .filter(|&row| is_hatching(image.get_pixel(column, row).0))
             .collect();

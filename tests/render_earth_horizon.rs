@@ -9,12 +9,11 @@
 
 use std::sync::Arc;
 
-use glam::{DVec2, DVec3};
+use glam::DVec3;
 use ridgeline::accuracy::TrueCamera;
 use ridgeline::camera::Camera;
 use ridgeline::dem::ElevationGrid;
 use ridgeline::display::{DisplayConfig, DisplayParts};
-use ridgeline::earth::ellipsoid::{A, B};
 use ridgeline::earth::GridPlacement;
 use ridgeline::geo::{Crs, GeoRef};
 use ridgeline::gl::{GlBackend, GlesVersion};
@@ -40,18 +39,6 @@ fn sea(name: &str, lat_deg: f64) -> Arc<Pyramid> {
     let dir = testkit::fresh_dir(name);
     testkit::pyramid::build_and_write(&grid, BuildOptions::default(), &dir);
     Arc::new(Pyramid::open(&dir).expect("the sea's pyramid"))
-}
-
-/// The topmost row whose pixel-centre ray meets the ellipsoid, in `column`.
-fn geometric_horizon_row(eye: &TrueCamera, column: u32) -> Option<u32> {
-    let scale = DVec3::new(1.0 / A, 1.0 / A, 1.0 / B);
-    let p = eye.eye * scale;
-    (0..VIEWPORT[1]).find(|&row| {
-        let d = eye.ray(DVec2::new(column as f64 + 0.5, row as f64 + 0.5)) * scale;
-        // |p + t d| = 1 for some t > 0: p is outside, so a real root ahead.
-        let (a, b, c) = (d.length_squared(), 2.0 * p.dot(d), p.length_squared() - 1.0);
-        b < 0.0 && b * b - 4.0 * a * c >= 0.0
-    })
 }
 
 /// The sea seen level from 10 km at its centre, heading `heading_deg`:
@@ -85,7 +72,7 @@ fn horizon_offset(pyramid: &Arc<Pyramid>, heading_deg: f64) -> u32 {
     let mut worst = 0;
     for column in (16..VIEWPORT[0]).step_by(32) {
         let drawn = (0..VIEWPORT[1]).find(|&row| image.get_pixel(column, row).0 != SENTINEL_RGBA);
-        let geometric = geometric_horizon_row(&eye, column);
+        let geometric = testkit::render::geometric_horizon_row(&eye, column, VIEWPORT[1]);
         let (Some(drawn), Some(geometric)) = (drawn, geometric) else {
             panic!("column {column}: drawn horizon {drawn:?}, geometric {geometric:?}");
         };

@@ -249,3 +249,22 @@ pub fn is_hatching([r, g, b, _]: [u8; 4]) -> bool {
     };
     near([0.22, 0.22, 0.24]) || near([0.44, 0.44, 0.48])
 }
+
+/// The topmost row of a `rows`-row viewport whose pixel-centre ray, in
+/// `column`, meets the WGS 84 ellipsoid (solved exactly, in f64, from the
+/// true camera): the geometric horizon.
+pub fn geometric_horizon_row(
+    eye: &ridgeline::accuracy::TrueCamera,
+    column: u32,
+    rows: u32,
+) -> Option<u32> {
+    use ridgeline::earth::ellipsoid::{A, B};
+    let scale = glam::DVec3::new(1.0 / A, 1.0 / A, 1.0 / B);
+    let p = eye.eye * scale;
+    (0..rows).find(|&row| {
+        let d = eye.ray(DVec2::new(column as f64 + 0.5, row as f64 + 0.5)) * scale;
+        // |p + t d| = 1 for some t > 0: p is outside, so a real root ahead.
+        let (a, b, c) = (d.length_squared(), 2.0 * p.dot(d), p.length_squared() - 1.0);
+        b < 0.0 && b * b - 4.0 * a * c >= 0.0
+    })
+}
