@@ -219,13 +219,50 @@ fn a_child_refines_its_parent_and_morphs_onto_its_surface() {
     }
 }
 
+/// A pyramid of two layers whose heights disagree by 12 m: a coarse one,
+/// and a fine one over part of it whose edges fall inside blocks, so a
+/// stored level-0 node has a neighbour read from a coarser ancestor, and
+/// the two disagree on their shared posts.
+fn layered_pyramid_in(dir: &Path) -> Arc<Pyramid> {
+    use ridgeline::dem::ElevationGrid;
+    use ridgeline::geo::{Crs, GeoRef};
+    let terrain = |x: f64, y: f64| 600.0 + 250.0 * (x / 3000.0).sin() * (y / 4100.0).cos();
+    let layer = |origin: [f64; 2], spacing: f64, posts: [u32; 2], offset: f64| {
+        let heights = (0..posts[1])
+            .flat_map(|j| (0..posts[0]).map(move |i| (i, j)))
+            .map(|(i, j)| {
+                let (x, y) = (origin[0] + i as f64 * spacing, origin[1] + j as f64 * spacing);
+                (terrain(x, y) + offset) as f32
+            })
+            .collect();
+        let crs = Crs::Projected { epsg: Some(32632) };
+        let georef = GeoRef { crs, origin, spacing: [spacing; 2] };
+        ElevationGrid { width: posts[0], height: posts[1], heights, georef, voids_filled: 0 }
+    };
+    let layers =
+        [layer([0.0, 0.0], 400.0, [40, 40], 0.0), layer([2_000.0, 3_000.0], 100.0, [61, 75], 12.0)];
+    let options = BuildOptions { node_size: 16, border: 2 };
+    let built = pyramid::build_layers(&layers, &options, &Silent).expect("build the layers");
+    pyramid::write_atomic(&built, &dir.join(pyramid::FILE_NAME), &Silent).expect("write");
+    Arc::new(Pyramid::open(dir).expect("open"))
+}
+
 /// The block build (one scan per block, each node's map cut from it)
 /// against each node's map built alone: equal for every node, at the
-/// test's depth and at one whose blocks span every level.
+/// test's depth and at one whose blocks span every level, on one grid and
+/// on two layers (where a stored node's neighbour comes from an ancestor:
+/// a shard builds alone what one process cuts from a block, and both must
+/// write the same bytes).
 #[test]
 fn every_map_of_the_block_build_is_the_map_built_alone() {
     let dir = testkit::fresh_dir("meshes-blocks");
-    let pyramid = pyramid_in(&dir);
+    the_block_build_is_each_map_built_alone(&dir, &pyramid_in(&dir));
+    let layered = dir.join("layered");
+    std::fs::create_dir_all(&layered).expect("a directory");
+    the_block_build_is_each_map_built_alone(&layered, &layered_pyramid_in(&layered));
+}
+
+fn the_block_build_is_each_map_built_alone(dir: &Path, pyramid: &Arc<Pyramid>) {
     let layout = *pyramid.layout();
     let identity = pyramid_identity(pyramid.path()).expect("identity");
     let nodes = ridgeline::meshes::source::stored_nodes(pyramid.as_ref());

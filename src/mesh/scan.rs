@@ -27,10 +27,15 @@ pub struct TriangleScan {
 /// its edges run along the axes or the diagonals) against the plane through
 /// its corner heights `h`.
 pub fn scan_triangle(grid: &HeightGrid, corners: [[u32; 2]; 3], h: [f64; 3]) -> TriangleScan {
-    let v = corners.map(|c| [c[0] as i64, c[1] as i64]);
-    let x_lo = v.iter().map(|p| p[0]).min().unwrap_or(0);
+    // Coordinates relative to the triangle's south-west bound: the same
+    // triangle anywhere in any grid scans with the same arithmetic, so a
+    // block's scan and a node's own scan round alike (issue 21: a shard
+    // builds a node alone that one process cuts from its block, and both
+    // must write the same bytes).
+    let sw = [0, 1].map(|a| corners.iter().map(|c| c[a]).min().unwrap_or(0));
+    let v = corners.map(|c| [(c[0] - sw[0]) as i64, (c[1] - sw[1]) as i64]);
+    let (x_lo, y0) = (0, 0);
     let x_hi = v.iter().map(|p| p[0]).max().unwrap_or(0);
-    let y0 = v.iter().map(|p| p[1]).min().unwrap_or(0);
     let y1 = v.iter().map(|p| p[1]).max().unwrap_or(0);
     if x_hi - x_lo <= 2 && y1 - y0 <= 2 {
         return scan_small(grid, corners, h);
@@ -65,7 +70,8 @@ pub fn scan_triangle(grid: &HeightGrid, corners: [[u32; 2]; 3], h: [f64; 3]) -> 
     for y in y0..=y1 {
         let Some((first, last)) = row_span(&edges, y, x_lo, x_hi) else { continue };
         let plane = (0..3).map(|k| weight(k, first, y) * h[k]).sum::<f64>() / area2;
-        let row = &heights[y as usize * side..][first as usize..=last as usize];
+        let (first_x, row_y) = (first as usize + sw[0] as usize, y as usize + sw[1] as usize);
+        let row = &heights[row_y * side..][first_x..=first_x + (last - first) as usize];
         scan_row(row, plane, slope_x, &mut scan);
     }
     scan

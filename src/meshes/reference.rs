@@ -91,18 +91,25 @@ impl ReferenceGrid {
         let post_level = self.post_level;
         let blocks = 1u32 << (id.level - post_level);
         let n = layout.node_size;
-        let wide = self.side as usize + 2;
-        let in_frame = |k: usize| k < 2 || k + 2 >= wide;
         let mut data = NodeData::with_capacity(&layout);
         let mut loaded: Option<NodeId> = None;
-        for by in 0..blocks {
-            for bx in 0..blocks {
+        // Blocks read from an ancestor first, the stored ones after: on an
+        // edge shared with a stored block the stored (finer) posts win,
+        // whatever the order, as best available asks. So a node's own read
+        // and its cut from a larger grid put the same posts there (its
+        // neighbour may be stored in one and not in the other: a shard's
+        // part lacks the nodes of the other shards).
+        for stored_pass in [false, true] {
+            for (bx, by) in (0..blocks).flat_map(|y| (0..blocks).map(move |x| (x, y))) {
                 let edge = bx == 0 || by == 0 || bx + 1 == blocks || by + 1 == blocks;
                 if frame_only && !edge {
                     continue;
                 }
                 let block = NodeId::new(post_level, id.x * blocks + bx, id.y * blocks + by);
                 let from = stored_ancestor(source, &layout, block, id);
+                if (from == block) != stored_pass {
+                    continue;
+                }
                 if loaded != Some(from) {
                     source.read_node(from, &mut data)?;
                     loaded = Some(from);
@@ -114,24 +121,44 @@ impl ReferenceGrid {
                     self.block_deltas[(by * blocks + bx) as usize] = data.delta;
                     self.delta = self.delta.max(data.delta);
                 }
-                let key = TileKey::new(post_level, block.x, block.y);
-                let reader = PostReader::new(&layout, key, n, from, &data);
-                // Block posts -1..=n+1 (the outer ones only on the node's edge).
-                let first = |b: u32| if b == 0 { -1 } else { 0 };
-                let end = |b: u32| if b + 1 == blocks { n as i64 + 1 } else { n as i64 };
-                let (x0, y0) = ((bx * n) as i64 + 1, (by * n) as i64 + 1);
-                for j in first(by)..=end(by) {
-                    let y = (y0 + j) as usize;
-                    for i in first(bx)..=end(bx) {
-                        let x = (x0 + i) as usize;
-                        if !frame_only || in_frame(x) || in_frame(y) {
-                            self.bordered[y * wide + x] = reader.post(i, j);
-                        }
-                    }
-                }
+                let reader = PostReader::new(
+                    &layout,
+                    TileKey::new(post_level, block.x, block.y),
+                    n,
+                    from,
+                    &data,
+                );
+                self.put_block(&reader, [bx, by], [n, blocks], frame_only);
             }
         }
         Ok(())
+    }
+
+    /// Writes block `[bx, by]`'s posts 0..=n (and -1, n+1 on the node's
+    /// edge) from `reader`, `blocks` a side; `frame_only`: only the outer
+    /// two posts.
+    fn put_block(
+        &mut self,
+        reader: &PostReader,
+        [bx, by]: [u32; 2],
+        [n, blocks]: [u32; 2],
+        frame_only: bool,
+    ) {
+        let n = n as i64;
+        let wide = self.side as usize + 2;
+        let in_frame = |k: usize| k < 2 || k + 2 >= wide;
+        let first = |b: u32| if b == 0 { -1 } else { 0 };
+        let end = |b: u32| if b + 1 == blocks { n + 1 } else { n };
+        let (x0, y0) = (bx as i64 * n + 1, by as i64 * n + 1);
+        for j in first(by)..=end(by) {
+            let y = (y0 + j) as usize;
+            for i in first(bx)..=end(bx) {
+                let x = (x0 + i) as usize;
+                if !frame_only || in_frame(x) || in_frame(y) {
+                    self.bordered[y * wide + x] = reader.post(i, j);
+                }
+            }
+        }
     }
 
     /// The reference grid of `member`, a node under `top` (this grid's node)
