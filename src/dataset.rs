@@ -26,9 +26,6 @@ const DEFAULT_TIFF: &[u8] = include_bytes!("../assets/dem/srtm3_n39e040_1000.tif
 /// (see assets/dem/README.md).
 const DEFAULT_BASE: &[u8] = include_bytes!("../assets/dem/etopo5_e37_e44_n37_n42.nc");
 
-/// Heights of the base below this are raised to it: the sea's surface.
-pub const SEA_SURFACE_M: f32 = 0.0;
-
 /// Why a dataset cannot be opened or the built-in terrain cannot be built.
 #[derive(Debug, thiserror::Error)]
 pub enum DatasetError {
@@ -127,7 +124,7 @@ fn build_default(dir: &Path, progress: &dyn Progress) -> Result<(), DatasetError
     };
     let tile = dem::import_file(&write_source("source.tif", DEFAULT_TIFF)?)?;
     let mut base = dem::import_file(&write_source("base.nc", DEFAULT_BASE)?)?;
-    base.heights.iter_mut().filter(|h| **h < SEA_SURFACE_M).for_each(|h| *h = SEA_SURFACE_M);
+    dem::sea::raise_to_sea_surface(&mut base.heights);
     let built = pyramid::build_layers(&[tile, base], &BuildOptions::default(), progress)?;
     pyramid::write_atomic(&built, &dir.join(FILE_NAME), progress)?;
     Ok(())

@@ -196,3 +196,75 @@ fn layered_import_counts_void_posts_by_what_became_of_them() {
     let stderr = String::from_utf8_lossy(&refused.stderr);
     assert!(stderr.contains("metres.asc") && stderr.contains("coordinate system"), "{stderr}");
 }
+
+/// `--sea-surface` raises a grid's sea floor to sea level and keeps its land
+/// and its no data; without it the heights are kept as given.
+#[test]
+fn sea_surface_raises_the_sea_floor_and_keeps_land_and_no_data() {
+    let dir = fresh_dir("cli-sea");
+    let source = dir.join("coast.asc");
+    // 64 x 64 posts 900 m apart: sea floor to -3000 m in the west, land to
+    // 900 m in the east, a void too large to fill (no data) in each.
+    let mut text = String::from(
+        "ncols 64\nnrows 64\nxllcenter 0\nyllcenter 0\ncellsize 900\nnodata_value -9999\n",
+    );
+    for j in (0..64).rev() {
+        let row: Vec<String> = (0..64)
+            .map(|i| {
+                let void = (j >= 20 && j < 36) && ((4..20).contains(&i) || (44..60).contains(&i));
+                let h = -3000.0 + i as f64 * 62.0 + (j as f64 * 0.3).sin() * 40.0;
+                if void {
+                    "-9999".into()
+                } else {
+                    format!("{h:.1}")
+                }
+            })
+            .collect();
+        text.push_str(&row.join(" "));
+        text.push('\n');
+    }
+    std::fs::write(&source, text).expect("write the grid");
+    let lowest = |args: &[&str], out: &str| {
+        let cache = dir.join(out);
+        let mut all = vec!["import", source.to_str().expect("utf-8 path")];
+        all.extend_from_slice(args);
+        all.extend_from_slice(&["--node-size", "16", "--out"]);
+        let imported = ridgeline(&all, &cache);
+        assert!(imported.status.success(), "{}", String::from_utf8_lossy(&imported.stderr));
+        let info = ridgeline(&["info", "--json"], &cache);
+        let json: serde_json::Value = serde_json::from_slice(&info.stdout).expect("JSON");
+        let said = String::from_utf8_lossy(&imported.stderr).into_owned();
+        let range =
+            [&json["height_min"], &json["height_max"]].map(|v| v.as_f64().expect("a height"));
+        (range[0], range[1], said, no_data_posts(&cache))
+    };
+    let (floor, top, _, holes) = lowest(&[], "as-given");
+    assert!(holes >= 2 * 14 * 14, "both voids stay no data: {holes} posts");
+    assert!(floor < -2900.0, "kept as given: lowest {floor}");
+    let (sea, raised_top, said, raised_holes) = lowest(&["--sea-surface"], "sea");
+    assert_eq!(sea, 0.0, "the sea floor is raised to sea level");
+    assert_eq!(raised_top, top, "land is kept");
+    assert_eq!(raised_holes, holes, "no data is never raised into terrain");
+    assert!(said.contains("below sea level raised"), "{said}");
+}
+
+/// No-data posts of the level-0 nodes' centres in `cache`'s pyramid.
+fn no_data_posts(cache: &Path) -> usize {
+    use ridgeline::node::{NodeData, NodeId, NodeSource};
+    let pyramid = ridgeline::pyramid::Pyramid::open(cache).expect("open the pyramid");
+    let layout = *pyramid.layout();
+    let (side, border, n) =
+        (layout.stored_side() as usize, layout.border as usize, layout.node_size as usize);
+    let mut data = NodeData::with_capacity(&layout);
+    let [nx, ny] = layout.nodes_at(0);
+    let mut holes = 0;
+    for id in (0..ny).flat_map(|y| (0..nx).map(move |x| NodeId::new(0, x, y))) {
+        if !pyramid.has_node(id) {
+            continue;
+        }
+        pyramid.read_node(id, &mut data).expect("read a node");
+        let centre = (0..n).flat_map(|j| (0..n).map(move |i| (j + border) * side + i + border));
+        holes += centre.filter(|&k| data.heights[k].is_nan()).count();
+    }
+    holes
+}

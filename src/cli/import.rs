@@ -19,7 +19,7 @@ use ridgeline::dem::GridView;
 use ridgeline::meshes::shards::{self, ShardOptions};
 use ridgeline::meshes::{MeshOptions, MeshedSource};
 use ridgeline::pyramid::shard::Shard;
-use ridgeline::pyramid::spilled::{spill_layers, SpilledLayer};
+use ridgeline::pyramid::spilled::{raise_to_sea_surface, spill_layers, SpilledLayer};
 use ridgeline::pyramid::{
     self, BuildOptions, Pyramid, StreamOptions, FILE_NAME, MAX_SYNTHETIC_SIZE,
 };
@@ -69,6 +69,12 @@ pub struct ImportArgs {
     /// here. The previous dataset stays until the merge is complete.
     #[arg(long, value_name = "N")]
     pub merge_shards: Option<u32>,
+    /// Raise heights below sea level to it (0 m): for data that keep the
+    /// sea floor (ETOPO, GEBCO), so the sea is drawn as its surface. Land
+    /// below sea level (Dead Sea, Caspian) is then drawn at 0 m, above the
+    /// real ground. Shards and their merge must all be given it or not.
+    #[arg(long)]
+    pub sea_surface: bool,
 }
 
 pub fn run(args: &ImportArgs) -> Result<()> {
@@ -116,16 +122,23 @@ fn import(args: &ImportArgs) -> Result<()> {
     let scratch = ScratchDir::create(&scratch_in)
         .with_context(|| format!("{}: cannot create the import's scratch", scratch_in.display()))?;
     let bar = Bar::new();
-    let synthetic = match args.synthetic {
+    let mut synthetic = match args.synthetic {
         Some(size) => Some(pyramid::synthetic_grid(size).with_context(|| {
             format!("--synthetic {size}: the size must be 1..={MAX_SYNTHETIC_SIZE}")
         })?),
         None => None,
     };
-    let spilled: Vec<SpilledLayer> = match synthetic {
+    let mut spilled: Vec<SpilledLayer> = match synthetic {
         Some(_) => Vec::new(),
         None => spill_layers(&args.files, &scratch, &bar)?,
     };
+    if args.sea_surface {
+        let raised = raise_to_sea_surface(&mut spilled)
+            + synthetic
+                .as_mut()
+                .map_or(0, |g| ridgeline::dem::sea::raise_to_sea_surface(&mut g.heights));
+        eprintln!("--sea-surface: {raised} posts below sea level raised to it");
+    }
     let views: Vec<GridView> = match &synthetic {
         Some(grid) => vec![grid.view()],
         None => spilled.iter().map(SpilledLayer::view).collect(),

@@ -15,6 +15,7 @@
 //! | [`raw`] | the pre-fill grid with voids and the checks importers share |
 //! | [`mosaic`] | joining several files on one lattice |
 //! | [`voids`] | the documented void fill |
+//! | [`sea`] | heights below sea level raised to it (`import --sea-surface`) |
 //! | [`error`] | [`ImportError`]: the file and the problem |
 
 use std::path::{Path, PathBuf};
@@ -33,6 +34,7 @@ pub mod netcdf;
 mod netcdf_header;
 pub mod open;
 pub mod raw;
+pub mod sea;
 pub mod voids;
 pub mod window;
 

@@ -57,6 +57,22 @@ impl SpilledLayer {
     }
 }
 
+/// Raises every layer's heights below sea level to it
+/// ([`crate::dem::sea`]), a band of rows at a time, dropping the pages
+/// behind each; returns the posts raised.
+pub fn raise_to_sea_surface(layers: &mut [SpilledLayer]) -> u64 {
+    let mut raised = 0;
+    for layer in layers {
+        let releaser = layer.heights.releaser();
+        let band = layer.width as usize * PASTE_ROWS;
+        for rows in layer.heights.as_mut_slice().chunks_mut(band) {
+            raised += crate::dem::sea::raise_to_sea_surface(rows);
+            releaser.release();
+        }
+    }
+    raised
+}
+
 /// A decoded file waiting for its layer: its footprint and its heights.
 struct Decoded {
     footprint: Footprint,
