@@ -364,7 +364,7 @@ fn row(
         own_bytes: flight.own_bytes,
         tau_mean: mean(&|s| s.scene.bound_px),
         tau_max: late.iter().map(|s| s.scene.bound_px).fold(0.0, f64::max),
-        split_tests_made: mean(&|s| s.scene.life.fraction()),
+        split_tests_made: mean(&|s| s.scene.split_tests.fraction()),
         views_tau_max: run.tau_achieved_max_px,
         error_p50_px: run.summary.p50_px,
         error_p999_px: run.summary.p999_px,

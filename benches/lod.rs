@@ -222,7 +222,7 @@ impl FlightRow {
         FlightRow {
             frames: frames.len(),
             triangles: mean(&|s| s.scene.triangles as f64),
-            draw_calls: mean(&|s| s.draw_calls as f64),
+            draw_calls: mean(&|s| s.calls.draw_calls as f64),
             bytes_uploaded: mean(&|s| s.scene.bytes_uploaded as f64),
             transfers: mean(&|s| s.scene.transfers as f64),
             cpu_ms: mean(&|s| {

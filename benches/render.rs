@@ -251,7 +251,7 @@ impl Summary {
             truth_over_lod_triangles: spread(&|v| {
                 v.truth.triangles as f64 / v.lod.scene.triangles as f64
             }),
-            lod_draw_calls: spread(&|v| v.lod.draw_calls as f64),
+            lod_draw_calls: spread(&|v| v.lod.calls.draw_calls as f64),
             truth_draw_calls: spread(&|v| v.truth.draw_calls as f64),
             differing_pixels_percent: spread(&|v| v.differing_pixels * 100.0),
             settle_ms: spread(&|v| v.settle_ms),
@@ -312,7 +312,7 @@ fn print_cpu_table(views: &[ViewRow], live: &[FrameStats]) {
         ("tile selection", |s| s.scene.cpu_ms.select_ms),
         ("tile generation", |s| s.scene.cpu_ms.tiles_ms),
         ("draw list", |s| s.scene.cpu_ms.draw_list_ms),
-        ("tiles generated (count)", |s| s.scene.generated as f64),
+        ("tiles generated (count)", |s| s.scene.tiles_generated as f64),
     ];
     let rows: Vec<Vec<String>> = stages
         .iter()

@@ -63,7 +63,10 @@ pub fn run(out: &Path, cache: &Path, frames: u32) -> Result<PathBuf, Error> {
         pipeline.settle(&camera, 1000)?;
         let stats = pipeline.frame(&camera, &mut renderer)?;
         check_state_left(&gl, &framebuffer)?;
-        println!("t = {t:5.1} s: {} tiles, {} draw calls", stats.scene.tiles, stats.draw_calls);
+        println!(
+            "t = {t:5.1} s: {} tiles, {} draw calls",
+            stats.scene.tiles, stats.calls.draw_calls
+        );
     }
     std::fs::create_dir_all(out)?;
     let picture = out.join("frame.png");

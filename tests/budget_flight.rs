@@ -92,8 +92,8 @@ fn the_triangle_budget_holds_after_30_frames() {
             let worst = late.iter().map(|s| deviation(s).abs()).fold(0.0, f64::max);
             let taus: Vec<f64> = late.iter().map(|s| s.scene.tau_px).collect();
             let (lo, hi) = taus.iter().fold((f64::MAX, 0.0f64), |(a, b), t| (a.min(*t), b.max(*t)));
-            let fraction =
-                late.iter().map(|s| s.scene.life.fraction()).sum::<f64>() / late.len() as f64;
+            let fraction = late.iter().map(|s| s.scene.split_tests.fraction()).sum::<f64>()
+                / late.len() as f64;
             println!(
                 "{name} flight, budget {budget}: after frame {SETTLE} triangles within {:.2} % of it, \
                  tau {lo:.2}..{hi:.2} px, {:.1} % of split tests made a frame; first frames: {:?}",

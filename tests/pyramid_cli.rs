@@ -46,6 +46,8 @@ fn info_json_describes_an_imported_cache() {
         table.status.success() && text.contains("257 x 257") && text.contains("4 levels"),
         "{text}"
     );
+    // One word per concept (DESIGN.md glossary): the grid's points are posts.
+    assert!(text.contains("posts     257 x 257") && !text.contains("sample"), "{text}");
 }
 
 #[test]

@@ -45,7 +45,7 @@ fn baseline_draws_the_display_picture_and_uploads_each_tile_once() {
     assert_eq!(base.uploads, tiles, "every tile is uploaded by itself on first sight");
     assert_eq!(base.buffers, tiles);
     assert_eq!(stats.calls.upload_calls as usize, tiles, "and counted as one upload each");
-    assert_eq!(stats.draw_calls, batched_stats.draw_calls, "the same draws");
+    assert_eq!(stats.calls.draw_calls, batched_stats.calls.draw_calls, "the same draws");
     let picture = display.context.read_pixels().expect("read");
     assert!(picture == batched, "the baseline draws the same picture");
     baseline_frame(&display, &mut pipeline, &mut baseline, &first);

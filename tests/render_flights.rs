@@ -125,7 +125,7 @@ fn fly_counting_holes(
         }
         let covered =
             must_be_terrain.iter().filter(|&&t| t).count() as f64 / must_be_terrain.len() as f64;
-        frames.push(Holes { holes, covered, generated: stats.scene.generated });
+        frames.push(Holes { holes, covered, generated: stats.scene.tiles_generated });
     }
     (frames, levels, evidence)
 }

@@ -48,7 +48,7 @@ fn frames_allocate_nothing(config: SceneConfig, budget: bool) {
     let (mut generated, mut reselected) = (0, 0);
     for k in 40..120 {
         let stats = scene.frame(&path(k), terrain).unwrap();
-        generated += stats.generated;
+        generated += stats.tiles_generated;
         reselected += stats.reselected;
         // Alternate the band's target so the scene keeps selecting again.
         let target = if k % 2 == 0 { 30_000.0 } else { 90_000.0 };
@@ -70,7 +70,11 @@ fn frames_allocate_nothing(config: SceneConfig, budget: bool) {
     assert!(!budget || reselected > 0, "the band never made the scene select again");
     if budget {
         let stats = scene.frame(&still, terrain).unwrap();
-        assert!(stats.life.candidates > 0 && !stats.life.full, "{:?}", stats.life);
+        assert!(
+            stats.split_tests.candidates > 0 && !stats.split_tests.full,
+            "{:?}",
+            stats.split_tests
+        );
     }
     assert_eq!(uploaded, 0, "a still camera uploads nothing (clusters: {})", config.clusters);
     assert_eq!(

@@ -43,7 +43,12 @@ fn scripted_flight_counts_and_a_still_camera_uploads_nothing() {
         let stats = fly(&mut pipeline, &mut backend, &still).unwrap();
         let calls = stats.calls;
         assert_eq!(
-            (calls.bytes_uploaded, calls.upload_calls, stats.scene.generated, stats.nodes_loaded),
+            (
+                calls.bytes_uploaded,
+                calls.upload_calls,
+                stats.scene.tiles_generated,
+                stats.nodes_loaded
+            ),
             (0, 0, 0, 0),
             "a still camera pages and uploads nothing"
         );

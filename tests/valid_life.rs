@@ -152,7 +152,7 @@ fn fly_default(max_travel_m: Option<f64>, meshes: bool) -> Vec<(Vec<TileKey>, Li
         let camera = path.sample(t).camera(60.0, FLY_SIZE);
         let stats = pipeline.frame(&camera, &mut backend).expect("frame");
         let keys = pipeline.draw_list().tiles.iter().map(|t| t.key).collect();
-        frames.push((keys, stats.scene.life));
+        frames.push((keys, stats.scene.split_tests));
     }
     frames
 }

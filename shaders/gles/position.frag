@@ -11,17 +11,17 @@ precision mediump float;
 
 varying vec3 v_position;
 
-#ifdef VOIDS
+#ifdef NO_DATA
 // Drawn for tiles with posts without data: a triangle touching one is
-// dropped whole (v_void is above 0 everywhere inside it). Also for tiles
+// dropped whole (v_no_data is above 0 everywhere inside it). Also for tiles
 // reaching past the data's last post: they are clipped there.
-varying float v_void;
+varying float v_no_data;
 varying vec2 v_beyond;
 #endif
 
 void main() {
-#ifdef VOIDS
-    if (v_void > 0.0 || max(v_beyond.x, v_beyond.y) > 0.0) {
+#ifdef NO_DATA
+    if (v_no_data > 0.0 || max(v_beyond.x, v_beyond.y) > 0.0) {
         discard;
     }
 #endif

@@ -27,17 +27,17 @@ vec3 elevation_tint(float h) {
     return mix(c, vec3(0.93, 0.94, 0.96), clamp((h - 3600.0) / 1200.0, 0.0, 1.0));
 }
 
-#ifdef VOIDS
+#ifdef NO_DATA
 // Drawn for tiles with posts without data: a triangle touching one is
-// dropped whole (v_void is above 0 everywhere inside it). Also for tiles
+// dropped whole (v_no_data is above 0 everywhere inside it). Also for tiles
 // reaching past the data's last post: they are clipped there.
-varying float v_void;
+varying float v_no_data;
 varying vec2 v_beyond;
 #endif
 
 void main() {
-#ifdef VOIDS
-    if (v_void > 0.0 || max(v_beyond.x, v_beyond.y) > 0.0) {
+#ifdef NO_DATA
+    if (v_no_data > 0.0 || max(v_beyond.x, v_beyond.y) > 0.0) {
         discard;
     }
 #endif

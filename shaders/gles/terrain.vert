@@ -47,7 +47,7 @@ varying float v_relative_height;  // terrain height minus aircraft altitude
 varying float v_height;
 varying float v_distance;
 varying vec3 v_position;     // camera-relative, for the accuracy tool's position output
-varying float v_void;        // 1 at a post without data, 0 elsewhere (see VOIDS in the fragment shaders)
+varying float v_no_data;     // 1 at a post without data, 0 elsewhere (see NO_DATA in the fragment shaders)
 varying vec2 v_beyond;       // posts past the data's last post, east and north (clipped where above 0)
 
 // sin d and 1 - cos d: by their series below half a radian, so a small
@@ -111,7 +111,7 @@ void main() {
     // a real height nearby: its triangles are dropped, but stay small.
     bool no_data = a_height.x < -1.0e8;
     float own = no_data ? a_height.y : a_height.x;
-    v_void = no_data ? 1.0 : 0.0;
+    v_no_data = no_data ? 1.0 : 0.0;
     // Edge k hangs its skirt its share of the depth: 4-bit field k-1 of
     // tile.w (an integer below 2^16, exact in a highp float), fifteenths.
     float share = a_grid.z > 0.5 ? mod(floor(tile.w / exp2(4.0 * (a_grid.z - 1.0))), 16.0) : 0.0;

@@ -187,7 +187,7 @@ impl LodSurface {
             below_surface_m: surface - drawn_m,
             across: tiles_across(tile.key, edge, &self.sources),
             past_last_post_m: [x_m - self.last_m[0], y_m - self.last_m[1]],
-            partial: tile.voids,
+            partial: tile.no_data,
         })
     }
 

@@ -176,7 +176,7 @@ mod tests {
             byte_offset: 8,
             index_byte_offset: 8 + counts.vertex_bytes(),
             index_count: counts.indices,
-            voids: false,
+            no_data: false,
             place: crate::earth::NodePlace::default(),
             ground: None,
         };

@@ -355,68 +355,6 @@ fn write_stats(
     input: Option<&InputReport>,
 ) -> Result<()> {
     let (info, dataset, max_travel_m) = (run.info, run.dataset, run.max_travel_m);
-    let frames: Vec<serde_json::Value> = rows
-        .iter()
-        .map(|row| {
-            let s = &row.stats;
-            json!({
-                "frame": row.frame,
-                "t": row.t,
-                "tiles": s.scene.tiles,
-                "triangles": s.scene.triangles,
-                "draw_calls": s.draw_calls,
-                "attribute_pointer_changes": s.calls.attribute_pointer_changes,
-                "clusters": s.scene.clusters,
-                "clusters_made": s.scene.clusters_made,
-                "cluster_bytes_uploaded": s.scene.cluster_bytes_uploaded,
-                "cluster_windows": s.scene.cluster_windows,
-                "cluster_windows_least": s.scene.cluster_windows_least,
-                "calls": s.calls,
-                "bytes_uploaded": s.scene.bytes_uploaded,
-                "transfers": s.scene.transfers,
-                "tiles_generated": s.scene.generated,
-                "allocator_used_bytes": s.scene.allocator_used_bytes,
-                "allocator_workspace_bytes": s.scene.allocator_workspace_bytes,
-                "resident_nodes": s.resident_nodes,
-                "nodes_loaded": s.nodes_loaded,
-                "nodes_over_budget": s.nodes_over_budget,
-                "atlas_bytes": s.atlas_bytes,
-                "fallback_tiles": s.scene.fallback_tiles,
-                "bound_px": s.scene.bound_px,
-                "coarsened": s.scene.coarsened,
-                "culled": s.scene.culled,
-                "horizon_culled": s.scene.horizon_culled,
-                "tau_px": s.scene.tau_px,
-                "tau_requested_px": s.tau_requested_px,
-                "tau_loosened": s.tau_loosened(),
-                "reselected": s.scene.reselected,
-                "split_tests": {
-                    "candidates": s.scene.life.candidates,
-                    "re_evaluated": s.scene.life.re_evaluated,
-                    "fraction": s.scene.life.fraction(),
-                    "full": s.scene.life.full,
-                },
-                "cpu_ms": {
-                    "clipmap": s.clipmap_ms,
-                    "select": s.scene.cpu_ms.select_ms,
-                    "tiles": s.scene.cpu_ms.tiles_ms,
-                    "draw_list": s.scene.cpu_ms.draw_list_ms,
-                    "gl": s.gl_ms,
-                },
-                "frame_ms": s.frame_ms,
-            })
-        })
-        .zip(rows)
-        .map(|(mut frame, row)| {
-            // `pose`, `input`, `wall_time`: the record's own serde output.
-            if let (Some(frame), Ok(serde_json::Value::Object(record))) =
-                (frame.as_object_mut(), serde_json::to_value(row.record))
-            {
-                frame.extend(record);
-            }
-            frame
-        })
-        .collect();
     let report = json!({
         "backend": info.backend.name(),
         "gl_version": info.version,
@@ -436,7 +374,8 @@ fn write_stats(
         "memory": memory,
         "symbology": args.symbology.on(),
         "input": input,
-        "frames": frames,
+        // Each frame is `Row`'s serde output: `FrameStats`' own keys.
+        "frames": rows,
     });
     let path = args.out.join("stats.json");
     super::write_beside(&path, serde_json::to_string_pretty(&report)?.as_bytes())?;
@@ -481,7 +420,7 @@ fn print_summary(rows: &[Row], memory: &MemoryReport, input: Option<&InputReport
         "  tiles             mean {:.0} ({:.0} triangles, {:.0} draw calls, {:.0} clusters)",
         mean(&|s| s.scene.tiles as f64),
         mean(&|s| s.scene.triangles as f64),
-        mean(&|s| s.draw_calls as f64),
+        mean(&|s| s.calls.draw_calls as f64),
         mean(&|s| s.scene.clusters as f64)
     )?;
     writeln!(
@@ -573,9 +512,9 @@ fn write_split_tests(out: &mut String, rows: &[Row]) -> Result<()> {
     use std::fmt::Write as _;
     let n = rows.len() as f64;
     let life = |f: &dyn Fn(&ridgeline::lod::life::LifeStats) -> f64| {
-        rows.iter().map(|r| f(&r.stats.scene.life)).sum::<f64>() / n
+        rows.iter().map(|r| f(&r.stats.scene.split_tests)).sum::<f64>() / n
     };
-    let full = rows.iter().filter(|r| r.stats.scene.life.full).count();
+    let full = rows.iter().filter(|r| r.stats.scene.split_tests.full).count();
     writeln!(
         out,
         "  split tests       {:.1} of {:.1} made a frame ({:.1} % mean; valid life), {full} full re-evaluations",

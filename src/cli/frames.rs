@@ -7,10 +7,13 @@ use std::time::{SystemTime, UNIX_EPOCH};
 use ridgeline::input::{GeoPose, StaleReason};
 use ridgeline::pipeline::FrameStats;
 
-/// One row of stats.json.
+/// One row of stats.json: its keys are this struct's serde output, no
+/// other (`tests/fly_cli.rs` checks them against `FrameStats`').
 #[derive(serde::Serialize)]
 pub struct Row {
+    /// The frame's number, from 0.
     pub frame: u32,
+    /// Seconds along the flight.
     pub t: f64,
     #[serde(flatten)]
     pub stats: FrameStats,

@@ -163,15 +163,15 @@ fn table(s: &Summary) -> String {
         s.posts_no_data
     );
     line!(out, "level  nodes        stored  delta max (m)  heights (m)");
-    for (lod, level) in s.level_details.iter().enumerate() {
-        let nodes = format!("{} x {}", level.nodes[0], level.nodes[1]);
+    for (level, summary) in s.level_details.iter().enumerate() {
+        let nodes = format!("{} x {}", summary.nodes[0], summary.nodes[1]);
         line!(
             out,
-            "{lod:>5}  {nodes:<11}  {:>6}  {:>13.3}  {:.1} .. {:.1}",
-            level.present,
-            level.delta_max,
-            level.height_min,
-            level.height_max
+            "{level:>5}  {nodes:<11}  {:>6}  {:>13.3}  {:.1} .. {:.1}",
+            summary.present,
+            summary.delta_max,
+            summary.height_min,
+            summary.height_max
         );
     }
     out

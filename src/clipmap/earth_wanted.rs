@@ -65,13 +65,13 @@ impl EarthMetric {
         let eye = ellipsoid::to_ecef(lat, lon, p.z);
         let viewer =
             Viewer { post, lat, lon, eye, ground_m: view.ground_m(), dz: p.z - view.ground_m() };
-        for lod in 0..layout.levels {
-            let radius = view.load_radius_m(layout, lod);
+        for level in 0..layout.levels {
+            let radius = view.load_radius_m(layout, level);
             if viewer.dz.abs() >= radius {
                 continue;
             }
-            let span = layout.span(lod) as f64;
-            let nodes = layout.nodes_at(lod);
+            let span = layout.span(level) as f64;
+            let nodes = layout.nodes_at(level);
             let (lo, hi) = self.placement.post_window(viewer.post, radius * 1.01);
             let last_row = nodes[1] as f64 - 1.0;
             let rows = (lo[1] / span).floor().max(0.0)..=(hi[1] / span).floor().min(last_row);
@@ -80,7 +80,7 @@ impl EarthMetric {
                 self.each_column(lo[0], hi[0], span, nodes[0], |x| {
                     let distance = self.distance_m(&viewer, span, x, y);
                     if distance < radius {
-                        want(NodeId::new(lod, x as u32, y as u32), distance);
+                        want(NodeId::new(level, x as u32, y as u32), distance);
                     }
                 });
             }

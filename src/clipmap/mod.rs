@@ -602,19 +602,20 @@ impl Clipmap {
         }
     }
 
-    /// The lookup of Kühnert eq. 4.10 and 4.11 in layer `lod` of a view:
+    /// The lookup of Kühnert eq. 4.10 and 4.11 in layer `level` of a view:
     /// the best resident node covering the point at that level or coarser.
-    pub fn lookup(&self, view: ViewId, point: DVec2, lod: u8) -> Result<NodeLookup, LookupError> {
+    pub fn lookup(&self, view: ViewId, point: DVec2, level: u8) -> Result<NodeLookup, LookupError> {
         let point = self.wrapped(point);
         let outside = LookupError::OutsideData(point.x, point.y);
-        let lod = lod.min(self.layout.levels - 1);
-        let located = self.layout.locate(lod, point.x, point.y).ok_or(outside)?;
+        let level = level.min(self.layout.levels - 1);
+        let located = self.layout.locate(level, point.x, point.y).ok_or(outside)?;
         let quadtree = &self.views[view.0];
         let (x, y) = (located.id.x as i64, located.id.y as i64);
-        let entry = quadtree.entry(lod, x, y).ok_or(LookupError::OutsideView(point.x, point.y))?;
+        let entry =
+            quadtree.entry(level, x, y).ok_or(LookupError::OutsideView(point.x, point.y))?;
         debug_assert_ne!(entry, Entry::NONE, "a located node is inside the pyramid");
         let node = self.atlas.node_in(entry.slot).expect("entries name resident slots");
-        let at = self.layout.locate(entry.atlas_lod, point.x, point.y).ok_or(outside)?;
+        let at = self.layout.locate(entry.atlas_level, point.x, point.y).ok_or(outside)?;
         debug_assert_eq!(at.id, node);
         let posts = DVec2::from(at.posts) / self.layout.node_size as f64;
         Ok(NodeLookup { slot: entry.slot, node, atlas_coords: posts })
@@ -624,13 +625,13 @@ impl Clipmap {
     /// finest whose view radius holds the 3D distance from the viewer,
     /// heights approximated by the ground under the viewer at the last
     /// update.
-    pub fn quadtree_lod(&self, view: ViewId, point: DVec2) -> u8 {
+    pub fn quadtree_level(&self, view: ViewId, point: DVec2) -> u8 {
         let quadtree = &self.views[view.0];
         let p = quadtree.position();
         let dz = p.z - quadtree.ground_m();
         let distance = (point.distance_squared(p.truncate()) + dz * dz).sqrt();
         (0..self.layout.levels)
-            .find(|&lod| distance < quadtree.view_radius_m(&self.layout, lod))
+            .find(|&level| distance < quadtree.view_radius_m(&self.layout, level))
             .unwrap_or(self.layout.levels - 1)
     }
 
@@ -641,12 +642,12 @@ impl Clipmap {
     pub fn height_at(&self, view: ViewId, point: DVec2) -> Result<HeightSample, LookupError> {
         let point = self.wrapped(point);
         let quadtree = &self.views[view.0];
-        for lod in 0..self.layout.levels {
-            let Some(located) = self.layout.locate(lod, point.x, point.y) else {
+        for level in 0..self.layout.levels {
+            let Some(located) = self.layout.locate(level, point.x, point.y) else {
                 return Err(LookupError::OutsideData(point.x, point.y));
             };
-            if quadtree.in_window(lod, located.id.x as i64, located.id.y as i64) {
-                let found = self.lookup(view, point, lod)?;
+            if quadtree.in_window(level, located.id.x as i64, located.id.y as i64) {
+                let found = self.lookup(view, point, level)?;
                 let data = self.atlas.data(found.slot);
                 let posts = (found.atlas_coords * self.layout.node_size as f64).to_array();
                 let height_m = data.interpolate(&self.layout, posts);

@@ -1,4 +1,4 @@
-//! The clipped quadtree of one view (Kühnert 4.5.1, 4.5.3): `lod_count`
+//! The clipped quadtree of one view (Kühnert 4.5.1, 4.5.3): `levels`
 //! layers of `node_count x node_count` entries, each layer a window of nodes
 //! of its level centred under the viewer and aligned to that level's node
 //! size, addressed toroidally (eq. 4.10) so an entry keeps its place while the
@@ -12,18 +12,18 @@ use super::atlas::NodeAtlas;
 use super::ViewConfig;
 use crate::node::{NodeId, NodeLayout};
 
-/// One quadtree entry: Kühnert's `atlas_index` and `atlas_lod`.
+/// One quadtree entry: Kühnert's atlas index (`slot`) and atlas LOD (`atlas_level`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Entry {
     /// The atlas slot of the best resident node for this entry.
     pub slot: u32,
     /// The level of the node in `slot` (coarser than the entry's own level when it fell back).
-    pub atlas_lod: u8,
+    pub atlas_level: u8,
 }
 
 impl Entry {
     /// The entry of a window node outside the pyramid.
-    pub const NONE: Entry = Entry { slot: u32::MAX, atlas_lod: u8::MAX };
+    pub const NONE: Entry = Entry { slot: u32::MAX, atlas_level: u8::MAX };
 }
 
 /// Node coordinates beyond which a window may not move (keeps `i64`
@@ -41,7 +41,7 @@ pub struct ClippedQuadtree {
     origins: Vec<[i64; 2]>,
     /// Per layer, the origin the entries were last refreshed for.
     refreshed: Vec<[i64; 2]>,
-    /// `lod_count * node_count^2` entries, layer-major, toroidal inside a layer.
+    /// `levels * node_count^2` entries, layer-major, toroidal inside a layer.
     entries: Vec<Entry>,
 }
 
@@ -84,50 +84,50 @@ impl ClippedQuadtree {
         self.ground_m = ground_m;
     }
 
-    /// Node coordinates of the south-west node of layer `lod`'s window.
-    pub fn origin(&self, lod: u8) -> [i64; 2] {
-        self.origins[lod as usize]
+    /// Node coordinates of the south-west node of layer `level`'s window.
+    pub fn origin(&self, level: u8) -> [i64; 2] {
+        self.origins[level as usize]
     }
 
-    /// Whether node `(x, y)` of level `lod` lies in that layer's window.
-    pub fn in_window(&self, lod: u8, x: i64, y: i64) -> bool {
-        let [ox, oy] = self.origins[lod as usize];
+    /// Whether node `(x, y)` of level `level` lies in that layer's window.
+    pub fn in_window(&self, level: u8, x: i64, y: i64) -> bool {
+        let [ox, oy] = self.origins[level as usize];
         let n = self.config.node_count as i64;
         (ox..ox + n).contains(&x) && (oy..oy + n).contains(&y)
     }
 
-    /// The entry for node `(x, y)` of layer `lod`, `None` outside the window.
-    pub fn entry(&self, lod: u8, x: i64, y: i64) -> Option<Entry> {
-        self.in_window(lod, x, y).then(|| self.entries[self.entry_index(lod, x, y)])
+    /// The entry for node `(x, y)` of layer `level`, `None` outside the window.
+    pub fn entry(&self, level: u8, x: i64, y: i64) -> Option<Entry> {
+        self.in_window(level, x, y).then(|| self.entries[self.entry_index(level, x, y)])
     }
 
     /// Toroidal address (eq. 4.10): the window position modulo `node_count`.
-    fn entry_index(&self, lod: u8, x: i64, y: i64) -> usize {
+    fn entry_index(&self, level: u8, x: i64, y: i64) -> usize {
         let n = self.config.node_count as i64;
         let (tx, ty) = (x.rem_euclid(n) as usize, y.rem_euclid(n) as usize);
-        (lod as usize * n as usize + ty) * n as usize + tx
+        (level as usize * n as usize + ty) * n as usize + tx
     }
 
-    /// Radius in metres within which layer `lod` wants its nodes loaded.
-    pub fn load_radius_m(&self, layout: &NodeLayout, lod: u8) -> f64 {
-        self.config.load_distance * min_side(layout.node_size_m(lod))
+    /// Radius in metres within which layer `level` wants its nodes loaded.
+    pub fn load_radius_m(&self, layout: &NodeLayout, level: u8) -> f64 {
+        self.config.load_distance * min_side(layout.node_size_m(level))
     }
 
-    /// Radius in metres within which lookups use layer `lod` (eq. 4.9).
-    pub fn view_radius_m(&self, layout: &NodeLayout, lod: u8) -> f64 {
-        self.config.view_distance * min_side(layout.node_size_m(lod))
+    /// Radius in metres within which lookups use layer `level` (eq. 4.9).
+    pub fn view_radius_m(&self, layout: &NodeLayout, level: u8) -> f64 {
+        self.config.view_distance * min_side(layout.node_size_m(level))
     }
 
     /// Centres every layer's window under the viewer, aligned to the layer's
     /// node size. Entries follow in [`Self::refresh_changes`].
     pub(crate) fn recenter(&mut self, layout: &NodeLayout) {
         let half = self.config.node_count as f64 / 2.0;
-        for lod in 0..layout.levels {
-            let [w, h] = layout.node_size_m(lod);
+        for level in 0..layout.levels {
+            let [w, h] = layout.node_size_m(level);
             let corner = |p: f64, side: f64| {
                 (p / side + 0.5 - half).floor().clamp(-COORD_LIMIT, COORD_LIMIT) as i64
             };
-            self.origins[lod as usize] = [corner(self.position.x, w), corner(self.position.y, h)];
+            self.origins[level as usize] = [corner(self.position.x, w), corner(self.position.y, h)];
         }
     }
 
@@ -140,13 +140,13 @@ impl ClippedQuadtree {
     pub(crate) fn collect_wanted(&self, layout: &NodeLayout, mut want: impl FnMut(NodeId, f64)) {
         let position = self.position;
         let dz = self.position.z - self.ground_m;
-        for lod in 0..layout.levels {
-            let radius = self.load_radius_m(layout, lod);
+        for level in 0..layout.levels {
+            let radius = self.load_radius_m(layout, level);
             if dz.abs() >= radius {
                 continue;
             }
-            let size = layout.node_size_m(lod);
-            let nodes = layout.nodes_at(lod);
+            let size = layout.node_size_m(level);
+            let nodes = layout.nodes_at(level);
             let range = |axis: usize, p: f64| {
                 let first = ((p - radius) / size[axis]).floor().max(0.0);
                 let last = ((p + radius) / size[axis]).floor().min(nodes[axis] as f64 - 1.0);
@@ -157,8 +157,11 @@ impl ClippedQuadtree {
                     let near = nearest_gap(position.truncate(), x, y, size);
                     let distance = (near.length_squared() + dz * dz).sqrt();
                     if distance < radius {
-                        debug_assert!(self.in_window(lod, x, y), "wanted node outside the window");
-                        want(NodeId::new(lod, x as u32, y as u32), distance);
+                        debug_assert!(
+                            self.in_window(level, x, y),
+                            "wanted node outside the window"
+                        );
+                        want(NodeId::new(level, x as u32, y as u32), distance);
                     }
                 }
             }
@@ -169,10 +172,10 @@ impl ClippedQuadtree {
     /// so each entry can fall back on its parent's entry.
     pub(crate) fn refresh_all(&mut self, layout: &NodeLayout, atlas: &NodeAtlas) {
         let n = self.config.node_count as i64;
-        for lod in (0..layout.levels).rev() {
-            let [ox, oy] = self.origins[lod as usize];
-            self.refresh_nodes(layout, atlas, lod, ox..ox + n, oy..oy + n, |_, _| true);
-            self.refreshed[lod as usize] = self.origins[lod as usize];
+        for level in (0..layout.levels).rev() {
+            let [ox, oy] = self.origins[level as usize];
+            self.refresh_nodes(layout, atlas, level, ox..ox + n, oy..oy + n, |_, _| true);
+            self.refreshed[level as usize] = self.origins[level as usize];
         }
     }
 
@@ -187,14 +190,14 @@ impl ClippedQuadtree {
         changes: &[NodeId],
     ) {
         let n = self.config.node_count as i64;
-        for lod in (0..layout.levels).rev() {
-            let [ox, oy] = self.origins[lod as usize];
-            let [px, py] = self.refreshed[lod as usize];
+        for level in (0..layout.levels).rev() {
+            let [ox, oy] = self.origins[level as usize];
+            let [px, py] = self.refreshed[level as usize];
             if [ox, oy] != [px, py] {
                 let entered =
                     |x: i64, y: i64| !((px..px + n).contains(&x) && (py..py + n).contains(&y));
-                self.refresh_nodes(layout, atlas, lod, ox..ox + n, oy..oy + n, entered);
-                self.refreshed[lod as usize] = [ox, oy];
+                self.refresh_nodes(layout, atlas, level, ox..ox + n, oy..oy + n, entered);
+                self.refreshed[level as usize] = [ox, oy];
             }
         }
         debug_assert!(
@@ -202,50 +205,50 @@ impl ClippedQuadtree {
             "changes are coarsest first"
         );
         for id in changes {
-            for lod in (0..=id.level).rev() {
-                let shift = id.level - lod;
+            for level in (0..=id.level).rev() {
+                let shift = id.level - level;
                 let (x0, y0) = ((id.x as i64) << shift, (id.y as i64) << shift);
-                let [ox, oy] = self.origins[lod as usize];
+                let [ox, oy] = self.origins[level as usize];
                 let xs = x0.max(ox)..(x0 + (1 << shift)).min(ox + n);
                 let ys = y0.max(oy)..(y0 + (1 << shift)).min(oy + n);
-                self.refresh_nodes(layout, atlas, lod, xs, ys, |_, _| true);
+                self.refresh_nodes(layout, atlas, level, xs, ys, |_, _| true);
             }
         }
     }
 
-    /// Recomputes the entries of the window nodes of layer `lod` in the given
+    /// Recomputes the entries of the window nodes of layer `level` in the given
     /// ranges for which `pick` says so.
     fn refresh_nodes(
         &mut self,
         layout: &NodeLayout,
         atlas: &NodeAtlas,
-        lod: u8,
+        level: u8,
         xs: std::ops::Range<i64>,
         ys: std::ops::Range<i64>,
         pick: impl Fn(i64, i64) -> bool,
     ) {
-        let [nx, ny] = layout.nodes_at(lod);
+        let [nx, ny] = layout.nodes_at(level);
         for y in ys {
             for x in xs.clone() {
                 if !pick(x, y) {
                     continue;
                 }
                 let inside = (0..nx as i64).contains(&x) && (0..ny as i64).contains(&y);
-                let entry = if inside { self.best_entry(atlas, lod, x, y) } else { Entry::NONE };
-                let index = self.entry_index(lod, x, y);
+                let entry = if inside { self.best_entry(atlas, level, x, y) } else { Entry::NONE };
+                let index = self.entry_index(level, x, y);
                 self.entries[index] = entry;
             }
         }
     }
 
-    fn best_entry(&self, atlas: &NodeAtlas, lod: u8, x: i64, y: i64) -> Entry {
-        if let Some(slot) = atlas.slot_of(NodeId::new(lod, x as u32, y as u32)) {
-            return Entry { slot, atlas_lod: lod };
+    fn best_entry(&self, atlas: &NodeAtlas, level: u8, x: i64, y: i64) -> Entry {
+        if let Some(slot) = atlas.slot_of(NodeId::new(level, x as u32, y as u32)) {
+            return Entry { slot, atlas_level: level };
         }
         // Not resident: the parent's entry, which lies in the next window
         // up because the windows nest; the root level is always resident.
-        let parent = self.entry(lod + 1, x / 2, y / 2);
-        debug_assert!(parent.is_some_and(|e| e != Entry::NONE), "no fallback for {lod}/{x}/{y}");
+        let parent = self.entry(level + 1, x / 2, y / 2);
+        debug_assert!(parent.is_some_and(|e| e != Entry::NONE), "no fallback for {level}/{x}/{y}");
         parent.unwrap_or(Entry::NONE)
     }
 }

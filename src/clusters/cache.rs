@@ -519,7 +519,7 @@ impl ClusterCache {
             let resident = self.slots[self.by_key[&key] as usize].expect("made");
             let first_member = list.members.len() as u32;
             let mut first_index = 0;
-            let mut voids = false;
+            let mut no_data = false;
             for p in &placements[start..end] {
                 let tile = &list.tiles[p.tile as usize];
                 list.members.push(Member {
@@ -529,14 +529,14 @@ impl ClusterCache {
                     index_count: tile.index_count,
                 });
                 first_index += tile.index_count;
-                voids |= tile.voids;
+                no_data |= tile.no_data;
             }
             let mut parts = 0;
             for p in &placements[start..end] {
                 let tile = &list.tiles[p.tile as usize];
                 for slice in [Slice::Far, Slice::Near] {
                     if list.tile_in(tile, slice) {
-                        parts |= part_bit(slice, voids);
+                        parts |= part_bit(slice, no_data);
                     }
                 }
             }
@@ -545,7 +545,7 @@ impl ClusterCache {
                 index_byte_offset: resident.index_byte_offset,
                 first_member,
                 member_count: (end - start) as u32,
-                voids,
+                no_data,
                 parts,
             });
             start = end;

@@ -217,7 +217,7 @@ mod tests {
             byte_offset: 0,
             index_byte_offset: 100 * VERTEX_BYTES,
             index_count: 6,
-            voids: false,
+            no_data: false,
             place: crate::earth::NodePlace::default(),
             ground: None,
         }

@@ -17,7 +17,7 @@
 //! metres it would be a needle a few centimetres wide and kilometres tall.
 //!
 //! The file is read as a stream of tokens, so it is never held in memory;
-//! the heights go wherever the caller puts them ([`super::window`]).
+//! the heights go wherever the caller puts them ([`super::swath`]).
 
 use std::io::{BufRead, BufReader};
 use std::path::Path;
@@ -25,7 +25,7 @@ use std::path::Path;
 use super::error::{ImportError, Problem};
 use super::mosaic::Footprint;
 use super::raw::{check_dimensions, classify, file_len, non_finite, NoData};
-use super::window::OpenedFile;
+use super::swath::OpenedFile;
 use crate::geo::{Crs, GeoRef};
 
 /// Cell size below which a grid without `.prj` whose corners fit in
@@ -84,19 +84,18 @@ impl OpenedFile for AsciiFile {
         &self.footprint
     }
 
-    /// The text is a stream of tokens; a window is `window_bytes` of it.
+    /// The text is a stream of tokens; a swath is `swath_bytes` of it.
     fn read_into(
         self: Box<Self>,
         out: &mut [f32],
-        window_bytes: usize,
-        window_done: &mut dyn FnMut(),
+        swath_bytes: usize,
+        swath_done: &mut dyn FnMut(),
     ) -> Result<(), ImportError> {
         let AsciiFile { footprint, mut tokens, mut token, nodata } = *self;
         let path = &footprint.path;
         let [width, height] = footprint.size;
         let samples = u64::from(width) * u64::from(height);
-        let (mut count, mut window_end) =
-            (0u64, tokens.consumed.saturating_add(window_bytes as u64));
+        let (mut count, mut swath_end) = (0u64, tokens.consumed.saturating_add(swath_bytes as u64));
         while !token.is_empty() {
             if count < samples {
                 let value = parse(path, width, count, &token, nodata)?;
@@ -107,9 +106,9 @@ impl OpenedFile for AsciiFile {
             count += 1;
             token.clear();
             tokens.next_into(&mut token).map_err(|e| ImportError::new(path, e.into()))?;
-            if tokens.consumed >= window_end {
-                window_done();
-                window_end = tokens.consumed.saturating_add(window_bytes as u64);
+            if tokens.consumed >= swath_end {
+                swath_done();
+                swath_end = tokens.consumed.saturating_add(swath_bytes as u64);
             }
         }
         if count != samples {
@@ -118,7 +117,7 @@ impl OpenedFile for AsciiFile {
                 Problem::ValueCount { expected: samples, found: count },
             ));
         }
-        window_done();
+        swath_done();
         Ok(())
     }
 }

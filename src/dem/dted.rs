@@ -23,7 +23,7 @@ use std::path::Path;
 use super::error::{ImportError, Problem};
 use super::mosaic::Footprint;
 use super::raw::check_dimensions;
-use super::window::{rows_per_window, OpenedFile};
+use super::swath::{rows_per_swath, OpenedFile};
 use crate::geo::{Crs, GeoRef};
 
 const UHL_LEN: usize = 80;
@@ -100,12 +100,12 @@ impl OpenedFile for DtedFile {
         &self.footprint
     }
 
-    /// Windows of whole data records (columns).
+    /// Swaths of whole data records (columns).
     fn read_into(
         self: Box<Self>,
         out: &mut [f32],
-        window_bytes: usize,
-        window_done: &mut dyn FnMut(),
+        swath_bytes: usize,
+        swath_done: &mut dyn FnMut(),
     ) -> Result<(), ImportError> {
         let path = &self.footprint.path;
         let fail = |problem| ImportError::new(path, problem);
@@ -113,19 +113,19 @@ impl OpenedFile for DtedFile {
         let (width, record_len) = (columns as usize, self.header.record_len());
         let mut file = std::fs::File::open(path).map_err(|e| fail(e.into()))?;
         file.seek(SeekFrom::Start(self.records_start)).map_err(|e| fail(e.into()))?;
-        let per_window = rows_per_window(window_bytes, record_len as u64, width);
-        let mut bytes = vec![0u8; per_window * record_len];
-        for first in (0..width).step_by(per_window) {
-            let window = &mut bytes[..per_window.min(width - first) * record_len];
-            file.read_exact(window).map_err(|e| fail(e.into()))?;
-            for (k, record) in window.chunks_exact(record_len).enumerate() {
+        let per_swath = rows_per_swath(swath_bytes, record_len as u64, width);
+        let mut bytes = vec![0u8; per_swath * record_len];
+        for first in (0..width).step_by(per_swath) {
+            let swath = &mut bytes[..per_swath.min(width - first) * record_len];
+            file.read_exact(swath).map_err(|e| fail(e.into()))?;
+            for (k, record) in swath.chunks_exact(record_len).enumerate() {
                 let column = (first + k) as u32;
                 let heights = check_record(record, column).map_err(fail)?;
                 for (j, h) in heights.enumerate() {
                     out[j * width + column as usize] = if h == VOID { f32::NAN } else { h as f32 };
                 }
             }
-            window_done();
+            swath_done();
         }
         Ok(())
     }

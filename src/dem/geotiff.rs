@@ -23,7 +23,7 @@ use super::mosaic::Footprint;
 use super::raw::{
     check_dimensions, classify, file_len, non_finite, read_prefix, NoData, MAX_SAMPLES,
 };
-use super::window::OpenedFile;
+use super::swath::OpenedFile;
 
 /// No DEFLATE or LZW stream expands by more than this factor (DEFLATE's
 /// limit is 1032, LZW's about 2700); compressed chunks declaring more data
@@ -66,13 +66,13 @@ impl OpenedFile for GeoTiffFile {
         &self.footprint
     }
 
-    /// Windows of whole strips or tiles, as many as `window_bytes` of
+    /// Swaths of whole strips or tiles, as many as `swath_bytes` of
     /// decoded samples hold (at least one).
     fn read_into(
         mut self: Box<Self>,
         out: &mut [f32],
-        window_bytes: usize,
-        window_done: &mut dyn FnMut(),
+        swath_bytes: usize,
+        swath_done: &mut dyn FnMut(),
     ) -> Result<(), ImportError> {
         let path = &self.footprint.path;
         let [width, height] = self.footprint.size;
@@ -83,12 +83,12 @@ impl OpenedFile for GeoTiffFile {
             let area = chunk_area(&self.decoder, chunk, width);
             decoded_since += area.width as usize * area.height as usize * 8;
             store_chunk(&mut target, self.placement, area, decoded, self.nodata)?;
-            if decoded_since >= window_bytes {
-                window_done();
+            if decoded_since >= swath_bytes {
+                swath_done();
                 decoded_since = 0;
             }
         }
-        window_done();
+        swath_done();
         Ok(())
     }
 }

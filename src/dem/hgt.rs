@@ -9,7 +9,7 @@ use std::path::Path;
 
 use super::error::{ImportError, Problem};
 use super::mosaic::Footprint;
-use super::window::{rows_per_window, OpenedFile};
+use super::swath::{rows_per_swath, OpenedFile};
 use crate::geo::{Crs, GeoRef};
 
 /// The value SRTM uses for a void.
@@ -44,18 +44,18 @@ impl OpenedFile for HgtFile {
     fn read_into(
         self: Box<Self>,
         out: &mut [f32],
-        window_bytes: usize,
-        window_done: &mut dyn FnMut(),
+        swath_bytes: usize,
+        swath_done: &mut dyn FnMut(),
     ) -> Result<(), ImportError> {
         let path = &self.footprint.path;
         let side = self.footprint.size[0] as usize;
         debug_assert_eq!(out.len(), side * side);
         let mut file = std::fs::File::open(path).map_err(|e| ImportError::new(path, e.into()))?;
-        let rows = rows_per_window(window_bytes, 2 * side as u64, side);
+        let rows = rows_per_swath(swath_bytes, 2 * side as u64, side);
         let mut bytes = vec![0u8; rows * 2 * side];
         for first in (0..side).step_by(rows) {
-            let window = &mut bytes[..rows.min(side - first) * 2 * side];
-            if let Err(e) = file.read_exact(window) {
+            let swath = &mut bytes[..rows.min(side - first) * 2 * side];
+            if let Err(e) = file.read_exact(swath) {
                 // The file shrank since it was opened: say how far it got.
                 let actual = super::raw::file_len(path)?;
                 let problem = match e.kind() {
@@ -64,7 +64,7 @@ impl OpenedFile for HgtFile {
                 };
                 return Err(ImportError::new(path, problem));
             }
-            for (k, row) in window.chunks_exact(2 * side).enumerate() {
+            for (k, row) in swath.chunks_exact(2 * side).enumerate() {
                 // File row 0 is the northern row; grid row 0 is the southern one.
                 let j = side - 1 - (first + k);
                 let to = &mut out[j * side..(j + 1) * side];
@@ -73,7 +73,7 @@ impl OpenedFile for HgtFile {
                     *to = if raw == VOID { f32::NAN } else { f32::from(raw) };
                 }
             }
-            window_done();
+            swath_done();
         }
         Ok(())
     }

@@ -10,7 +10,7 @@
 //! | [`dted`] | DTED levels 0, 1, 2 |
 //! | [`ascii_grid`] | ESRI ASCII grids |
 //! | [`netcdf`] | netCDF-3 classic grids (ETOPO5); `netcdf_header`: where a variable's values start |
-//! | [`window`] | decoding an opened file window by window into any slice (the formats use it) |
+//! | [`swath`] | decoding an opened file swath by swath into any slice (the formats use it) |
 //! | [`mod@open`] | opening a file of any format (its header) and decoding one whole |
 //! | [`raw`] | the pre-fill grid with voids and the checks importers share |
 //! | [`mosaic`] | joining several files on one lattice |
@@ -35,8 +35,8 @@ mod netcdf_header;
 pub mod open;
 pub mod raw;
 pub mod sea;
+pub mod swath;
 pub mod voids;
-pub mod window;
 
 pub use error::{ImportError, Problem};
 pub use format::Format;
@@ -99,7 +99,7 @@ impl ElevationGrid {
 }
 
 /// Reads one file of any supported format onto the heap, voids still
-/// marked (at most [`raw::MAX_SAMPLES`] posts; [`window`] decodes larger
+/// marked (at most [`raw::MAX_SAMPLES`] posts; [`swath`] decodes larger
 /// ones into spills).
 pub fn read_raw(path: &Path) -> Result<RawGrid, ImportError> {
     open::read_whole(open::open(path)?)

@@ -28,7 +28,7 @@ use netcdf3::{DataSet, DataType, DataVector, FileReader, ReadError, Variable};
 use super::error::{ImportError, Problem};
 use super::mosaic::Footprint;
 use super::raw::{check_dimensions, classify, file_len, non_finite, NoData};
-use super::window::{rows_per_window, OpenedFile};
+use super::swath::{rows_per_swath, OpenedFile};
 use crate::geo::{Crs, GeoRef};
 
 /// The start of every netCDF-3 file: `CDF` and the version byte (1 classic,
@@ -115,25 +115,25 @@ impl OpenedFile for NetCdfFile {
         &self.footprint
     }
 
-    /// Windows of whole rows, read at their place in the file.
+    /// Swaths of whole rows, read at their place in the file.
     fn read_into(
         self: Box<Self>,
         out: &mut [f32],
-        window_bytes: usize,
-        window_done: &mut dyn FnMut(),
+        swath_bytes: usize,
+        swath_done: &mut dyn FnMut(),
     ) -> Result<(), ImportError> {
         let path = &self.footprint.path;
         let fail = |problem| ImportError::new(path, problem);
         let [width, height] = self.footprint.size.map(|s| s as usize);
         let size = self.data_type.size_of();
         let file = std::fs::File::open(path).map_err(|e| fail(e.into()))?;
-        let rows = rows_per_window(window_bytes, (width * size) as u64, height);
+        let rows = rows_per_swath(swath_bytes, (width * size) as u64, height);
         let mut bytes = vec![0u8; rows * width * size];
         for first in (0..height).step_by(rows) {
-            let window = &mut bytes[..rows.min(height - first) * width * size];
+            let swath = &mut bytes[..rows.min(height - first) * width * size];
             let at = self.begin + (first * width * size) as u64;
-            read_exact_at(&file, window, at).map_err(|e| fail(e.into()))?;
-            for (k, row) in window.chunks_exact(width * size).enumerate() {
+            read_exact_at(&file, swath, at).map_err(|e| fail(e.into()))?;
+            for (k, row) in swath.chunks_exact(width * size).enumerate() {
                 let file_row = first + k;
                 let j = if self.south_first { file_row } else { height - 1 - file_row };
                 let to = &mut out[j * width..(j + 1) * width];
@@ -143,7 +143,7 @@ impl OpenedFile for NetCdfFile {
                         .ok_or_else(|| non_finite(path, file_row as u64, column as u64, value))?;
                 }
             }
-            window_done();
+            swath_done();
         }
         Ok(())
     }

@@ -1,6 +1,6 @@
 //! Opening an elevation file of any supported format (its header only)
 //! and decoding one whole onto the heap: the dispatch over the formats,
-//! kept apart from [`super::window`] so the formats do not import it.
+//! kept apart from [`super::swath`] so the formats do not import it.
 
 use std::path::Path;
 
@@ -8,7 +8,7 @@ use super::error::{ImportError, Problem};
 use super::format::{self, Format};
 use super::mosaic::Footprint;
 use super::raw::{RawGrid, MAX_SAMPLES};
-use super::window::{OpenedFile, WINDOW_BYTES};
+use super::swath::{OpenedFile, SWATH_BYTES};
 use super::{ascii_grid, dted, geotiff, hgt, netcdf};
 
 /// Opens a file of any supported format: its header only.
@@ -33,7 +33,7 @@ pub fn read_whole(opened: Box<dyn OpenedFile>) -> Result<RawGrid, ImportError> {
         return Err(ImportError::new(&path, problem));
     }
     let mut grid = RawGrid::voids(&path, width, height, georef);
-    opened.read_into(&mut grid.heights, WINDOW_BYTES, &mut || {})?;
+    opened.read_into(&mut grid.heights, SWATH_BYTES, &mut || {})?;
     grid.debug_check();
     Ok(grid)
 }

@@ -11,7 +11,7 @@ use crate::geo::GeoRef;
 /// The most samples a grid held on the heap (a file read whole, an
 /// in-memory mosaic) may have: 2^28, a 16384 x 16384 grid, 1 GiB of `f32`.
 /// The streaming import ([`crate::pyramid::spilled`]) decodes larger files
-/// window by window into spills.
+/// swath by swath into spills.
 pub const MAX_SAMPLES: u64 = 1 << 28;
 
 /// The most posts one file may declare: 2^33 (a 15" world grid is 2^31.8),

@@ -413,7 +413,7 @@ fn measure_one(
         mirror_p99_m: if mirror.is_empty() { 0.0 } else { percentile(&mirror, 0.99) },
         triangles_lod: surface.surface_triangles(),
         triangles_truth: truth_stats.triangles,
-        draw_calls_lod: lod_stats.draw_calls as usize,
+        draw_calls_lod: lod_stats.calls.draw_calls as usize,
         draw_calls_truth: truth_stats.draw_calls,
         tiles_per_level,
         horizon_culled: lod_stats.scene.horizon_culled,

@@ -100,7 +100,7 @@ pub struct TerrainPass {
     gl: Rc<Gl>,
     /// Per output, the plain program and the one that drops triangles
     /// touching posts without data (its `discard` costs early depth
-    /// rejection, so only tiles with voids use it).
+    /// rejection, so only tiles with posts of no data use it).
     colour: [TerrainProgram; 2],
     position: [TerrainProgram; 2],
     /// The tiles' blocks, at the allocator's offsets (with clusters: the
@@ -124,14 +124,14 @@ impl TerrainPass {
     pub fn new(gl: &Rc<Gl>, buffer_bytes: u32) -> Result<TerrainPass, GlError> {
         let colour = [
             TerrainProgram::build(gl, "terrain", FRAGMENT_SOURCE)?,
-            TerrainProgram::build(gl, "terrain with voids", &with_voids(FRAGMENT_SOURCE))?,
+            TerrainProgram::build(gl, "terrain with no data", &with_no_data(FRAGMENT_SOURCE))?,
         ];
         let position = [
             TerrainProgram::build(gl, "terrain positions", POSITION_SOURCE)?,
             TerrainProgram::build(
                 gl,
-                "terrain positions with voids",
-                &with_voids(POSITION_SOURCE),
+                "terrain positions with no data",
+                &with_no_data(POSITION_SOURCE),
             )?,
         ];
         // Uploads bind it as vertex buffer, which no vertex array records.
@@ -338,8 +338,8 @@ impl TerrainPass {
     }
 
     /// Draws the tiles of `list` that reach into depth slice `slice` with its
-    /// `view_projection`: those without voids with the plain program (bound
-    /// on entry), then those with voids with the other. Returns whether the
+    /// `view_projection`: those whose posts all have data with the plain program (bound
+    /// on entry), then those with posts of no data with the other. Returns whether the
     /// plain program is still bound.
     #[allow(unsafe_code, clippy::too_many_arguments)]
     fn draw_slice(
@@ -353,24 +353,24 @@ impl TerrainPass {
         base: &mut Bound<'_>,
     ) -> bool {
         let frame = list.uniforms.expect("drawn lists have uniforms");
-        let [plain, voids] = programs;
+        let [plain, no_data] = programs;
         // SAFETY: the plain program is bound and its location comes from it.
         unsafe { calls.uniform_matrix(plain.at.view_projection.as_ref(), &view_projection) };
         self.draw_part(calls, &plain.at, list, slice, false, blocks, base);
-        if !list.has_voids_in(slice) {
+        if !list.has_no_data_in(slice) {
             return true;
         }
         // SAFETY: a linked program of this context; its locations come from it.
         unsafe {
-            calls.use_program(&voids.program);
-            set_frame_uniforms(calls, &voids.at, &frame);
-            calls.uniform_matrix(voids.at.view_projection.as_ref(), &view_projection);
+            calls.use_program(&no_data.program);
+            set_frame_uniforms(calls, &no_data.at, &frame);
+            calls.uniform_matrix(no_data.at.view_projection.as_ref(), &view_projection);
         }
-        self.draw_part(calls, &voids.at, list, slice, true, blocks, base);
+        self.draw_part(calls, &no_data.at, list, slice, true, blocks, base);
         false
     }
 
-    /// Draws the tiles or clusters of `slice` with or without `voids`.
+    /// Draws the tiles or clusters of `slice` with or without no data.
     #[allow(clippy::too_many_arguments)]
     fn draw_part(
         &self,
@@ -378,16 +378,16 @@ impl TerrainPass {
         at: &Locations,
         list: &DrawList,
         slice: Slice,
-        voids: bool,
+        no_data: bool,
         blocks: TileBlocks<'_>,
         bound: &mut Bound<'_>,
     ) {
         if list.clustered() {
-            for cluster in list.clusters_with(slice, voids, bound.base) {
+            for cluster in list.clusters_with(slice, no_data, bound.base) {
                 draw_cluster(calls, at, list, cluster, slice, bound);
             }
         } else {
-            self.draw_tiles(calls, at, list.tiles_with(slice, voids), blocks);
+            self.draw_tiles(calls, at, list.tiles_with(slice, no_data), blocks);
         }
     }
 
@@ -525,9 +525,9 @@ fn set_frame_uniforms(calls: Calls<'_>, at: &Locations, frame: &FrameUniforms) {
     }
 }
 
-/// `source` with `VOIDS` defined after its `#version` line: the variant
+/// `source` with `NO_DATA` defined after its `#version` line: the variant
 /// that discards fragments of triangles touching a post without data.
-fn with_voids(source: &str) -> String {
+fn with_no_data(source: &str) -> String {
     let (version, rest) = source.split_once('\n').unwrap_or((source, ""));
-    format!("{version}\n#define VOIDS\n{rest}")
+    format!("{version}\n#define NO_DATA\n{rest}")
 }

@@ -52,7 +52,7 @@ struct ChunkDraw {
     /// Where its indices start there.
     index_byte_offset: u32,
     /// Some posts have no data.
-    voids: bool,
+    no_data: bool,
 }
 
 /// The truth mesh on the GPU, drawn by a terrain pass of its own.
@@ -91,7 +91,7 @@ impl TruthPass {
                 first_post: mesh.chunk_first_post(chunk),
                 byte_offset,
                 index_byte_offset: byte_offset + counts.vertex_bytes(),
-                voids: chunk.voids,
+                no_data: chunk.no_data,
             });
         }
         Ok(TruthPass { terrain, chunks, index_count: counts.indices, triangles: mesh.triangles() })
@@ -130,7 +130,7 @@ impl TruthPass {
                 byte_offset: chunk.byte_offset,
                 index_byte_offset: chunk.index_byte_offset,
                 index_count: self.index_count,
-                voids: chunk.voids,
+                no_data: chunk.no_data,
                 place,
                 ground: None,
             })

@@ -111,15 +111,16 @@ pub enum FrameError<E: std::error::Error + 'static> {
     Backend(E),
 }
 
-/// What one frame did and cost. Its fields are `stats.json`'s per-frame keys.
+/// What one frame did and cost. Its serde output is `stats.json`'s
+/// per-frame keys (with `SceneStats`' flattened in), written by nothing
+/// else, so a field's doc comment is its key's documentation.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct FrameStats {
     /// Selection, tiles and uploads.
     #[serde(flatten)]
     pub scene: SceneStats,
-    /// Draw calls the backend issued (tiles once per depth slice they reach, and the sky).
-    pub draw_calls: u64,
-    /// Every call the backend issued, by kind.
+    /// Every call the backend issued, by kind (`calls.draw_calls`: tiles
+    /// once per depth slice they reach, and the sky).
     pub calls: CallStats,
     /// Nodes in the atlas after paging.
     pub resident_nodes: u32,
@@ -238,7 +239,6 @@ impl FramePipeline {
         let calls = backend.take_calls();
         let ms = ms(start, Instant::now());
         Ok(FrameStats {
-            draw_calls: calls.draw_calls,
             calls,
             resident_nodes: self.clipmap.atlas().resident_count(),
             atlas_bytes: self.clipmap.atlas().resident_bytes(),
@@ -277,7 +277,6 @@ impl FramePipeline {
         let calls = backend.take_calls();
         let stats = FrameStats {
             scene,
-            draw_calls: calls.draw_calls,
             calls,
             resident_nodes: self.clipmap.atlas().resident_count(),
             nodes_loaded: update.applied,

@@ -1,6 +1,6 @@
 //! Elevation files into layers that live in spills ([`crate::spill`]), for
 //! imports larger than memory: each file is decoded once (one at a time),
-//! window by window ([`crate::dem::window`]), into a spill, and written into
+//! swath by swath ([`crate::dem::swath`]), into a spill, and written into
 //! its layer's spill at its place on the mosaic's lattice, so neither a
 //! file nor a layer is ever whole on the heap. The rules are those of
 //! [`crate::dem::import_layers`] (grouping by spacing, the mosaic's first valid
@@ -19,7 +19,7 @@ use rayon::prelude::*;
 use super::progress::Progress;
 use crate::dem::mosaic::{plan, Footprint};
 use crate::dem::{
-    check_same_crs, same_spacing, voids, window, GridView, ImportError, Problem, RawGrid,
+    check_same_crs, same_spacing, swath, voids, GridView, ImportError, Problem, RawGrid,
 };
 use crate::geo::GeoRef;
 use crate::spill::{ScratchDir, Spill};
@@ -105,8 +105,7 @@ pub fn spill_layers(
         // Windows of the file go straight to the spill, its pages dropped
         // behind each one: no file is ever whole in memory.
         let releaser = heights.releaser();
-        opened
-            .read_into(heights.as_mut_slice(), window::WINDOW_BYTES, &mut || releaser.release())?;
+        opened.read_into(heights.as_mut_slice(), swath::SWATH_BYTES, &mut || releaser.release())?;
         heights.release();
         let decoded = Decoded { footprint, heights };
         let same_spacing =

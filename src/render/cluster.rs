@@ -91,8 +91,8 @@ pub struct Cluster {
     pub first_member: u32,
     /// How many members it has (1 to [`MAX_MEMBERS`]).
     pub member_count: u32,
-    /// Some member has posts without data: drawn by the voids program.
-    pub voids: bool,
+    /// Some member has posts without data: drawn by the no-data program.
+    pub no_data: bool,
     /// The parts of the terrain pass it is drawn in ([`super::cluster_draws::part_bit`]).
     pub parts: u8,
 }

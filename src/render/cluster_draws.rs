@@ -7,13 +7,13 @@ use super::cluster::{Cluster, ClusterMorph, ClusterRun, Member, MAX_MEMBERS, MEM
 use super::draw_list::{DrawList, Slice, TileUniforms};
 
 /// The bit of the terrain pass's part that draws depth slice `slice` with
-/// the plain program or the voids one. The parts are drawn in bit order.
-pub fn part_bit(slice: Slice, voids: bool) -> u8 {
+/// the plain program or the no-data one. The parts are drawn in bit order.
+pub fn part_bit(slice: Slice, no_data: bool) -> u8 {
     let slice = match slice {
         Slice::Far => 0,
         Slice::Near => 2,
     };
-    1 << (slice + voids as u8)
+    1 << (slice + no_data as u8)
 }
 
 impl TileUniforms {
@@ -56,9 +56,9 @@ impl DrawList {
         self.clustered
     }
 
-    /// Whether some tile or cluster drawn in `slice` has voids (then the
-    /// pass switches to the voids program after the others).
-    pub fn has_voids_in(&self, slice: Slice) -> bool {
+    /// Whether some tile or cluster drawn in `slice` has no data (then the
+    /// pass switches to the no-data program after the others).
+    pub fn has_no_data_in(&self, slice: Slice) -> bool {
         if self.clustered {
             self.clusters_with(slice, true, None).next().is_some()
         } else {
@@ -76,7 +76,7 @@ impl DrawList {
         }
     }
 
-    /// The clusters with a member in `slice`, with or without voids, in
+    /// The clusters with a member in `slice`, with or without no data, in
     /// draw order: those of attribute base `bound` (the one last set)
     /// first, then the other bases, those that the next part also draws
     /// last (so it can start with the base this part ends with); within a
@@ -85,10 +85,10 @@ impl DrawList {
     pub fn clusters_with(
         &self,
         slice: Slice,
-        voids: bool,
+        no_data: bool,
         bound: Option<u32>,
     ) -> impl Iterator<Item = &Cluster> + '_ {
-        let part = part_bit(slice, voids);
+        let part = part_bit(slice, no_data);
         // The next part with clusters, in drawing order.
         let later = self.clusters.iter().fold(0u8, |all, c| all | c.parts) & !(2 * part - 1);
         let next = later & later.wrapping_neg();

@@ -144,7 +144,7 @@ pub fn sky(model: &CostModel) -> CallStats {
 /// The terrain pass: nine state calls, glUseProgram, six frame uniforms, the
 /// VAO bind, the tile buffer bound as index and as vertex buffer, three
 /// attribute enables; then per depth slice one matrix uniform and the
-/// slice's draws, those with voids last, after a switch to the program that
+/// slice's draws, those with no data last, after a switch to the program that
 /// drops their triangles (glUseProgram, six frame uniforms, the matrix) and
 /// back to the plain one for the next slice; a depth clear between slices;
 /// three attribute disables and the VAO unbind.
@@ -190,7 +190,7 @@ pub fn terrain(model: &CostModel, list: &DrawList) -> CallStats {
             switch(&mut stats);
             on_plain = true;
         }
-        if list.has_voids_in(slice) {
+        if list.has_no_data_in(slice) {
             switch(&mut stats);
             on_plain = false;
         }
@@ -203,8 +203,8 @@ pub fn terrain(model: &CostModel, list: &DrawList) -> CallStats {
             }
             continue;
         }
-        for voids in [false, true] {
-            for cluster in list.clusters_with(slice, voids, base) {
+        for no_data in [false, true] {
+            for cluster in list.clusters_with(slice, no_data, base) {
                 stats.uniform_writes += 1;
                 if base != Some(cluster.base) {
                     base = Some(cluster.base);

@@ -222,9 +222,9 @@ pub struct TileUniforms {
     /// glDrawElements.
     pub index_count: u32,
     /// Some posts have no data: drawn by the program that drops the
-    /// triangles touching them (after the tiles without voids, since that
+    /// triangles touching them (after the tiles whose posts all have data, since that
     /// program cannot use early depth rejection).
-    pub voids: bool,
+    pub no_data: bool,
     /// Its node's placement on the ellipsoid (zero in the chart).
     pub place: NodePlace,
     /// On the ellipsoid, its [`Self::ground_rectangle`] computed once when
@@ -423,14 +423,14 @@ impl DrawList {
         self.tiles.iter().map(TileUniforms::triangles).sum()
     }
 
-    /// The tiles drawn in depth slice `slice` with or without `voids`, in
+    /// The tiles drawn in depth slice `slice` with or without posts of no data, in
     /// draw order. The GL terrain pass and the cost model both walk this.
     pub fn tiles_with(
         &self,
         slice: Slice,
-        voids: bool,
+        no_data: bool,
     ) -> impl Iterator<Item = &TileUniforms> + '_ {
-        self.tiles_in(slice).filter(move |tile| tile.voids == voids)
+        self.tiles_in(slice).filter(move |tile| tile.no_data == no_data)
     }
 
     /// The tiles drawn in depth slice `slice`, in list order (every tile in
@@ -536,7 +536,7 @@ fn tile_uniforms(
         byte_offset: draw.byte_offset,
         index_byte_offset: draw.index_byte_offset,
         index_count: draw.index_count,
-        voids: draw.coverage != TileCoverage::Full,
+        no_data: draw.coverage != TileCoverage::Full,
         place: frame.earth.map_or(NodePlace::default(), |earth| {
             earth.place(node_centre(key, geometry.grid_size, geometry.node_size))
         }),
@@ -833,7 +833,7 @@ mod tests {
             byte_offset: 0,
             index_byte_offset: 0,
             index_count: 0,
-            voids: false,
+            no_data: false,
             place: NodePlace::default(),
             ground: None,
         }

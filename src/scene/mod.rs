@@ -152,7 +152,7 @@ pub struct SceneStats {
     /// Transfers: one per run piece (dirty range).
     pub transfers: usize,
     /// Tiles whose block was made this frame.
-    pub generated: usize,
+    pub tiles_generated: usize,
     /// Bytes held by resident tiles.
     pub allocator_used_bytes: u64,
     /// End of the highest block not free: the buffer size this state needs, bytes.
@@ -170,7 +170,7 @@ pub struct SceneStats {
     /// Tiles drawn from a coarser node than their level's (best available).
     pub fallback_tiles: usize,
     /// The valid life's split tests in the final selection (all zero without one).
-    pub life: LifeStats,
+    pub split_tests: LifeStats,
     /// Selections redone to keep a triangle budget's band ([`TriangleBand`]).
     pub reselected: u32,
     /// Clusters drawn (0 when tiles are drawn one by one).
@@ -503,7 +503,7 @@ impl Scene {
         report.horizon_culled = self.selector.horizon_culled();
         report.tau_px = lod.tau_px;
         (report.fallback_tiles, report.bound_px) = self.fallback_bound(camera, lod.tau_px);
-        report.life = self.selector.life_stats().unwrap_or_default();
+        report.split_tests = self.selector.life_stats().unwrap_or_default();
         report.triangles = self.draw_list.triangles();
         if report.coarsened == 0 {
             self.band.observe(report.triangles);
@@ -515,7 +515,7 @@ impl Scene {
         }));
         report.bytes_uploaded = stats.bytes_uploaded;
         report.transfers = stats.transfers;
-        report.generated = stats.generated;
+        report.tiles_generated = stats.generated;
         report.allocator_used_bytes = stats.allocator_used_bytes;
         report.allocator_workspace_bytes = stats.allocator_workspace_bytes;
         if let Some(clusters) = &self.clusters {

@@ -12,7 +12,7 @@ use crate::node::{cell_surface, NodeData, NodeId, NodeLayout};
 /// than one post beyond the data's edge): far below any terrain, so that no consumer mistakes it
 /// for one. Its morph target then holds a nearby real height, for the
 /// rasteriser's sake only; every triangle touching such a vertex is dropped
-/// (see [`TileCoverage`] and the terrain shaders' `VOIDS` variant).
+/// (see [`TileCoverage`] and the terrain shaders' `NO_DATA` variant).
 pub const NO_DATA: f32 = -1.0e9;
 
 /// Whether a vertex's height is [`NO_DATA`].

@@ -173,7 +173,7 @@ pub struct TruthChunk {
     /// of the edge posts.
     pub vertices: Vec<TileVertex>,
     /// Some posts have no data ([`crate::tiles::NO_DATA`]).
-    pub voids: bool,
+    pub no_data: bool,
 }
 
 /// Surface triangles of one chunk (its skirts have no area).
@@ -382,7 +382,7 @@ impl MarginGrid {
                 vertex.with_surface(height, height, [nx, ny, nx, ny])
             };
         }
-        let voids = vertices.iter().any(|v| v.target.is_nan());
+        let no_data = vertices.iter().any(|v| v.target.is_nan());
         for vertex in &mut vertices[..posts] {
             if vertex.target.is_nan() {
                 vertex.target = if nearest.is_nan() { 0.0 } else { nearest };
@@ -393,7 +393,7 @@ impl MarginGrid {
             vertices[k] = vertices[k].with_surface_of(vertices[i + j * (g as usize + 1)]);
         }
         debug_assert_eq!(vertices.len(), vertex_count(g));
-        TruthChunk { first_post, vertices, voids }
+        TruthChunk { first_post, vertices, no_data }
     }
 }
 
@@ -481,7 +481,7 @@ mod tests {
             let expected = if past { NO_DATA } else { earth.sample(i - 3, j + 500) };
             assert_eq!(chunk.vertices[k].height, expected, "post ({i}, {j})");
         }
-        assert!(chunk.voids, "the chunk reaches past the data");
+        assert!(chunk.no_data, "the chunk reaches past the data");
         let tiled = TruthRegion::covering_tiles(earth.layout(), 32);
         assert_eq!(tiled.posts, [513, 513]);
         let wider = TruthRegion { first: [0, 0], posts: [514, 2] };

@@ -122,7 +122,7 @@ pub fn covers(clipmap: &Clipmap, id: NodeId, point: DVec2) -> bool {
 
 /// `height_at` answers at `point` from a resident node covering it, the
 /// finest resident one from the finest layer whose window holds the point,
-/// within its error bound of the exact height; the returned lod is the
+/// within its error bound of the exact height; the returned level is the
 /// answering node's.
 pub fn check_height(clipmap: &Clipmap, view: ViewId, point: DVec2) -> Result<u8, String> {
     let sample = clipmap.height_at(view, point).map_err(|e| format!("height_at {point}: {e}"))?;
@@ -140,8 +140,8 @@ pub fn check_height(clipmap: &Clipmap, view: ViewId, point: DVec2) -> Result<u8,
             quadtree.in_window(l, id.x as i64, id.y as i64)
         })
         .unwrap();
-    for lod in first_layer..node.level {
-        let id = layout.locate(lod, point.x, point.y).unwrap().id;
+    for level in first_layer..node.level {
+        let id = layout.locate(level, point.x, point.y).unwrap().id;
         if clipmap.atlas().slot_of(id).is_some() {
             return Err(format!("answered from {node:?} though {id:?} is resident"));
         }
@@ -159,11 +159,11 @@ pub fn check_height(clipmap: &Clipmap, view: ViewId, point: DVec2) -> Result<u8,
 /// The Kühnert lookup at the distance-dependent layer answers from a
 /// resident node at that level or coarser covering the point.
 pub fn check_lookup(clipmap: &Clipmap, view: ViewId, point: DVec2) -> Result<(), String> {
-    let lod = clipmap.quadtree_lod(view, point);
+    let level = clipmap.quadtree_level(view, point);
     let found =
-        clipmap.lookup(view, point, lod).map_err(|e| format!("lookup {point} at {lod}: {e}"))?;
-    if clipmap.atlas().node_in(found.slot) != Some(found.node) || found.node.level < lod {
-        return Err(format!("lookup at {lod} gave {found:?}"));
+        clipmap.lookup(view, point, level).map_err(|e| format!("lookup {point} at {level}: {e}"))?;
+    if clipmap.atlas().node_in(found.slot) != Some(found.node) || found.node.level < level {
+        return Err(format!("lookup at {level} gave {found:?}"));
     }
     if !covers(clipmap, found.node, point) || !(0.0..=1.0).contains(&found.atlas_coords.x) {
         return Err(format!("lookup gave {found:?} for {point}"));
@@ -178,16 +178,16 @@ pub fn check_entries(clipmap: &Clipmap, view: ViewId) -> Result<(), String> {
     let layout = clipmap.layout();
     let quadtree = clipmap.view(view);
     let n = quadtree.config().node_count as i64;
-    for lod in 0..layout.levels {
-        let [ox, oy] = quadtree.origin(lod);
-        let [nx, ny] = layout.nodes_at(lod);
+    for level in 0..layout.levels {
+        let [ox, oy] = quadtree.origin(level);
+        let [nx, ny] = layout.nodes_at(level);
         for (x, y) in (oy..oy + n).flat_map(|y| (ox..ox + n).map(move |x| (x, y))) {
             let inside = (0..nx as i64).contains(&x) && (0..ny as i64).contains(&y);
             let expected = if inside {
-                let mut id = NodeId::new(lod, x as u32, y as u32);
+                let mut id = NodeId::new(level, x as u32, y as u32);
                 loop {
                     if let Some(slot) = clipmap.atlas().slot_of(id) {
-                        break Entry { slot, atlas_lod: id.level };
+                        break Entry { slot, atlas_level: id.level };
                     }
                     id = id
                         .parent()
@@ -197,10 +197,10 @@ pub fn check_entries(clipmap: &Clipmap, view: ViewId) -> Result<(), String> {
             } else {
                 Entry::NONE
             };
-            let got = quadtree.entry(lod, x, y).ok_or("a window node has no entry")?;
+            let got = quadtree.entry(level, x, y).ok_or("a window node has no entry")?;
             if got != expected {
                 return Err(format!(
-                    "layer {lod} node ({x}, {y}): entry {got:?}, expected {expected:?}"
+                    "layer {level} node ({x}, {y}): entry {got:?}, expected {expected:?}"
                 ));
             }
         }

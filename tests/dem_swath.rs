@@ -1,6 +1,6 @@
-//! Windowed decoding (`ridgeline::dem::window`): every streaming format,
-//! decoded in windows far smaller than the file (one row, record, strip or
-//! tile at a time), gives bit for bit the heights of one window covering
+//! Decoding by swaths (`ridgeline::dem::swath`): every streaming format,
+//! decoded in swaths far smaller than the file (one row, record, strip or
+//! tile at a time), gives bit for bit the heights of one swath covering
 //! the whole file, and those are the heights written; the committed real
 //! files (GeoTIFFs, ETOPO5 netCDF, ASCII grid) agree the same way.
 
@@ -10,24 +10,24 @@ use ridgeline::dem::open::{open, read_whole};
 use testkit::dem::*;
 use tiff::encoder::{colortype, Compression, DeflateLevel, Predictor};
 
-/// Decodes `path` in windows of `window_bytes`; returns the heights and
-/// the number of windows.
-fn decode(path: &Path, window_bytes: usize) -> (Vec<f32>, usize) {
+/// Decodes `path` in swaths of `swath_bytes`; returns the heights and
+/// the number of swaths.
+fn decode(path: &Path, swath_bytes: usize) -> (Vec<f32>, usize) {
     let opened = open(path).unwrap();
     let [w, h] = opened.footprint().size;
     let mut heights = vec![0.0f32; w as usize * h as usize];
-    let mut windows = 0;
-    opened.read_into(&mut heights, window_bytes, &mut || windows += 1).unwrap();
-    (heights, windows)
+    let mut swaths = 0;
+    opened.read_into(&mut heights, swath_bytes, &mut || swaths += 1).unwrap();
+    (heights, swaths)
 }
 
-/// Small windows and one window agree bit for bit (NaN voids included),
+/// Small swaths and one swath agree bit for bit (NaN voids included),
 /// the small ones were many, and both match `expected` when given.
-fn check_windows(path: &Path, expected: Option<&[f32]>) {
+fn check_swaths(path: &Path, expected: Option<&[f32]>) {
     let (small, many) = decode(path, 1);
     let (whole, one) = decode(path, usize::MAX);
-    assert!(many > 4, "{}: {many} small windows", path.display());
-    assert!(one <= 2, "{}: {one} windows of the whole file", path.display());
+    assert!(many > 4, "{}: {many} small swaths", path.display());
+    assert!(one <= 2, "{}: {one} swaths of the whole file", path.display());
     let bits = |v: &[f32]| v.iter().map(|h| h.to_bits()).collect::<Vec<_>>();
     assert_eq!(bits(&small), bits(&whole), "{}", path.display());
     if let Some(expected) = expected {
@@ -56,29 +56,29 @@ fn north_first<T: Copy>(values: &[T], w: u32) -> Vec<T> {
 }
 
 #[test]
-fn hgt_windows_match_the_whole_file() {
-    let dir = TempDir::new("window-hgt");
+fn hgt_swaths_match_the_whole_file() {
+    let dir = TempDir::new("swath-hgt");
     let path = dir.path("N10E020.hgt");
     let values = grid(1201, 1201);
     let raw: Vec<i16> = values.iter().map(|v| v.unwrap_or(HGT_VOID)).collect();
     write_hgt(&path, 1201, &raw);
-    check_windows(&path, Some(&as_f32(&values)));
+    check_swaths(&path, Some(&as_f32(&values)));
 }
 
 #[test]
-fn dted_windows_match_the_whole_file() {
-    let dir = TempDir::new("window-dted");
+fn dted_swaths_match_the_whole_file() {
+    let dir = TempDir::new("swath-dted");
     let path = dir.path("e020n10.dt0");
     let spec = DtedSpec { level: 0, origin: [20, 10], lon_tenths: 300, columns: 121, rows: 121 };
     let values = grid(121, 121);
     let raw: Vec<i32> = values.iter().map(|v| v.map_or(DTED_VOID, i32::from)).collect();
     std::fs::write(&path, dted_bytes(spec, &raw)).unwrap();
-    check_windows(&path, Some(&as_f32(&values)));
+    check_swaths(&path, Some(&as_f32(&values)));
 }
 
 #[test]
-fn geotiff_strip_and_tile_windows_match_the_whole_file() {
-    let dir = TempDir::new("window-tif");
+fn geotiff_strip_and_tile_swaths_match_the_whole_file() {
+    let dir = TempDir::new("swath-tif");
     let (w, h) = (301u32, 203u32);
     let values = grid(w, h);
     let geo = GeoTags {
@@ -97,16 +97,16 @@ fn geotiff_strip_and_tile_windows_match_the_whole_file() {
         3,
         &geo,
     );
-    check_windows(&strips, Some(&as_f32(&values)));
+    check_swaths(&strips, Some(&as_f32(&values)));
     let tiles = dir.path("tiles.tif");
     let samples = Samples::I16(file);
     write_tiff_tiles(&tiles, [w, h], 32, &samples, TileCompression::Lzw, 2, &geo);
-    check_windows(&tiles, Some(&as_f32(&values)));
+    check_swaths(&tiles, Some(&as_f32(&values)));
 }
 
 #[test]
-fn ascii_grid_windows_match_the_whole_file() {
-    let dir = TempDir::new("window-asc");
+fn ascii_grid_swaths_match_the_whole_file() {
+    let dir = TempDir::new("swath-asc");
     let path = dir.path("grid.asc");
     let (w, h) = (157u32, 91u32);
     let values = grid(w, h);
@@ -116,11 +116,11 @@ fn ascii_grid_windows_match_the_whole_file() {
         .collect();
     let header = format!("ncols {w}\nnrows {h}\nxllcorner 0\nyllcorner 0\ncellsize 30\n");
     write_ascii(&path, &header, &rows);
-    check_windows(&path, Some(&as_f32(&values)));
+    check_swaths(&path, Some(&as_f32(&values)));
 }
 
 #[test]
-fn the_committed_files_decode_the_same_in_any_window() {
+fn the_committed_files_decode_the_same_in_any_swath() {
     let assets = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/dem");
     for name in [
         "srtm3_n39e040_1000.tif",
@@ -129,7 +129,7 @@ fn the_committed_files_decode_the_same_in_any_window() {
         "etopo5_e5_e11_n43_n47.nc",
         "jacksboro_fault_3s.asc",
     ] {
-        check_windows(&assets.join(name), None);
+        check_swaths(&assets.join(name), None);
     }
 }
 
@@ -164,14 +164,14 @@ fn memory_child() {
 }
 
 /// A file that takes more than 64 MB decoded whole is imported (decoded
-/// window by window into a spill, the pyramid cut in bands) by a child
+/// swath by swath into a spill, the pyramid cut in bands) by a child
 /// process whose peak resident memory stays under 64 MB.
 #[test]
 fn a_streaming_import_stays_under_64_mb() {
     if !Path::new("/proc/self/status").exists() {
         return;
     }
-    let dir = TempDir::new("window-memory");
+    let dir = TempDir::new("swath-memory");
     let path = dir.path("big.tif");
     let side = BIG_SIDE;
     let file: Vec<i16> =

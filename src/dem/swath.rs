@@ -1,11 +1,11 @@
-//! Windowed decoding: every importer first *opens* a file (reads and checks
+//! Decoding by swaths: every importer first *opens* a file (reads and checks
 //! its header against the file's length, decodes no height), then decodes
-//! its heights a *window* at a time (a few rows, records, strips or tiles,
-//! about [`WINDOW_BYTES`] of the file) straight into a slice the caller
+//! its heights a *swath* at a time (a few rows, records, strips or tiles,
+//! about [`SWATH_BYTES`] of the file) straight into a slice the caller
 //! provides: a `Vec` for the in-memory import, a memory-mapped
 //! [`crate::spill::Spill`] for the streaming one, whose pages the
-//! `window_done` callback drops. So no format holds a whole file in
-//! memory; what one window holds is the format's unit (a GeoTIFF strip or
+//! `swath_done` callback drops. So no format holds a whole file in
+//! memory; what one swath holds is the format's unit (a GeoTIFF strip or
 //! tile is decoded whole, as the `tiff` crate does).
 
 //! Opening a file of any format and decoding it whole are in
@@ -15,9 +15,9 @@
 use super::error::ImportError;
 use super::mosaic::Footprint;
 
-/// Bytes of a file decoded per window (a multiple of any format's row
+/// Bytes of a file decoded per swath (a multiple of any format's row
 /// stays under a few MB of decoded heights).
-pub const WINDOW_BYTES: usize = 4 << 20;
+pub const SWATH_BYTES: usize = 4 << 20;
 
 /// A file whose header is read and checked, its heights not yet decoded.
 pub trait OpenedFile {
@@ -25,19 +25,19 @@ pub trait OpenedFile {
     fn footprint(&self) -> &Footprint;
 
     /// Decodes every post into `out` (`width * height` heights, row 0
-    /// southern, voids NaN), writing each post once, about `window_bytes`
+    /// southern, voids NaN), writing each post once, about `swath_bytes`
     /// of the file (at least one row, record, strip or tile) at a time,
-    /// and calls `window_done` after every window.
+    /// and calls `swath_done` after every swath.
     fn read_into(
         self: Box<Self>,
         out: &mut [f32],
-        window_bytes: usize,
-        window_done: &mut dyn FnMut(),
+        swath_bytes: usize,
+        swath_done: &mut dyn FnMut(),
     ) -> Result<(), ImportError>;
 }
 
-/// Rows of `row_bytes` each in a window of `window_bytes`: at least one,
+/// Rows of `row_bytes` each in a swath of `swath_bytes`: at least one,
 /// at most the file's `rows`.
-pub fn rows_per_window(window_bytes: usize, row_bytes: u64, rows: usize) -> usize {
-    (window_bytes as u64 / row_bytes.max(1)).clamp(1, rows.max(1) as u64) as usize
+pub fn rows_per_swath(swath_bytes: usize, row_bytes: u64, rows: usize) -> usize {
+    (swath_bytes as u64 / row_bytes.max(1)).clamp(1, rows.max(1) as u64) as usize
 }
