@@ -165,10 +165,7 @@ impl Runner {
         let context = GlContext::new(&request)?;
         let (source, summary) = terrain.source();
         let pipeline = FramePipeline::new(&config.pipeline(), source, summary)?;
-        let mut renderer = GlRenderer::new(context.gl(), config.scene.buffer_bytes)?;
-        if let Some(clusters) = pipeline.scene().clusters() {
-            renderer.prepare_clusters(clusters.config().index_capacity_bytes)?;
-        }
+        let renderer = GlRenderer::new(context.gl(), &pipeline.buffer_plan())?;
         let backend = Timed { renderer, issue_ms: 0.0 };
         Ok(Runner { context, pipeline, backend, sum: Row::default() })
     }

@@ -17,7 +17,9 @@ use super::objects::{Buffer, BufferTarget, BufferUsage};
 use super::renderer::GlRenderer;
 use super::terrain_pass::{TerrainOutput, TerrainPass, TileBlocks};
 use crate::lod::TileKey;
-use crate::render::{check_uploads, CallStats, DrawList, FrameOutput, RenderBackend, TileUniforms};
+use crate::render::{
+    check_uploads, BufferPlan, CallStats, DrawList, FrameOutput, RenderBackend, TileUniforms,
+};
 use crate::tiles::grid::tile_bytes;
 
 /// What one baseline frame transferred.
@@ -56,7 +58,7 @@ impl ChunkedBaseline {
         let tile_bytes = tile_bytes(grid_size);
         Ok(ChunkedBaseline {
             gl: Rc::clone(gl),
-            background: GlRenderer::new(gl, tile_bytes)?,
+            background: GlRenderer::new(gl, &BufferPlan::new(tile_bytes, false))?,
             pass: TerrainPass::new(gl, tile_bytes)?,
             buffers: HashMap::new(),
             wanted: HashSet::new(),

@@ -37,7 +37,7 @@ use super::symbol_pass::SymbolPass;
 use super::terrain_pass::{TerrainOutput, TerrainPass};
 use crate::gl_check;
 use crate::render::{
-    palette, CallStats, CostModel, DrawList, FrameOutput, FrameUniforms, RenderBackend,
+    palette, BufferPlan, CallStats, CostModel, DrawList, FrameOutput, FrameUniforms, RenderBackend,
     SymbolBackend,
 };
 use crate::symbology::{flag::WITHDRAWN_CLEAR, SymbolMesh};
@@ -53,24 +53,23 @@ pub struct GlRenderer {
 }
 
 impl GlRenderer {
-    /// The passes over a tile buffer of `buffer_bytes` (the tile
-    /// allocator's capacity).
-    pub fn new(gl: &Rc<Gl>, buffer_bytes: u32) -> Result<GlRenderer, GlError> {
+    /// The passes over the buffers of `plan` (a pipeline's,
+    /// `FramePipeline::buffer_plan`): the tile buffer and, when the plan
+    /// has clusters, the cluster index buffer and, with vertex array
+    /// objects, one per window of the vertex buffer, its pointers set here
+    /// once (calls made before any frame, not counted).
+    pub fn new(gl: &Rc<Gl>, plan: &BufferPlan) -> Result<GlRenderer, GlError> {
+        let mut terrain = TerrainPass::new(gl, plan.buffer_bytes)?;
+        if let Some(index_bytes) = plan.cluster_index_bytes {
+            terrain.prepare_clusters(index_bytes)?;
+        }
         Ok(GlRenderer {
             gl: Rc::clone(gl),
-            terrain: TerrainPass::new(gl, buffer_bytes)?,
+            terrain,
             sky: SkyPass::new(gl)?,
             symbols: SymbolPass::new(gl)?,
             sentinel: None,
         })
-    }
-
-    /// Readies the terrain pass to draw clusters, whose index blocks take
-    /// `index_bytes` (the cluster cache's index capacity): an index buffer
-    /// and, with vertex array objects, one per window of the tile buffer,
-    /// its pointers set here once (calls made before any frame, not counted).
-    pub fn prepare_clusters(&mut self, index_bytes: u32) -> Result<(), GlError> {
-        self.terrain.prepare_clusters(index_bytes)
     }
 
     /// With `Some(colour)` the sky is not drawn and the target is cleared to

@@ -232,9 +232,8 @@ impl TerrainPass {
 
     /// The cluster buffers, or why there are none.
     fn prepared(&self) -> Result<&ClusterArrays, GlError> {
-        self.clusters.as_ref().ok_or_else(|| {
-            GlError::InvalidRequest("clusters drawn by a pass not prepared for them".to_owned())
-        })
+        // As the null backend refuses them: the renderer's plan had none.
+        self.clusters.as_ref().ok_or(GlError::from(RenderError::ClustersNotPlanned))
     }
 
     /// `bytes` into `buffer` at `offset`, which the caller checked.

@@ -9,6 +9,7 @@ pub mod cost;
 pub mod draw_list;
 pub mod null;
 pub mod palette;
+pub mod plan;
 
 pub use cluster::{Cluster, ClusterMorph, ClusterOrder, ClusterRun, Member};
 pub use cost::{CallStats, CostModel};
@@ -16,6 +17,7 @@ pub use draw_list::{
     DepthSlices, DrawList, DrawnTile, FrameUniforms, PostFrame, Slice, TileUniforms,
 };
 pub use null::NullBackend;
+pub use plan::BufferPlan;
 
 use std::ops::Range;
 
@@ -83,6 +85,9 @@ pub enum RenderError {
         /// Bytes of the staging copy.
         staging: usize,
     },
+    /// A frame with clusters on a backend whose [`BufferPlan`] has none.
+    #[error("clusters drawn by a backend whose buffer plan has no cluster index buffer")]
+    ClustersNotPlanned,
 }
 
 /// Refuses `ranges` that reach past a GPU buffer of `capacity` bytes or
