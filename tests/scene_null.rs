@@ -68,6 +68,22 @@ fn an_upload_past_the_buffer_is_refused() {
     );
 }
 
+/// A draw list built for no frame (no uniforms) draws nothing, but the
+/// frame's uploads still go: `RenderBackend::render` decides it for every
+/// backend.
+#[test]
+fn a_list_without_uniforms_uploads_and_draws_nothing() {
+    let plan = BufferPlan::new(128, false);
+    let mut backend = NullBackend::new(&plan, CostModel { vertex_arrays: true, sky: true });
+    let (staging, list) = ([0u8; 128], DrawList::default());
+    let dirty = std::slice::from_ref(&(0..64u32));
+    let frame = FrameOutput { list: &list, staging: &staging, dirty, indices: None };
+    backend.render(&frame).expect("an upload within the buffer");
+    let calls = backend.take_calls();
+    assert_eq!((calls.upload_calls, calls.bytes_uploaded), (1, 64));
+    assert_eq!((calls.frames, calls.clears, calls.draw_calls), (0, 0, 0));
+}
+
 /// Cluster indices reach only a backend whose buffer plan has an index
 /// buffer, within it: the null backend refuses them otherwise, as the GL
 /// renderer does.

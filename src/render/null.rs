@@ -4,8 +4,8 @@
 //! GL context.
 
 use super::{
-    check_uploads, cost, BufferPlan, CallStats, CostModel, FrameOutput, RenderBackend, RenderError,
-    SymbolBackend,
+    check_uploads, cost, BufferPlan, CallStats, CostModel, DrawList, FrameOutput, FrameUniforms,
+    RenderBackend, RenderError, SymbolBackend,
 };
 use crate::symbology::SymbolMesh;
 
@@ -35,7 +35,7 @@ impl NullBackend {
 impl RenderBackend for NullBackend {
     type Error = RenderError;
 
-    fn render(&mut self, frame: &FrameOutput<'_>) -> Result<(), RenderError> {
+    fn upload_frame(&mut self, frame: &FrameOutput<'_>) -> Result<(), RenderError> {
         check_uploads(frame.staging, self.plan.buffer_bytes, frame.dirty)?;
         self.calls.add(&cost::upload(&self.model, frame.dirty));
         if let Some((staging, dirty)) = frame.indices {
@@ -43,7 +43,11 @@ impl RenderBackend for NullBackend {
             check_uploads(staging, capacity, dirty)?;
             self.calls.add(&cost::upload(&self.model, dirty));
         }
-        self.calls.add(&cost::frame(&self.model, frame.list));
+        Ok(())
+    }
+
+    fn draw_frame(&mut self, list: &DrawList, uniforms: &FrameUniforms) -> Result<(), RenderError> {
+        self.calls.add(&cost::frame(&self.model, list, uniforms));
         Ok(())
     }
 
