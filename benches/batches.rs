@@ -42,7 +42,9 @@ use ridgeline::meshes::{MeshOptions, MeshedSource};
 use ridgeline::node::NodeSource;
 use ridgeline::pipeline::FramePipeline;
 use ridgeline::pyramid::{Pyramid, Silent};
-use ridgeline::render::{CallStats, ClusterOrder, FrameOutput, RenderBackend};
+use ridgeline::render::{
+    CallStats, ClusterOrder, DrawList, FrameOutput, FrameUniforms, RenderBackend,
+};
 use ridgeline::scene::TerrainSummary;
 use serde_json::json;
 use support::{print_table, write_json, write_svg, BenchArgs, Panel, Series};
@@ -82,6 +84,15 @@ struct Timed {
 impl RenderBackend for Timed {
     type Error = ridgeline::gl::GlError;
 
+    fn upload_frame(&mut self, frame: &FrameOutput<'_>) -> Result<(), Self::Error> {
+        self.renderer.upload_frame(frame)
+    }
+
+    fn draw_frame(&mut self, list: &DrawList, uniforms: &FrameUniforms) -> Result<(), Self::Error> {
+        self.renderer.draw_frame(list, uniforms)
+    }
+
+    /// The renderer's whole frame, uploads and draws, timed.
     fn render(&mut self, frame: &FrameOutput<'_>) -> Result<(), Self::Error> {
         let start = Instant::now();
         let result = self.renderer.render(frame);
@@ -165,10 +176,7 @@ impl Runner {
         let context = GlContext::new(&request)?;
         let (source, summary) = terrain.source();
         let pipeline = FramePipeline::new(&config.pipeline(), source, summary)?;
-        let mut renderer = GlRenderer::new(context.gl(), config.scene.buffer_bytes)?;
-        if let Some(clusters) = pipeline.scene().clusters() {
-            renderer.prepare_clusters(clusters.config().index_capacity_bytes)?;
-        }
+        let renderer = GlRenderer::new(context.gl(), &pipeline.buffer_plan())?;
         let backend = Timed { renderer, issue_ms: 0.0 };
         Ok(Runner { context, pipeline, backend, sum: Row::default() })
     }

@@ -7,8 +7,11 @@
 //! frames of the built-in approach over the built-in terrain and writes the
 //! last one to `target/embed/frame.png`. After every frame it checks the GL
 //! state Ridgeline documents leaving behind (`gl::GlRenderer`'s module doc).
+//! With `--clusters` the tiles are drawn as cluster batches (Judnich &
+//! Ling), and it says how many clusters it drew.
 //!
-//! `cargo run --release --example embed`; `tests/embed_example.rs` runs it.
+//! `cargo run --release --example embed [-- --clusters]`;
+//! `tests/embed_example.rs` runs it both ways.
 
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
@@ -23,7 +26,7 @@ use ridgeline::camera::Camera;
 use ridgeline::clipmap::LoaderMode;
 use ridgeline::flight::default_flight;
 use ridgeline::gl::{Gl, GlRenderer, GlesVersion};
-use ridgeline::pipeline::{FramePipeline, PipelineConfig};
+use ridgeline::pipeline::{FramePipeline, FrameStats, PipelineConfig};
 use ridgeline::pyramid::Silent;
 use ridgeline::scene::TerrainSummary;
 
@@ -33,29 +36,53 @@ const WIDTH: u32 = 320;
 const HEIGHT: u32 = 180;
 
 fn main() -> Result<(), Error> {
+    let clusters = clusters_flag(std::env::args().skip(1))?;
     let out = PathBuf::from("target/embed");
-    let picture = run(&out, Path::new("cache"), 8)?;
-    println!("wrote {}", picture.display());
+    let flight = run(&out, Path::new("cache"), 8, clusters)?;
+    if clusters {
+        let drawn: usize = flight.frames.iter().map(|f| f.scene.clusters).sum();
+        println!("drew {drawn} clusters in {} frames", flight.frames.len());
+    }
+    println!("wrote {}", flight.picture.display());
     Ok(())
 }
 
+/// Whether the arguments ask for clusters: `--clusters`, or nothing.
+pub fn clusters_flag(mut args: impl Iterator<Item = String>) -> Result<bool, Error> {
+    match (args.next().as_deref(), args.next()) {
+        (None, _) => Ok(false),
+        (Some("--clusters"), None) => Ok(true),
+        _ => Err("usage: embed [--clusters]".into()),
+    }
+}
+
+/// What [`run`] drew: each frame's stats and the last frame's picture.
+pub struct Flight {
+    pub frames: Vec<FrameStats>,
+    pub picture: PathBuf,
+}
+
 /// Flies `frames` frames into the application's framebuffer with the
-/// terrain cache in `cache`; writes the last frame under `out`.
-pub fn run(out: &Path, cache: &Path, frames: u32) -> Result<PathBuf, Error> {
+/// terrain cache in `cache`, as cluster batches with `clusters`; writes the
+/// last frame under `out`.
+pub fn run(out: &Path, cache: &Path, frames: u32, clusters: bool) -> Result<Flight, Error> {
     // 1. The application's own context and framebuffer.
     let (display, context, glow) = open_egl()?;
     let framebuffer = AppFramebuffer::new(&glow, WIDTH, HEIGHT)?;
     // 2. Ridgeline adopts the context: the same function table, its
-    //    capabilities read once. The terrain and the pipeline are GL-free.
+    //    capabilities read once. The terrain and the pipeline are GL-free;
+    //    the renderer's buffers are the ones the pipeline planned.
     let gl: Rc<Gl> = Gl::adopt(glow, GlesVersion::Es3)?;
     std::fs::create_dir_all(cache)?;
     let pyramid = Arc::new(ridgeline::dataset::open(None, cache, &Silent)?);
     let summary = TerrainSummary::from_pyramid(pyramid.info());
-    let config =
+    let mut config =
         PipelineConfig { loader: LoaderMode::Inline, ..PipelineConfig::new([WIDTH, HEIGHT]) };
+    config.scene.clusters = clusters;
     let mut pipeline = FramePipeline::new(&config, pyramid.clone(), summary)?;
-    let mut renderer = GlRenderer::new(&gl, config.scene.buffer_bytes)?;
+    let mut renderer = GlRenderer::new(&gl, &pipeline.buffer_plan())?;
     let path = default_flight(&pyramid);
+    let mut flown = Vec::new();
     // 3. The application's loop: bind its target, ask for a frame, go on.
     for t in path.frame_times(frames) {
         let camera: Camera = path.sample(t).camera(60.0, [WIDTH, HEIGHT]);
@@ -63,10 +90,10 @@ pub fn run(out: &Path, cache: &Path, frames: u32) -> Result<PathBuf, Error> {
         pipeline.settle(&camera, 1000)?;
         let stats = pipeline.frame(&camera, &mut renderer)?;
         check_state_left(&gl, &framebuffer)?;
-        println!(
-            "t = {t:5.1} s: {} tiles, {} draw calls",
-            stats.scene.tiles, stats.calls.draw_calls
-        );
+        let (tiles, clusters, draws) =
+            (stats.scene.tiles, stats.scene.clusters, stats.calls.draw_calls);
+        println!("t = {t:5.1} s: {tiles} tiles, {clusters} clusters, {draws} draw calls");
+        flown.push(stats);
     }
     std::fs::create_dir_all(out)?;
     let picture = out.join("frame.png");
@@ -77,7 +104,7 @@ pub fn run(out: &Path, cache: &Path, frames: u32) -> Result<PathBuf, Error> {
     drop(gl);
     drop(context);
     drop(display);
-    Ok(picture)
+    Ok(Flight { frames: flown, picture })
 }
 
 /// A surfaceless GLES 3 context on the first EGL device that gives one.

@@ -71,7 +71,7 @@ fn fly_over(
         ..PipelineConfig::new(SIZE)
     };
     let mut pipeline = FramePipeline::new(&config, source, summary).expect("pipeline");
-    let mut backend = null_backend(&scene);
+    let mut backend = null_backend(&pipeline);
     path.frame_times(FRAMES)
         .map(|t| pipeline.frame(&path.sample(t).camera(60.0, SIZE), &mut backend).expect("frame"))
         .collect()

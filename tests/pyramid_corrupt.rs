@@ -182,7 +182,7 @@ fn the_pipeline_flies_over_a_damaged_node_on_its_ancestor() {
     let config = ridgeline::scene::SceneConfig::default();
     let summary = ridgeline::scene::TerrainSummary::from_pyramid(pyramid.info());
     let mut pipeline = testkit::scene::pipeline_over(pyramid.clone(), summary, config);
-    let mut backend = testkit::scene::null_backend(&config);
+    let mut backend = testkit::scene::null_backend(&pipeline);
     let centre = DVec2::new((bad.x as f64 + 0.5) * span_m[0], (bad.y as f64 + 0.5) * span_m[1]);
     let height = original.exact_height(centre.x, centre.y).expect("the original has data") as f64;
     let grid = config.lod.grid_size;

@@ -25,7 +25,7 @@ fn fly_both(config: &DisplayConfig) -> (CallStats, u32) {
     let mut gl = DisplayParts::open(config, pyramid.clone(), summary.clone()).expect("EGL display");
     let mut null_pipeline =
         FramePipeline::new(&config.pipeline(), pyramid.clone(), summary).expect("pipeline");
-    let mut null = NullBackend::new(config.scene.buffer_bytes, gl.renderer.cost_model());
+    let mut null = NullBackend::new(&null_pipeline.buffer_plan(), gl.renderer.cost_model());
     let path = default_flight(&pyramid);
     let (mut total, mut sliced) = (CallStats::default(), 0);
     for (k, t) in path.frame_times(FRAMES).enumerate() {

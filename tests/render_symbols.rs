@@ -190,7 +190,7 @@ fn the_null_backend_counts_the_symbol_pass_and_the_withdrawn_frame() {
         let summary = testkit::summary_of(&terrain);
         let mut pipeline =
             FramePipeline::new(&config.pipeline(), terrain, summary).expect("pipeline");
-        let mut null = NullBackend::new(config.scene.buffer_bytes, gl.renderer.cost_model());
+        let mut null = NullBackend::new(&pipeline.buffer_plan(), gl.renderer.cost_model());
         let (camera, velocity) = banked();
         let mut mesh = SymbolMesh::new();
         reference_symbols(&mut mesh, &camera, Some(velocity));

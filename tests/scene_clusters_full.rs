@@ -14,7 +14,7 @@ fn a_cluster_buffer_too_small_coarsens_the_tiles_instead_of_failing() {
     // 2 MB: they carry what its K needs, no more).
     let config = SceneConfig { clusters: true, buffer_bytes: 1 << 20, ..SceneConfig::default() };
     let mut pipeline = pipeline(config);
-    let mut backend = null_backend(&config);
+    let mut backend = null_backend(&pipeline);
     let mut coarsened = 0;
     for k in 0..6 {
         let at = camera(20_000.0 + 400.0 * k as f64, 30_000.0, 1_500.0, 55.0, -8.0);

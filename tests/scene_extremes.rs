@@ -60,7 +60,7 @@ fn extreme_terrain_draws_without_cracks() {
         let config = SceneConfig::default();
         let source: Arc<dyn NodeSource> = terrain;
         let mut pipeline = pipeline_over(source, summary, config);
-        let mut backend = null_backend(&config);
+        let mut backend = null_backend(&pipeline);
         let (mut worst, mut draw_calls): (f64, u64) = (0.0, 0);
         for k in 0..12 {
             let t = k as f64 / 11.0;

@@ -4,7 +4,7 @@
 //! instead of failing or leaving holes.
 
 use ridgeline::render::{
-    CostModel, DrawList, FrameOutput, NullBackend, RenderBackend, RenderError, Slice,
+    BufferPlan, CostModel, DrawList, FrameOutput, NullBackend, RenderBackend, RenderError, Slice,
 };
 use ridgeline::scene::{Scene, SceneConfig};
 use ridgeline::tiles::grid::tile_bytes;
@@ -17,7 +17,7 @@ use testkit::scene::{camera, fly, null_backend, pipeline, terrain};
 fn scripted_flight_counts_and_a_still_camera_uploads_nothing() {
     let config = SceneConfig { transfer_cap: None, ..SceneConfig::default() };
     let mut pipeline = pipeline(config);
-    let mut backend = null_backend(&config);
+    let mut backend = null_backend(&pipeline);
     let mut uploaded = 0;
     for k in 0..20 {
         let cam = camera(10_000.0 + 1_500.0 * k as f64, 20_000.0, 3_500.0, 60.0, -6.0);
@@ -60,7 +60,8 @@ fn scripted_flight_counts_and_a_still_camera_uploads_nothing() {
 /// GL backend gives.
 #[test]
 fn an_upload_past_the_buffer_is_refused() {
-    let mut backend = NullBackend::new(64, CostModel { vertex_arrays: true, sky: true });
+    let plan = BufferPlan { buffer_bytes: 64, cluster_index_bytes: None };
+    let mut backend = NullBackend::new(&plan, CostModel { vertex_arrays: true, sky: true });
     let staging = [0u8; 128];
     let list = DrawList::default();
     let dirty = std::slice::from_ref(&(32..96));
@@ -70,6 +71,47 @@ fn an_upload_past_the_buffer_is_refused() {
         error,
         RenderError::UploadPastBuffer { start: 32, end: 96, capacity: 64, staging: 128 }
     );
+}
+
+/// A draw list built for no frame (no uniforms) draws nothing, but the
+/// frame's uploads still go: `RenderBackend::render` decides it for every
+/// backend.
+#[test]
+fn a_list_without_uniforms_uploads_and_draws_nothing() {
+    let plan = BufferPlan::new(128, false);
+    let mut backend = NullBackend::new(&plan, CostModel { vertex_arrays: true, sky: true });
+    let (staging, list) = ([0u8; 128], DrawList::default());
+    let dirty = std::slice::from_ref(&(0..64u32));
+    let frame = FrameOutput { list: &list, staging: &staging, dirty, indices: None };
+    backend.render(&frame).expect("an upload within the buffer");
+    let calls = backend.take_calls();
+    assert_eq!((calls.upload_calls, calls.bytes_uploaded), (1, 64));
+    assert_eq!((calls.frames, calls.clears, calls.draw_calls), (0, 0, 0));
+}
+
+/// Cluster indices reach only a backend whose buffer plan has an index
+/// buffer, within it: the null backend refuses them otherwise, as the GL
+/// renderer does.
+#[test]
+fn cluster_indices_need_a_planned_index_buffer() {
+    let model = CostModel { vertex_arrays: true, sky: true };
+    let (staging, list) = ([0u8; 128], DrawList::default());
+    let indices = std::slice::from_ref(&(0..64u32));
+    let frame = FrameOutput {
+        list: &list,
+        staging: &staging,
+        dirty: &[],
+        indices: Some((&staging, indices)),
+    };
+    let without = NullBackend::new(&BufferPlan::new(128, false), model).render(&frame);
+    assert_eq!(without.unwrap_err(), RenderError::ClustersNotPlanned);
+    let with = BufferPlan::new(128, true);
+    assert_eq!(with.cluster_index_bytes, Some(64));
+    NullBackend::new(&with, model).render(&frame).expect("indices within the planned buffer");
+    let past = std::slice::from_ref(&(0..96u32));
+    let frame = FrameOutput { indices: Some((&staging, past)), ..frame };
+    let error = NullBackend::new(&with, model).render(&frame).unwrap_err();
+    assert!(matches!(error, RenderError::UploadPastBuffer { capacity: 64, .. }), "{error}");
 }
 
 #[test]
@@ -160,7 +202,7 @@ fn the_near_plane_follows_the_nearest_tile() {
 fn tiles_stop_where_finer_data_stop() {
     let config = SceneConfig::default();
     let mut pipeline = pipeline(config);
-    let mut backend = null_backend(&config);
+    let mut backend = null_backend(&pipeline);
     // 5 km inside the tile's west edge, looking west over the base.
     let cam = camera(5_000.0, 45_000.0, 4_000.0, 270.0, -4.0);
     let stats = fly(&mut pipeline, &mut backend, &cam).unwrap();

@@ -16,7 +16,7 @@ const LAPS: u32 = 25;
 fn ten_thousand_frames_keep_memory_and_free_space_flat() {
     let config = SceneConfig::default();
     let mut pipeline = pipeline(config);
-    let mut backend = null_backend(&config);
+    let mut backend = null_backend(&pipeline);
     let (mut frames, mut bytes_uploaded, mut nodes_loaded) = (0u64, 0u64, 0u64);
     // A circle of 12 km radius around the middle of the data, heading along it.
     let at = |frame: u32| {

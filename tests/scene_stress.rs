@@ -109,8 +109,9 @@ fn numbers_that_are_not_numbers_are_refused() {
 
 /// The pipeline over the built-in terrain and its null backend.
 fn display_pipeline() -> (FramePipeline, NullBackend) {
-    let config = SceneConfig::default();
-    (pipeline(config), null_backend(&config))
+    let pipeline = pipeline(SceneConfig::default());
+    let backend = null_backend(&pipeline);
+    (pipeline, backend)
 }
 
 /// A frame that must be refused by the scene (the camera), not elsewhere.

@@ -146,7 +146,7 @@ fn fly_default(max_travel_m: Option<f64>, meshes: bool) -> Vec<(Vec<TileKey>, Li
         (pyramid.clone(), TerrainSummary::from_pyramid(pyramid.info()))
     };
     let mut pipeline = FramePipeline::new(&config, source, summary).expect("pipeline");
-    let mut backend = null_backend(&scene);
+    let mut backend = null_backend(&pipeline);
     let mut frames = Vec::new();
     for t in path.frame_times(FLY_FRAMES) {
         let camera = path.sample(t).camera(60.0, FLY_SIZE);

@@ -354,7 +354,7 @@ fn measure_one(
     let [lod, truth_positions] = images;
     let frame = frame_of(display.pipeline.draw_list())?;
     passes.positions.bind();
-    display.renderer.draw_positions(display.pipeline.draw_list())?;
+    display.renderer.draw_positions(display.pipeline.draw_list(), &frame)?;
     passes.positions.read_positions(lod)?;
     let placement = display.pipeline.scene().config().earth;
     let geometry = ViewGeometry::new(camera, &frame).on_earth(&frame, placement);
@@ -362,8 +362,8 @@ fn measure_one(
         Truth::Mesh(truth) => {
             let stats = draw_truth(display, truth)?;
             passes.positions.bind();
-            let background = DrawList { uniforms: Some(frame), ..DrawList::default() };
-            display.renderer.draw_positions(&background)?;
+            // No tiles: the cleared target under the truth's positions.
+            display.renderer.draw_positions(&DrawList::default(), &frame)?;
             truth.draw(&frame, crate::gl::TerrainOutput::Position)?;
             passes.positions.read_positions(truth_positions)?;
             stats

@@ -137,12 +137,7 @@ impl DisplayParts {
         request.vertex_arrays = config.vertex_arrays;
         let context = GlContext::new(&request)?;
         let pipeline = FramePipeline::new(&config.pipeline(), source, summary)?;
-        // The buffer the pipeline's staging copy mirrors (a memory budget may have shrunk it).
-        let buffer_bytes = pipeline.scene().config().buffer_bytes;
-        let mut renderer = GlRenderer::new(context.gl(), buffer_bytes)?;
-        if let Some(clusters) = pipeline.scene().clusters() {
-            renderer.prepare_clusters(clusters.config().index_capacity_bytes)?;
-        }
+        let mut renderer = GlRenderer::new(context.gl(), &pipeline.buffer_plan())?;
         renderer.set_sentinel(config.sentinel);
         Ok(DisplayParts { renderer, context, pipeline })
     }

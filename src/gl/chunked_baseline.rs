@@ -17,7 +17,10 @@ use super::objects::{Buffer, BufferTarget, BufferUsage};
 use super::renderer::GlRenderer;
 use super::terrain_pass::{TerrainOutput, TerrainPass, TileBlocks};
 use crate::lod::TileKey;
-use crate::render::{check_uploads, CallStats, DrawList, FrameOutput, RenderBackend, TileUniforms};
+use crate::render::{
+    check_uploads, BufferPlan, CallStats, DrawList, FrameOutput, FrameUniforms, RenderBackend,
+    TileUniforms,
+};
 use crate::tiles::grid::tile_bytes;
 
 /// What one baseline frame transferred.
@@ -56,7 +59,7 @@ impl ChunkedBaseline {
         let tile_bytes = tile_bytes(grid_size);
         Ok(ChunkedBaseline {
             gl: Rc::clone(gl),
-            background: GlRenderer::new(gl, tile_bytes)?,
+            background: GlRenderer::new(gl, &BufferPlan::new(tile_bytes, false))?,
             pass: TerrainPass::new(gl, tile_bytes)?,
             buffers: HashMap::new(),
             wanted: HashSet::new(),
@@ -71,9 +74,8 @@ impl ChunkedBaseline {
 
     /// Uploads, each by itself, the tiles of `list` that have no buffer yet
     /// or whose bytes lie in the frame's `dirty` ranges of `staging` (the
-    /// scene's staging copy); frees the buffers of tiles no longer drawn; and
-    /// draws the tiles into the bound target (not cleared).
-    fn tiles(
+    /// scene's staging copy), and frees the buffers of tiles no longer drawn.
+    fn uploads(
         &mut self,
         list: &DrawList,
         staging: &[u8],
@@ -107,9 +109,6 @@ impl ChunkedBaseline {
             stats.uploads += 1;
             stats.bytes_uploaded += bytes.len() as u64;
         }
-        let buffers = &self.buffers;
-        let buffer_of = |tile: &TileUniforms| buffers.get(&block_key(tile));
-        self.pass.draw_from(list, TerrainOutput::Colour, TileBlocks::PerTile(&buffer_of))?;
         stats.buffers = self.buffers.len();
         Ok(stats)
     }
@@ -137,13 +136,19 @@ impl ChunkedBaseline {
 impl RenderBackend for ChunkedBaseline {
     type Error = GlError;
 
-    fn render(&mut self, frame: &FrameOutput<'_>) -> Result<(), GlError> {
+    fn upload_frame(&mut self, frame: &FrameOutput<'_>) -> Result<(), GlError> {
         check_uploads(frame.staging, frame.staging.len() as u32, frame.dirty)?;
-        let Some(uniforms) = frame.list.uniforms else { return Ok(()) };
-        self.gl.tally(|c| c.frames += 1);
-        self.background.draw_background(&uniforms)?;
-        self.last = self.tiles(frame.list, frame.staging, frame.dirty)?;
+        self.last = self.uploads(frame.list, frame.staging, frame.dirty)?;
         Ok(())
+    }
+
+    fn draw_frame(&mut self, list: &DrawList, uniforms: &FrameUniforms) -> Result<(), GlError> {
+        self.gl.tally(|c| c.frames += 1);
+        self.background.draw_background(uniforms)?;
+        let buffers = &self.buffers;
+        let buffer_of = |tile: &TileUniforms| buffers.get(&block_key(tile));
+        let blocks = TileBlocks::PerTile(&buffer_of);
+        self.pass.draw_from(list, uniforms, TerrainOutput::Colour, blocks)
     }
 
     fn finish(&mut self) {

@@ -37,7 +37,7 @@ use super::symbol_pass::SymbolPass;
 use super::terrain_pass::{TerrainOutput, TerrainPass};
 use crate::gl_check;
 use crate::render::{
-    palette, CallStats, CostModel, DrawList, FrameOutput, FrameUniforms, RenderBackend,
+    palette, BufferPlan, CallStats, CostModel, DrawList, FrameOutput, FrameUniforms, RenderBackend,
     SymbolBackend,
 };
 use crate::symbology::{flag::WITHDRAWN_CLEAR, SymbolMesh};
@@ -53,24 +53,23 @@ pub struct GlRenderer {
 }
 
 impl GlRenderer {
-    /// The passes over a tile buffer of `buffer_bytes` (the tile
-    /// allocator's capacity).
-    pub fn new(gl: &Rc<Gl>, buffer_bytes: u32) -> Result<GlRenderer, GlError> {
+    /// The passes over the buffers of `plan` (a pipeline's,
+    /// `FramePipeline::buffer_plan`): the tile buffer and, when the plan
+    /// has clusters, the cluster index buffer and, with vertex array
+    /// objects, one per window of the vertex buffer, its pointers set here
+    /// once (calls made before any frame, not counted).
+    pub fn new(gl: &Rc<Gl>, plan: &BufferPlan) -> Result<GlRenderer, GlError> {
+        let mut terrain = TerrainPass::new(gl, plan.buffer_bytes)?;
+        if let Some(index_bytes) = plan.cluster_index_bytes {
+            terrain.prepare_clusters(index_bytes)?;
+        }
         Ok(GlRenderer {
             gl: Rc::clone(gl),
-            terrain: TerrainPass::new(gl, buffer_bytes)?,
+            terrain,
             sky: SkyPass::new(gl)?,
             symbols: SymbolPass::new(gl)?,
             sentinel: None,
         })
-    }
-
-    /// Readies the terrain pass to draw clusters, whose index blocks take
-    /// `index_bytes` (the cluster cache's index capacity): an index buffer
-    /// and, with vertex array objects, one per window of the tile buffer,
-    /// its pointers set here once (calls made before any frame, not counted).
-    pub fn prepare_clusters(&mut self, index_bytes: u32) -> Result<(), GlError> {
-        self.terrain.prepare_clusters(index_bytes)
     }
 
     /// With `Some(colour)` the sky is not drawn and the target is cleared to
@@ -88,12 +87,16 @@ impl GlRenderer {
     }
 
     /// Clears the bound RGBA32F target to 0 (alpha 0: no terrain) and draws
-    /// `list`'s tiles as camera-relative positions (the accuracy tool's
-    /// position pass over the tiles this renderer holds).
-    pub fn draw_positions(&mut self, list: &DrawList) -> Result<(), GlError> {
-        let Some(frame) = list.uniforms else { return Ok(()) };
+    /// `list`'s tiles (built for the frame of `frame`) as camera-relative
+    /// positions (the accuracy tool's position pass over the tiles this
+    /// renderer holds).
+    pub fn draw_positions(
+        &mut self,
+        list: &DrawList,
+        frame: &FrameUniforms,
+    ) -> Result<(), GlError> {
         self.clear(frame.viewport, [0.0; 4])?;
-        self.terrain.draw(list, TerrainOutput::Position)
+        self.terrain.draw(list, frame, TerrainOutput::Position)
     }
 
     /// Clears the bound target and draws the sky of `frame` (or clears to the
@@ -128,35 +131,24 @@ impl GlRenderer {
     }
 }
 
-impl GlRenderer {
-    /// Copies `ranges` of `staging` into the tile buffer at the same
-    /// offsets, one glBufferSubData each.
-    pub fn upload(
-        &mut self,
-        staging: &[u8],
-        ranges: &[std::ops::Range<u32>],
-    ) -> Result<(), GlError> {
-        self.terrain.upload(staging, ranges)
-    }
-
-    /// Clears, draws the sky and the tiles of `list` from the tile buffer.
-    pub fn draw(&mut self, list: &DrawList) -> Result<(), GlError> {
-        let Some(frame) = list.uniforms else { return Ok(()) };
-        self.gl.tally(|c| c.frames += 1);
-        self.draw_background(&frame)?;
-        self.terrain.draw(list, TerrainOutput::Colour)
-    }
-}
-
 impl RenderBackend for GlRenderer {
     type Error = GlError;
 
-    fn render(&mut self, frame: &FrameOutput<'_>) -> Result<(), GlError> {
-        self.upload(frame.staging, frame.dirty)?;
+    /// One glBufferSubData per dirty range, into the tile buffer (and the
+    /// cluster index buffer) at the same offsets.
+    fn upload_frame(&mut self, frame: &FrameOutput<'_>) -> Result<(), GlError> {
+        self.terrain.upload(frame.staging, frame.dirty)?;
         if let Some((staging, dirty)) = frame.indices {
             self.terrain.upload_indices(staging, dirty)?;
         }
-        self.draw(frame.list)
+        Ok(())
+    }
+
+    /// Clears, draws the sky and the tiles of `list` from the tile buffer.
+    fn draw_frame(&mut self, list: &DrawList, uniforms: &FrameUniforms) -> Result<(), GlError> {
+        self.gl.tally(|c| c.frames += 1);
+        self.draw_background(uniforms)?;
+        self.terrain.draw(list, uniforms, TerrainOutput::Colour)
     }
 
     #[allow(unsafe_code)]

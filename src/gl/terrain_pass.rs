@@ -232,9 +232,8 @@ impl TerrainPass {
 
     /// The cluster buffers, or why there are none.
     fn prepared(&self) -> Result<&ClusterArrays, GlError> {
-        self.clusters.as_ref().ok_or_else(|| {
-            GlError::InvalidRequest("clusters drawn by a pass not prepared for them".to_owned())
-        })
+        // As the null backend refuses them: the renderer's plan had none.
+        self.clusters.as_ref().ok_or(GlError::from(RenderError::ClustersNotPlanned))
     }
 
     /// `bytes` into `buffer` at `offset`, which the caller checked.
@@ -252,12 +251,18 @@ impl TerrainPass {
         }
     }
 
-    /// Draws every tile of `list`, writing `output`, in the frame's depth
-    /// slices (far first, depth cleared between). Sets all the state it
-    /// relies on: depth test and writes on, back faces culled, no blending,
-    /// no scissor. Mirrored call for call by [`crate::render::cost::terrain`].
-    pub fn draw(&self, list: &DrawList, output: TerrainOutput) -> Result<(), GlError> {
-        self.draw_from(list, output, TileBlocks::Shared)
+    /// Draws every tile of `list` (built for the frame of `frame`, its
+    /// uniforms), writing `output`, in the frame's depth slices (far first,
+    /// depth cleared between). Sets all the state it relies on: depth test
+    /// and writes on, back faces culled, no blending, no scissor. Mirrored
+    /// call for call by [`crate::render::cost::terrain`].
+    pub fn draw(
+        &self,
+        list: &DrawList,
+        frame: &FrameUniforms,
+        output: TerrainOutput,
+    ) -> Result<(), GlError> {
+        self.draw_from(list, frame, output, TileBlocks::Shared)
     }
 
     /// [`Self::draw`] with the tiles' blocks where `blocks` says.
@@ -265,10 +270,10 @@ impl TerrainPass {
     pub fn draw_from(
         &self,
         list: &DrawList,
+        frame: &FrameUniforms,
         output: TerrainOutput,
         blocks: TileBlocks<'_>,
     ) -> Result<(), GlError> {
-        let Some(frame) = list.uniforms else { return Ok(()) };
         let clusters = if list.clustered() { Some(self.prepared()?) } else { None };
         // Per window vertex arrays, where the context has them.
         let windows = clusters.map(|c| c.windows.as_slice()).filter(|w| !w.is_empty());
@@ -294,7 +299,7 @@ impl TerrainPass {
             // The depth clear between slices must reach the whole target.
             calls.disable(glow::SCISSOR_TEST);
             calls.use_program(&program.program);
-            set_frame_uniforms(calls, &program.at, &frame);
+            set_frame_uniforms(calls, &program.at, frame);
             if windows.is_none() {
                 if let Some(vertex_array) = &self.vertex_array {
                     calls.bind_vertex_array(Some(vertex_array));
@@ -317,15 +322,16 @@ impl TerrainPass {
             let mut bound = Bound { base: None, windows };
             if let Some(far) = frame.slices.far {
                 let b = &mut bound;
-                on_plain = self.draw_slice(calls, programs, list, far, Slice::Far, blocks, b);
+                let far = (far, Slice::Far);
+                on_plain = self.draw_slice(calls, programs, list, *frame, far, blocks, b);
                 calls.clear(glow::DEPTH_BUFFER_BIT);
             }
             if !on_plain {
                 calls.use_program(&program.program);
-                set_frame_uniforms(calls, &program.at, &frame);
+                set_frame_uniforms(calls, &program.at, frame);
             }
-            let near = frame.slices.near;
-            self.draw_slice(calls, programs, list, near, Slice::Near, blocks, &mut bound);
+            let near = (frame.slices.near, Slice::Near);
+            self.draw_slice(calls, programs, list, *frame, near, blocks, &mut bound);
             if windows.is_none() {
                 enable_attributes(calls, false);
             }
@@ -347,12 +353,11 @@ impl TerrainPass {
         calls: Calls<'_>,
         programs: &[TerrainProgram; 2],
         list: &DrawList,
-        view_projection: glam::Mat4,
-        slice: Slice,
+        frame: FrameUniforms,
+        (view_projection, slice): (glam::Mat4, Slice),
         blocks: TileBlocks<'_>,
         base: &mut Bound<'_>,
     ) -> bool {
-        let frame = list.uniforms.expect("drawn lists have uniforms");
         let [plain, no_data] = programs;
         // SAFETY: the plain program is bound and its location comes from it.
         unsafe { calls.uniform_matrix(plain.at.view_projection.as_ref(), &view_projection) };

@@ -143,6 +143,6 @@ impl TruthPass {
         };
         // As the display does: a fair brute force gets early z too.
         list.sort_front_to_back(CHUNK_CELLS);
-        self.terrain.draw(&list, output)
+        self.terrain.draw(&list, frame, output)
     }
 }

@@ -29,7 +29,7 @@ use crate::clipmap::{
 };
 use crate::lod::budget::{BudgetConfig, BudgetError, BudgetTarget, TauController};
 use crate::node::NodeSource;
-use crate::render::{CallStats, DrawList, FrameOutput, RenderBackend, SymbolBackend};
+use crate::render::{BufferPlan, CallStats, DrawList, FrameOutput, RenderBackend, SymbolBackend};
 use crate::scene::{
     ClipmapTerrain, Scene, SceneConfig, SceneError, SceneStats, TerrainSummary, TriangleBand,
 };
@@ -353,6 +353,13 @@ impl FramePipeline {
     /// The clipmap (its atlas and views).
     pub fn clipmap(&self) -> &Clipmap {
         &self.clipmap
+    }
+
+    /// The GPU buffers this pipeline's frames fill (after any memory
+    /// budget shrank them): every backend is built from it
+    /// (`GlRenderer::new`, [`crate::render::NullBackend::new`]).
+    pub fn buffer_plan(&self) -> BufferPlan {
+        self.scene.buffer_plan()
     }
 
     /// How the memory budget was shared, if one was given.

@@ -7,7 +7,7 @@
 //! Each function below mirrors one GL pass call for call; its comments name
 //! the calls, in the order the pass makes them.
 
-use super::{DrawList, Slice};
+use super::{DrawList, FrameUniforms, Slice};
 use crate::symbology::SymbolMesh;
 use std::ops::Range;
 
@@ -103,16 +103,13 @@ pub fn upload(model: &CostModel, ranges: &[Range<u32>]) -> CallStats {
     }
 }
 
-/// A frame of the display: clear, sky, terrain.
-pub fn frame(model: &CostModel, list: &DrawList) -> CallStats {
-    if list.uniforms.is_none() {
-        return CallStats::default();
-    }
+/// A frame of the display (`frame` its uniforms): clear, sky, terrain.
+pub fn frame(model: &CostModel, list: &DrawList, frame: &FrameUniforms) -> CallStats {
     let mut stats = clear();
     if model.sky {
         stats.add(&sky(model));
     }
-    stats.add(&terrain(model, list));
+    stats.add(&terrain(model, list, frame));
     stats.frames = 1;
     stats
 }
@@ -163,8 +160,7 @@ pub fn sky(model: &CostModel) -> CallStats {
 /// embedding caller), a window's vertex array per change of base, and the
 /// unbind at the end. Without vertex arrays a change of base is three
 /// pointers.
-pub fn terrain(model: &CostModel, list: &DrawList) -> CallStats {
-    let Some(frame) = list.uniforms else { return CallStats::default() };
+pub fn terrain(model: &CostModel, list: &DrawList, frame: &FrameUniforms) -> CallStats {
     let windows = model.vertex_arrays && list.clustered();
     let mut stats = CallStats {
         state_changes: 9,

@@ -9,6 +9,7 @@ pub mod cost;
 pub mod draw_list;
 pub mod null;
 pub mod palette;
+pub mod plan;
 
 pub use cluster::{Cluster, ClusterMorph, ClusterOrder, ClusterRun, Member};
 pub use cost::{CallStats, CostModel};
@@ -16,6 +17,7 @@ pub use draw_list::{
     DepthSlices, DrawList, DrawnTile, FrameUniforms, PostFrame, Slice, TileUniforms,
 };
 pub use null::NullBackend;
+pub use plan::BufferPlan;
 
 use std::ops::Range;
 
@@ -44,9 +46,22 @@ pub trait RenderBackend {
     /// What can go wrong; an upload past the buffer is [`RenderError`] in
     /// every backend.
     type Error: std::error::Error + From<RenderError>;
-    /// Uploads the frame's dirty ranges, clears, draws the sky and the
-    /// terrain tiles.
-    fn render(&mut self, frame: &FrameOutput<'_>) -> Result<(), Self::Error>;
+    /// Uploads the frame's dirty ranges (and, with clusters, its index
+    /// ranges) into the backend's buffers.
+    fn upload_frame(&mut self, frame: &FrameOutput<'_>) -> Result<(), Self::Error>;
+    /// Clears, draws the sky and `list`'s terrain, for the frame whose
+    /// uniforms are `uniforms`.
+    fn draw_frame(&mut self, list: &DrawList, uniforms: &FrameUniforms) -> Result<(), Self::Error>;
+    /// Uploads, then draws the frame. The one place that decides that a
+    /// draw list built for no frame (no uniforms) draws nothing: no clear,
+    /// no sky, no frame counted; its uploads still go.
+    fn render(&mut self, frame: &FrameOutput<'_>) -> Result<(), Self::Error> {
+        self.upload_frame(frame)?;
+        match &frame.list.uniforms {
+            Some(uniforms) => self.draw_frame(frame.list, uniforms),
+            None => Ok(()),
+        }
+    }
     /// Waits until the frame is drawn (glFinish), so frame times are whole.
     fn finish(&mut self) {}
     /// The calls issued since the last take, and a new count from zero.
@@ -83,6 +98,9 @@ pub enum RenderError {
         /// Bytes of the staging copy.
         staging: usize,
     },
+    /// A frame with clusters on a backend whose [`BufferPlan`] has none.
+    #[error("clusters drawn by a backend whose buffer plan has no cluster index buffer")]
+    ClustersNotPlanned,
 }
 
 /// Refuses `ranges` that reach past a GPU buffer of `capacity` bytes or

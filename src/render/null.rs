@@ -4,8 +4,8 @@
 //! GL context.
 
 use super::{
-    check_uploads, cost, CallStats, CostModel, FrameOutput, RenderBackend, RenderError,
-    SymbolBackend,
+    check_uploads, cost, BufferPlan, CallStats, CostModel, DrawList, FrameOutput, FrameUniforms,
+    RenderBackend, RenderError, SymbolBackend,
 };
 use crate::symbology::SymbolMesh;
 
@@ -14,15 +14,16 @@ use crate::symbology::SymbolMesh;
 pub struct NullBackend {
     calls: CallStats,
     model: CostModel,
-    /// Size of the GPU buffer it stands for; uploads past it are refused.
-    capacity: u32,
+    /// The GPU buffers it stands for; uploads past them are refused, and
+    /// cluster indices without an index buffer, as the GL backend does.
+    plan: BufferPlan,
 }
 
 impl NullBackend {
-    /// A backend standing for a GPU buffer of `capacity` bytes on a context
-    /// described by `model`.
-    pub fn new(capacity: u32, model: CostModel) -> Self {
-        NullBackend { calls: CallStats::default(), model, capacity }
+    /// A backend standing for the GPU buffers of `plan` (a pipeline's,
+    /// `FramePipeline::buffer_plan`) on a context described by `model`.
+    pub fn new(plan: &BufferPlan, model: CostModel) -> Self {
+        NullBackend { calls: CallStats::default(), model, plan: *plan }
     }
 
     /// The calls counted so far.
@@ -34,14 +35,19 @@ impl NullBackend {
 impl RenderBackend for NullBackend {
     type Error = RenderError;
 
-    fn render(&mut self, frame: &FrameOutput<'_>) -> Result<(), RenderError> {
-        check_uploads(frame.staging, self.capacity, frame.dirty)?;
+    fn upload_frame(&mut self, frame: &FrameOutput<'_>) -> Result<(), RenderError> {
+        check_uploads(frame.staging, self.plan.buffer_bytes, frame.dirty)?;
         self.calls.add(&cost::upload(&self.model, frame.dirty));
         if let Some((staging, dirty)) = frame.indices {
-            check_uploads(staging, staging.len() as u32, dirty)?;
+            let capacity = self.plan.cluster_index_bytes.ok_or(RenderError::ClustersNotPlanned)?;
+            check_uploads(staging, capacity, dirty)?;
             self.calls.add(&cost::upload(&self.model, dirty));
         }
-        self.calls.add(&cost::frame(&self.model, frame.list));
+        Ok(())
+    }
+
+    fn draw_frame(&mut self, list: &DrawList, uniforms: &FrameUniforms) -> Result<(), RenderError> {
+        self.calls.add(&cost::frame(&self.model, list, uniforms));
         Ok(())
     }
 

@@ -28,7 +28,7 @@ use crate::mesh::code::threshold_code;
 use crate::node::{NodeId, NodeLayout};
 use crate::render::draw_list::{made_delta, TileGeometry};
 use crate::render::draw_list::{DepthSlices, PostFrame};
-use crate::render::{palette, ClusterMorph, ClusterOrder, DrawList, FrameUniforms};
+use crate::render::{palette, BufferPlan, ClusterMorph, ClusterOrder, DrawList, FrameUniforms};
 use crate::tiles::errors::{MapErrors, MeshErrors};
 use crate::tiles::{TileCache, TileCacheConfig, TileError};
 use std::time::Instant;
@@ -240,10 +240,11 @@ impl Scene {
         let mut draw_list = DrawList::with_capacity(cache_config.max_tiles as usize);
         draw_list.cluster_morph = config.cluster_morph;
         draw_list.cluster_order = config.cluster_order;
-        let clusters = if config.clusters {
+        let plan = BufferPlan::new(config.buffer_bytes, config.clusters);
+        let clusters = if let Some(index_capacity_bytes) = plan.cluster_index_bytes {
             Some(ClusterCache::new(ClusterConfig {
-                capacity_bytes: config.buffer_bytes,
-                index_capacity_bytes: (config.buffer_bytes / 2) & !3,
+                capacity_bytes: plan.buffer_bytes,
+                index_capacity_bytes,
                 max_clusters: cache_config.max_tiles,
                 transfer_cap: config.transfer_cap,
                 frames_in_flight: config.frames_in_flight,
@@ -290,6 +291,12 @@ impl Scene {
     /// The configuration the scene was built with.
     pub fn config(&self) -> &SceneConfig {
         &self.config
+    }
+
+    /// The GPU buffers the scene's frames fill, as its caches were sized:
+    /// what every backend drawing them must be sized by.
+    pub fn buffer_plan(&self) -> BufferPlan {
+        BufferPlan::new(self.config.buffer_bytes, self.config.clusters)
     }
 
     /// The last frame's draw list.

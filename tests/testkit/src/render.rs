@@ -143,7 +143,8 @@ pub fn redraw(display: &mut DisplayParts, alter: impl FnOnce(&mut DrawList)) -> 
     alter(&mut list);
     display.context.make_current().expect("make the display's context current");
     display.context.bind_target();
-    display.renderer.draw(&list).expect("redraw");
+    let uniforms = list.uniforms.expect("the last frame's list has uniforms");
+    display.renderer.draw_frame(&list, &uniforms).expect("redraw");
     display.renderer.finish();
     display.context.read_pixels().expect("read back")
 }

@@ -49,9 +49,10 @@ pub fn pipeline_grid(config: SceneConfig) -> FramePipeline {
     pipeline_over(pyramid, summary, config)
 }
 
-/// A null backend standing for an ES 3 context with the sky on.
-pub fn null_backend(config: &SceneConfig) -> NullBackend {
-    NullBackend::new(config.buffer_bytes, CostModel { vertex_arrays: true, sky: true })
+/// A null backend for `pipeline`'s buffers, standing for an ES 3 context
+/// with the sky on.
+pub fn null_backend(pipeline: &FramePipeline) -> NullBackend {
+    NullBackend::new(&pipeline.buffer_plan(), CostModel { vertex_arrays: true, sky: true })
 }
 
 /// Pages in everything `camera` wants, then draws one frame on `backend`.
