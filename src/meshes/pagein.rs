@@ -18,9 +18,9 @@
 
 use crate::lod::TileKey;
 use crate::node::{ErrorMap, NodeData, NodeError, NodeId, NodeLayout, NodeSource};
-use crate::tiles::vertex::PostReader;
+use crate::tiles::vertex::{slope_parts, PostReader};
 
-use super::reference::{normal_of_slopes, slopes, stored_ancestor};
+use super::reference::{inverse_length, quantise_normal, stored_ancestor};
 
 /// Fills `map`'s heights and normals (a sparse map of node `id`, its keys
 /// and lattice decoded) from `source`, the pyramid the map was built on:
@@ -42,26 +42,39 @@ pub fn fill_from_pyramid(
     let side = map.side();
     // Keys ascend: the row advances without a division per key.
     let (mut row, mut row_start) = (0u32, 0u32);
-    // A chunk's slopes first, then its normals: each loop's divisions and
-    // square roots are independent from key to key, so they overlap (a
-    // key's normal alone is a chain of four of them).
+    // A chunk's posts first, then its divisions and square roots, each in
+    // a loop of its own: they are independent from key to key, so they
+    // overlap, two to a vector instruction (a key's normal alone is a
+    // chain of four of them, most of a key's time).
+    let mut parts = [[0.0f64; 4]; CHUNK];
     let mut slopes_of = [[0.0f64; 2]; CHUNK];
+    let mut inverse = [0.0f64; CHUNK];
     for keys in map.keys.chunks(CHUNK) {
-        for (&key, out) in keys.iter().zip(&mut slopes_of) {
+        let count = keys.len();
+        for (&key, out) in keys.iter().zip(&mut parts) {
             while key >= row_start + side {
                 row += 1;
                 row_start += side;
             }
             let [w, c, e, s, n] = nodes.cross(i64::from(key - row_start), i64::from(row));
             map.heights.push(c as f32);
-            *out = slopes([w, c, e], [s, c, n], spacing);
+            let [rise_x, run_x] = slope_parts(w, c, e, spacing[0]);
+            let [rise_y, run_y] = slope_parts(s, c, n, spacing[1]);
+            *out = [rise_x, rise_y, run_x, run_y];
         }
-        map.normals.extend(slopes_of[..keys.len()].iter().map(|&d| normal_of_slopes(d)));
+        for (p, d) in parts[..count].iter().zip(&mut slopes_of) {
+            *d = [p[0] / p[2], p[1] / p[3]];
+        }
+        for (d, inv) in slopes_of[..count].iter().zip(&mut inverse) {
+            *inv = inverse_length(*d);
+        }
+        let normals = slopes_of[..count].iter().zip(&inverse);
+        map.normals.extend(normals.map(|(&d, &inv)| quantise_normal(d, inv)));
     }
     Ok(())
 }
 
-/// Keys whose slopes are held at a time (4 KiB on the stack).
+/// Keys held at a time (14 KiB on the stack).
 const CHUNK: usize = 256;
 
 /// One reference node of the map's node and where its posts come from.
@@ -75,9 +88,10 @@ struct RefNode {
     /// Read from itself: it wins a shared post over one read from an
     /// ancestor (see `ReferenceGrid::read_blocks`).
     stored: bool,
-    /// Stored, and its posts 1..n-1 both ways lie within the data (none
-    /// past its last post): a key whose cross lies there reads it
-    /// straight from the node's heights.
+    /// Stored, and its posts 0..n-1 both ways lie within the data (none
+    /// past its last post): a key whose cross lies there, and whose
+    /// posts no other reference node wins, reads it straight from the
+    /// node's heights.
     inner: bool,
 }
 
@@ -143,7 +157,7 @@ impl<'a> RefNodes<'a> {
             nodes.all_stored &= stored;
             let inner = stored
                 && [bx, by].into_iter().zip(nodes.origin).enumerate().all(|(k, (b, o))| {
-                    nodes.in_data(k, o + i64::from(b) * n + 1)
+                    nodes.in_data(k, o + i64::from(b) * n)
                         && nodes.in_data(k, o + i64::from(b) * n + n - 1)
                 });
             let key = TileKey::new(post_level, own.x, own.y);
@@ -165,14 +179,17 @@ impl<'a> RefNodes<'a> {
         (0..=last).contains(&(p << self.post_level))
     }
 
-    /// The heights at grid post `(ci, cj)` (its own last) and its four
-    /// neighbours west, east, south, north (one may lie in the node's
-    /// border: -1 or `side`).
+    /// The heights west of grid post `(ci, cj)`, at it, east, south and
+    /// north (a neighbour may lie in the node's border: -1 or `side`).
     fn cross(&self, ci: i64, cj: i64) -> [f64; 5] {
         let mask = self.n - 1;
         let (i, j) = (ci & mask, cj & mask);
         let (bx, by) = (ci >> self.shift, cj >> self.shift);
-        let inside = (2..=self.n - 2).contains(&i) && (2..=self.n - 2).contains(&j);
+        // A post on the edge two reference nodes share is the later one's
+        // (its own post 0) where both are stored: then a key at post 1
+        // reads its own node only, else only from post 2 on.
+        let first = if self.all_stored { 1 } else { 2 };
+        let inside = (first..=self.n - 2).contains(&i) && (first..=self.n - 2).contains(&j);
         if inside && bx < self.count && by < self.count {
             let node = &self.list[(by * self.count + bx) as usize];
             if node.inner {
@@ -180,12 +197,15 @@ impl<'a> RefNodes<'a> {
                 let border = i64::from(self.layout.border);
                 let at = ((j + border) * self.stored_side + i + border) as usize;
                 let side = self.stored_side as usize;
-                let posts = [at - 1, at + 1, at - side, at + side, at].map(|k| heights[k]);
+                // The rows south and north of the key, and its own.
+                let cross = &heights[at - side..=at + side];
+                let (c, last) = (side, 2 * side);
+                let posts = [cross[c - 1], cross[c], cross[c + 1], cross[0], cross[last]];
                 // A height of zero or without data reads through the
                 // surface's formula, which may change its sign or bits.
                 if posts.iter().all(|h| h.is_finite() && *h != 0.0) {
-                    let [w, e, s, n, c] = posts.map(f64::from);
-                    return [w, c, e, s, n];
+                    let f = |k: usize| f64::from(posts[k]);
+                    return [f(0), f(1), f(2), f(3), f(4)];
                 }
             }
         }

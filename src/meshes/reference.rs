@@ -235,22 +235,24 @@ impl ReferenceGrid {
 /// (`super::pagein`), so both give the same bits.
 #[inline]
 pub fn quantised_normal(x: [f64; 3], y: [f64; 3], spacing_m: [f64; 2]) -> [i8; 2] {
-    normal_of_slopes(slopes(x, y, spacing_m))
+    let slopes = [slope(x[0], x[1], x[2], spacing_m[0]), slope(y[0], y[1], y[2], spacing_m[1])];
+    quantise_normal(slopes, inverse_length(slopes))
 }
 
-/// The slopes east and north of [`quantised_normal`].
+/// The inverse length of the normal of `slopes` (east and north), before
+/// it is made a unit vector: a caller may take many at once, their square
+/// roots and divisions then overlap.
 #[inline]
-pub fn slopes(x: [f64; 3], y: [f64; 3], spacing_m: [f64; 2]) -> [f64; 2] {
-    [slope(x[0], x[1], x[2], spacing_m[0]), slope(y[0], y[1], y[2], spacing_m[1])]
+pub fn inverse_length([dx, dy]: [f64; 2]) -> f64 {
+    1.0 / (dx * dx + dy * dy + 1.0).sqrt()
 }
 
-/// [`quantised_normal`] from its [`slopes`].
+/// [`quantised_normal`] from its slopes and their [`inverse_length`].
 #[inline]
-pub fn normal_of_slopes([dx, dy]: [f64; 2]) -> [i8; 2] {
+pub fn quantise_normal([dx, dy]: [f64; 2], inv: f64) -> [i8; 2] {
     if dx.is_nan() || dy.is_nan() {
         return [0, 0];
     }
-    let inv = 1.0 / (dx * dx + dy * dy + 1.0).sqrt();
     let q = |x: f64| round_half_away(x * 127.0).clamp(-127, 127) as i8;
     [q(-dx * inv), q(-dy * inv)]
 }
