@@ -113,7 +113,7 @@ pub fn map_from_codes(
 /// A sparse map at most this many levels finer than its node stores no
 /// heights or normals: they are the pyramid's, and page-in reads them
 /// from the at most 4^2 nodes of its lattice under the node
-/// ([`fill_posts`]). Those maps (levels 1 and 2 over level-0 data) keep
+/// ([`super::pagein`], the same bits as [`fill_posts`]). Those maps (levels 1 and 2 over level-0 data) keep
 /// most of their posts, and their heights and normals were 60 % of the
 /// map file. Coarser maps keep few posts from many nodes: they store
 /// their heights, quantised (`quantise_heights`).
@@ -141,7 +141,8 @@ fn keep_sparse(map: &mut ErrorMap, reference: &ReferenceGrid, forced: u32, codes
 }
 
 /// Fills a sparse map's heights and normals at its keys from its
-/// reference grid: at build, and at page-in for a map that stores none.
+/// reference grid, at build (page-in reads the same bits without the
+/// grid: [`super::pagein`]).
 pub fn fill_posts(map: &mut ErrorMap, reference: &ReferenceGrid, layout: &NodeLayout) {
     debug_assert_eq!(reference.side, map.side());
     let side = reference.side;

@@ -33,9 +33,8 @@ use memmap2::Mmap;
 use rayon::prelude::*;
 
 use super::block::{build_blocks, record_order};
-use super::build::fill_posts;
+use super::pagein::fill_from_pyramid;
 use super::record;
-use super::reference::reference_grid;
 use super::{MeshOptions, MeshesError};
 use crate::mesh::code::{code_error, ALWAYS};
 use crate::node::{ErrorMap, NodeError, NodeId, NodeLayout, NodeSource};
@@ -186,8 +185,8 @@ fn encode_record(index: u64, map: &ErrorMap) -> (Vec<u8>, Entry) {
 }
 
 /// Decodes node `id`'s record into `out` (a fresh map), reading the heights
-/// and normals of a map that stores none from its reference grid in
-/// `source`; buffers are reserved exactly (a buffer is counted at what the
+/// and normals of a map that stores none from the nodes under it in
+/// `source` ([`super::pagein`]); buffers are reserved exactly (a buffer is counted at what the
 /// node needs, as the memory budget plans).
 fn decode_record(
     source: &dyn NodeSource,
@@ -212,8 +211,7 @@ fn decode_record(
         )));
     }
     if head.kind == record::FROM_PYRAMID {
-        let reference = reference_grid(source, id, out.post_level)?;
-        fill_posts(out, &reference, layout);
+        fill_from_pyramid(source, id, out)?;
     }
     if out.heights.iter().any(|h| h.is_infinite()) {
         return Err(corrupt("map record has an infinite height".into()));

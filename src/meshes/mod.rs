@@ -19,6 +19,7 @@
 //! | [`mod@build`] | one node's error map |
 //! | [`mod@block`] | maps a block at a time: one scan of the block's triangles for every node under it |
 //! | [`mod@file`] | the map file: versioned, checksummed, memory-mapped, written atomically, built streaming and in shards |
+//! | [`mod@pagein`] | page-in of a map that stores no heights: its keys' heights and normals straight from the pyramid's nodes |
 //! | [`mod@record`] | one node's record in the map file: compact keys, quantised or no heights |
 //! | [`mod@source`] | [`MeshedSource`]: a pyramid whose nodes come with their maps |
 //! | [`mod@shards`] | a dataset built by N shards and merged: their parts, the merge |
@@ -26,6 +27,7 @@
 pub mod block;
 pub mod build;
 pub mod file;
+pub mod pagein;
 pub mod record;
 pub mod reference;
 pub mod shards;

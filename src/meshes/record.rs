@@ -17,7 +17,7 @@
 //! ```
 //!
 //! Kind 2's heights and normals are the pyramid's at its keys: page-in
-//! reads them from its reference grid ([`super::build::fill_posts`]).
+//! reads them from the nodes under the map's node ([`super::pagein`]).
 //! Kind 1's heights were rounded to their steps at build (the map's
 //! reference delta holds the half step), so they read back bit for bit.
 

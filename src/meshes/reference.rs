@@ -201,7 +201,7 @@ impl ReferenceGrid {
 
 /// `block` itself if the source stores it, else its deepest stored
 /// ancestor, which is at most `top` (stored by the caller's contract).
-fn stored_ancestor(
+pub(super) fn stored_ancestor(
     source: &dyn NodeSource,
     layout: &NodeLayout,
     block: NodeId,
@@ -224,13 +224,70 @@ impl ReferenceGrid {
             let (x, y) = ((i as i64 + 1 + di) as usize, (j as i64 + 1 + dj) as usize);
             self.bordered[y * wide + x] as f64
         };
-        let dx = slope(h(-1, 0), h(0, 0), h(1, 0), spacing_m[0]);
-        let dy = slope(h(0, -1), h(0, 0), h(0, 1), spacing_m[1]);
-        if dx.is_nan() || dy.is_nan() {
-            return [0, 0];
+        quantised_normal([h(-1, 0), h(0, 0), h(1, 0)], [h(0, -1), h(0, 0), h(0, 1)], spacing_m)
+    }
+}
+
+/// The unit normal, x and y quantised as the tiles' are, at a post from
+/// the heights west, here and east (`x`) and south, here and north (`y`),
+/// posts `spacing_m` apart: central differences, one-sided where a
+/// neighbour has no data. One formula for the build and the page-in
+/// (`super::pagein`), so both give the same bits.
+#[inline]
+pub fn quantised_normal(x: [f64; 3], y: [f64; 3], spacing_m: [f64; 2]) -> [i8; 2] {
+    let slopes = [slope(x[0], x[1], x[2], spacing_m[0]), slope(y[0], y[1], y[2], spacing_m[1])];
+    quantise_normal(slopes, inverse_length(slopes))
+}
+
+/// The inverse length of the normal of `slopes` (east and north), before
+/// it is made a unit vector: a caller may take many at once, their square
+/// roots and divisions then overlap.
+#[inline]
+pub fn inverse_length([dx, dy]: [f64; 2]) -> f64 {
+    1.0 / (dx * dx + dy * dy + 1.0).sqrt()
+}
+
+/// [`quantised_normal`] from its slopes and their [`inverse_length`].
+#[inline]
+pub fn quantise_normal([dx, dy]: [f64; 2], inv: f64) -> [i8; 2] {
+    if dx.is_nan() || dy.is_nan() {
+        return [0, 0];
+    }
+    let q = |x: f64| round_half_away(x * 127.0).clamp(-127, 127) as i8;
+    [q(-dx * inv), q(-dy * inv)]
+}
+
+/// `x.round() as i64` for `|x| < 2^52` (and 0 for NaN, as the cast
+/// gives), without a call: on the x86-64 baseline `f64::round` is a libm
+/// call, a third of page-in's time per key. Truncation and the fraction
+/// are exact there, so the result is the same integer.
+#[inline]
+fn round_half_away(x: f64) -> i64 {
+    let t = x as i64;
+    let fraction = x - t as f64;
+    t + i64::from(fraction >= 0.5) - i64::from(fraction <= -0.5)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::round_half_away;
+
+    /// Every quarter step from -300 to 300, its neighbours a unit in the
+    /// last place away, zeros and NaN: as `f64::round` and the cast.
+    #[test]
+    fn rounding_is_f64_rounds() {
+        let mut values = vec![0.0, -0.0, f64::NAN, 0.49999999999999994, -0.49999999999999994];
+        for k in (-1200..=1200).filter(|&k| k != 0) {
+            let x = k as f64 / 4.0;
+            values.extend([x, f64::from_bits(x.to_bits() + 1), f64::from_bits(x.to_bits() - 1)]);
         }
-        let inv = 1.0 / (dx * dx + dy * dy + 1.0).sqrt();
-        let q = |x: f64| (x * 127.0).round().clamp(-127.0, 127.0) as i8;
-        [q(-dx * inv), q(-dy * inv)]
+        // And spread over the range a normal's component takes.
+        let spread = (0..20_000u64).map(|k| {
+            let bits = k.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> 11;
+            bits as f64 / (1u64 << 53) as f64 * 300.0 - 150.0
+        });
+        for x in values.into_iter().chain(spread) {
+            assert_eq!(round_half_away(x), x.round() as i64, "{x:e}");
+        }
     }
 }

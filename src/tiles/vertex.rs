@@ -280,11 +280,19 @@ const OUTWARD: [[i64; 2]; 4] = [[0, -1], [1, 0], [0, 1], [-1, 0]];
 /// The slope between posts `step_m` apart: central where both neighbours
 /// have data, one-sided where one has, flat where neither has.
 pub fn slope(before: f64, here: f64, after: f64, step_m: f64) -> f64 {
+    let [rise, run] = slope_parts(before, here, after, step_m);
+    rise / run
+}
+
+/// [`slope`]'s rise and run, divided apart by a caller that divides many
+/// at once (flat: 0 over 1, exactly 0).
+#[inline]
+pub fn slope_parts(before: f64, here: f64, after: f64, step_m: f64) -> [f64; 2] {
     match (before.is_nan(), after.is_nan()) {
-        (false, false) => (after - before) / (2.0 * step_m),
-        (true, false) => (after - here) / step_m,
-        (false, true) => (here - before) / step_m,
-        (true, true) => 0.0,
+        (false, false) => [after - before, 2.0 * step_m],
+        (true, false) => [after - here, step_m],
+        (false, true) => [here - before, step_m],
+        (true, true) => [0.0, 1.0],
     }
 }
 
