@@ -126,6 +126,18 @@ impl GridPlacement {
         }
     }
 
+    /// For a projected grid of a known projection, its projection and the
+    /// projected metres between neighbouring posts, east and north: what
+    /// [`super::EarthFrame`] expands its nodes' posts with
+    /// ([`super::Expansion`]). `None` for geographic grids and for grids
+    /// placed by assumption (drawn in the chart).
+    pub fn projected_lattice(&self) -> Option<(Projection, [f64; 2])> {
+        match self.kind {
+            Kind::Projected(projection) if self.assumed.is_none() => Some((projection, self.step)),
+            _ => None,
+        }
+    }
+
     /// Why the grid is placed by assumption (centred on 0 N 0 E), if it is.
     pub fn assumed(&self) -> Option<&'static str> {
         self.assumed
