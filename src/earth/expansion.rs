@@ -14,14 +14,16 @@
 //! expansion (the 2 x 2 Jacobian) misses the meridians' curvature in the
 //! plane, `r^2 tan(phi) / 2R` at `r` from the centre: 0.12 m at 1 km at
 //! 45 degrees, a pixel at 100 m from the eye. The coefficients are the
-//! Cauchy integral's over eight points on a circle about the centre.
+//! Cauchy integral's over four points on a circle about the centre.
 //!
 //! **Error.** The series' error against the exact inverse, over every post
 //! of every node of a UTM grid at every level, is measured in the tests
 //! (`a_nodes_series_is_the_projection`).
 
-use super::ellipsoid::{normalize_longitude, A};
-use super::placement::GridPlacement;
+use std::f64::consts::{PI, TAU};
+
+use super::ellipsoid::A;
+use super::placement::ProjectedLattice;
 
 /// The series of one node: its centre's latitude and the complex
 /// coefficients of `lambda + i psi` in `z = (east + i north) / a`, the
@@ -38,13 +40,16 @@ pub struct Expansion {
     pub e2: f64,
 }
 
-/// Points on the circle the coefficients are integrated over.
-const SAMPLES: usize = 8;
+/// Points on the circle the coefficients are integrated over: four, a
+/// quarter turn apart, fold order `k + 4` onto order `k` (and the negative
+/// orders, zero for a holomorphic function, onto the first three).
+const SAMPLES: usize = 4;
 /// The circle's radius, in `z` (32 km): large enough that rounding in the
-/// samples stays far below the third coefficient, small enough that the
-/// orders past the eighth (which the samples fold onto the first three)
-/// vanish.
+/// samples (1e-16) costs the third coefficient 1e-9 of itself, small
+/// enough that the folded orders (`c_{k+4} r^4`, 6e-10 of `c_k`) vanish.
 const RADIUS: f64 = 0.005;
+/// `e^{i j pi / 2}`, `j` = 0..4: the samples' directions.
+const TURNS: [[f64; 2]; SAMPLES] = [[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]];
 
 /// The isometric latitude of latitude `lat` (radians) on an ellipsoid of
 /// eccentricity squared `e2`: `asinh(tan lat) - e atanh(e sin lat)`.
@@ -58,32 +63,29 @@ fn mul([a, b]: [f64; 2], [c, d]: [f64; 2]) -> [f64; 2] {
 }
 
 impl Expansion {
-    /// The series of `placement`'s node centred on level-0 post `centre`,
-    /// `None` for a grid that is not projected by a known projection.
-    pub fn new(placement: &GridPlacement, centre: [f64; 2]) -> Option<Expansion> {
-        let (projection, step) = placement.projected_lattice()?;
-        let e2 = projection.isometric_e2();
-        let (lat0, lon0) = placement.geodetic_of_post(centre[0], centre[1]);
+    /// The series of the node of `lattice` centred on level-0 post `centre`.
+    pub fn new(lattice: &ProjectedLattice, centre: [f64; 2]) -> Expansion {
+        let step = lattice.step;
+        let e2 = lattice.projection.isometric_e2();
+        let (lat0, lon0) = lattice.geodetic(centre);
         let psi0 = isometric_latitude(lat0, e2);
         let mut terms = [[0.0; 2]; 3];
-        for j in 0..SAMPLES {
-            let theta = std::f64::consts::TAU * j as f64 / SAMPLES as f64;
-            let (sin, cos) = theta.sin_cos();
+        for (j, [cos, sin]) in TURNS.into_iter().enumerate() {
             let (u, v) =
                 (centre[0] + RADIUS * A * cos / step[0], centre[1] + RADIUS * A * sin / step[1]);
-            let (lat, lon) = placement.geodetic_of_post(u, v);
-            let dlon = normalize_longitude((lon - lon0).to_degrees()).to_radians();
+            let (lat, lon) = lattice.geodetic([u, v]);
+            let dlon = (lon - lon0 + PI).rem_euclid(TAU) - PI;
             let w = [dlon, isometric_latitude(lat, e2) - psi0];
             for (k, term) in terms.iter_mut().enumerate() {
-                let n = (k + 1) as f64;
-                let turn = [(n * theta).cos(), -(n * theta).sin()];
+                // e^{-i (k + 1) theta_j}
+                let [c, s] = TURNS[(j * (k + 1)) % SAMPLES];
                 let scale = 1.0 / (SAMPLES as f64 * RADIUS.powi(k as i32 + 1));
-                let [re, im] = mul(w, turn);
+                let [re, im] = mul(w, [c, -s]);
                 term[0] += re * scale;
                 term[1] += im * scale;
             }
         }
-        Some(Expansion { lat0, terms, e2 })
+        Expansion { lat0, terms, e2 }
     }
 
     /// The node's share of its member's uniforms (two vec4): the centre's
@@ -123,10 +125,8 @@ pub fn latitude_series(lat: f64, e2: f64) -> [f64; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::earth::ellipsoid;
+    use crate::earth::{ellipsoid, GridPlacement};
     use crate::geo::{Crs, GeoRef};
-    use crate::lod::rings::{LevelRings, RingInputs};
-    use crate::lod::LodConfig;
 
     /// Level-0 posts a node spans (the pyramid's default node size).
     const NODE: i64 = 64;
@@ -151,9 +151,10 @@ mod tests {
     fn node_error(placement: &GridPlacement, level: u32, node: [i64; 2], orders: usize) -> f64 {
         let span = NODE << level;
         let centre = node.map(|n| (n * span + span / 2) as f64);
-        let mut e = Expansion::new(placement, centre).expect("projected");
+        let lattice = placement.projected_lattice().expect("projected");
+        let mut e = Expansion::new(&lattice, centre);
         e.terms[orders..].fill([0.0; 2]);
-        let (_, step) = placement.projected_lattice().expect("projected");
+        let step = lattice.step;
         let (lat0, lon0) = placement.geodetic_of_post(centre[0], centre[1]);
         let mut worst: f64 = 0.0;
         for i in 0..=NODE {
@@ -173,25 +174,17 @@ mod tests {
     /// nine nodes a level (the grid's corners, edges' middles and centre),
     /// at every level of a UTM grid, in metres and in pixels at the
     /// nearest distance a node of that level is drawn at (its level's ring
-    /// by Kühnert's rule with no data error, the nearest any tau allows; at
-    /// level 0, 100 m): under 0.02 px at every level.
+    /// by Kühnert's rule alone, `lod::rings`: three tiles of 32 cells, the
+    /// nearest any tau and data allow; at level 0, 100 m): under 0.025 px
+    /// at every level.
     #[test]
     fn a_nodes_series_is_the_projection() {
-        let rings = LevelRings::new(
-            &LodConfig::default(),
-            RingInputs {
-                tile_size_m: 32.0 * 30.0,
-                delta_per_level: &[0.0; LEVELS as usize],
-                height_range_m: 0.0,
-                perspective_scale: K,
-            },
-        );
         for placement in
             [utm(32637, [250_000.0, 4_000_000.0]), utm(32737, [250_000.0, 5_600_000.0])]
         {
             for level in 0..LEVELS {
                 let last = (16_384 / (NODE << level) - 1).max(0);
-                let near = if level == 0 { 100.0 } else { rings.split_distance(level as u8) };
+                let near = if level == 0 { 100.0 } else { 3.0 * 32.0 * 30.0 * (1 << level) as f64 };
                 // The first and second orders for comparison (printed).
                 let [first, second, worst_m] = [1, 2, 3].map(|orders| {
                     let mut worst: f64 = 0.0;
@@ -209,7 +202,7 @@ mod tests {
                     first / near * K,
                     second / near * K
                 );
-                assert!(px < 0.02, "level {level}: {worst_m} m is {px} px at {near} m");
+                assert!(px < 0.025, "level {level}: {worst_m} m is {px} px at {near} m");
             }
         }
     }
@@ -224,7 +217,8 @@ mod tests {
             spacing: [100.0; 2],
         };
         let placement = GridPlacement::new(&georef, [4097, 4097], [100.0; 2]);
-        let e = Expansion::new(&placement, [2048.0, 2048.0]).expect("projected");
+        let e =
+            Expansion::new(&placement.projected_lattice().expect("projected"), [2048.0, 2048.0]);
         assert_eq!(e.e2, 0.0);
         assert!((e.terms[0][0] - 1.0).abs() < 1e-9 && e.terms[0][1].abs() < 1e-9, "{e:?}");
         for t in &e.terms[1..] {

@@ -33,7 +33,7 @@ use glam::{DMat3, DQuat, DVec3, Vec3};
 
 use super::ellipsoid::{self, A, E2};
 use super::expansion::Expansion;
-use super::placement::GridPlacement;
+use super::placement::{GridPlacement, ProjectedLattice};
 
 /// Where the camera and the grid are for one frame (f64, CPU only).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -54,9 +54,9 @@ enum Lattice {
     /// A geographic grid: longitude and latitude of post (0, 0) and
     /// between neighbouring posts, east and north, radians.
     Geographic { origin: [f64; 2], step: [f64; 2] },
-    /// A projected grid of a known projection: by its placement (exact),
-    /// and per node by its [`Expansion`] (the shader).
-    Projected { placement: GridPlacement, isometric_e2: f64, step_m: [f64; 2] },
+    /// A projected grid of a known projection: by its inverse (exact), and
+    /// per node by its [`Expansion`] (the shader).
+    Projected(ProjectedLattice),
 }
 
 /// One node's placement as the vertex shader takes it (two vec4 and a
@@ -83,11 +83,7 @@ impl EarthFrame {
     pub fn new(placement: &GridPlacement, eye_chart: DVec3, anchor: [i64; 2]) -> Option<Self> {
         let lattice = match (placement.geographic_lattice(), placement.projected_lattice()) {
             (Some((origin, step)), _) => Lattice::Geographic { origin, step },
-            (None, Some((projection, step_m))) => Lattice::Projected {
-                placement: *placement,
-                isometric_e2: projection.isometric_e2(),
-                step_m,
-            },
+            (None, Some(projected)) => Lattice::Projected(projected),
             (None, None) => return None,
         };
         let (lat, lon) = placement.geodetic_of_chart([eye_chart.x, eye_chart.y]);
@@ -115,9 +111,10 @@ impl EarthFrame {
                 let [east, north] = step.map(|s| s as f32);
                 [east, north, anchor_lat as f32, 1.0, a, e2, 0.0, 0.0]
             }
-            Lattice::Projected { isometric_e2, step_m, .. } => {
-                let [east, north] = step_m.map(|s| (s / A) as f32);
-                [east, north, 0.0, 2.0, a, e2, isometric_e2 as f32, 0.0]
+            Lattice::Projected(projected) => {
+                let [east, north] = projected.step.map(|s| (s / A) as f32);
+                let isometric_e2 = projected.projection.isometric_e2() as f32;
+                [east, north, 0.0, 2.0, a, e2, isometric_e2, 0.0]
             }
         }
     }
@@ -130,7 +127,7 @@ impl EarthFrame {
             Lattice::Geographic { origin, step } => {
                 (origin[1] + post[1] * step[1], origin[0] + post[0] * step[0])
             }
-            Lattice::Projected { placement, .. } => placement.geodetic_of_post(post[0], post[1]),
+            Lattice::Projected(projected) => projected.geodetic(post),
         }
     }
 
@@ -141,14 +138,14 @@ impl EarthFrame {
         let offset = self.to_camera * (ellipsoid::to_ecef(lat, lon, 0.0) - self.eye);
         let rotation = DQuat::from_mat3(&(self.to_camera * ellipsoid::enu_to_ecef(lat, lon)));
         let expansion = match &self.lattice {
-            Lattice::Geographic { .. } => None,
-            Lattice::Projected { placement, .. } => Expansion::new(placement, post),
+            Lattice::Geographic { .. } => [0.0; 8],
+            Lattice::Projected(projected) => Expansion::new(projected, post).uniforms(),
         };
         NodePlace {
             centre: [0, 1].map(|k| (centre[k] - self.anchor[k]) as f32),
             offset: offset.as_vec3().to_array(),
             rotation: rotation.normalize().as_quat().to_array(),
-            expansion: expansion.map_or([0.0; 8], |e| e.uniforms()),
+            expansion,
         }
     }
 
@@ -171,7 +168,7 @@ impl EarthFrame {
         let n = ((span / 55_000.0).ceil() as usize).clamp(2, 32);
         let (min, max) = match self.lattice {
             // Latitude and longitude depend on both post numbers.
-            Lattice::Projected { .. } => self.sampled_box(p0, p1, n, (lo, hi)),
+            Lattice::Projected(_) => self.sampled_box(p0, p1, n, (lo, hi)),
             Lattice::Geographic { .. } => self.lattice_box(p0, p1, n, (lo, hi)),
         };
         // The smallest radius of curvature (the meridian's at the equator)

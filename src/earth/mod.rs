@@ -29,5 +29,5 @@ pub use bounds::{EarthBox, EllipsoidHorizon};
 pub use ellipsoid::{geodetic_of, normalize_longitude, Geodetic};
 pub use expansion::Expansion;
 pub use frame::{EarthFrame, NodePlace};
-pub use placement::GridPlacement;
+pub use placement::{GridPlacement, ProjectedLattice};
 pub use projection::{Projection, TransverseMercator, UnsupportedEpsg};
