@@ -85,3 +85,61 @@ fn accuracy_refuses_impossible_options_by_name() {
         assert!(stderr.contains(named), "{args:?}: {stderr}");
     }
 }
+
+/// A UTM grid (zone 37 N, 60 m posts, hills) 3.3 degrees east of its
+/// central meridian, where grid north is 2.1 degrees off true north,
+/// written as a GeoTIFF tagged EPSG:32637 and imported.
+fn import_utm(dir: &Path) -> std::path::PathBuf {
+    use testkit::dem::{projected_keys, write_tiff_strips, GeoTags};
+    use tiff::encoder::{colortype, Compression, Predictor};
+    const SIDE: u32 = 257;
+    const SPACING: f64 = 60.0;
+    let heights: Vec<f32> = (0..SIDE * SIDE)
+        .map(|k| ((k % SIDE) as f32, (k / SIDE) as f32))
+        .map(|(c, r)| 1500.0 + 300.0 * (c / 19.0).sin() * (r / 23.0).cos() + 2.0 * c)
+        .collect();
+    let geo = GeoTags {
+        scale: Some([SPACING, SPACING, 0.0]),
+        tiepoint: Some([0.0, 0.0, 0.0, 780_000.0, 4_400_000.0, 0.0]),
+        keys: projected_keys(32637),
+        ..GeoTags::default()
+    };
+    let tif = dir.join("utm37n.tif");
+    let none = (Compression::Uncompressed, Predictor::None);
+    write_tiff_strips::<colortype::Gray32Float>(
+        &tif, [SIDE; 2], &heights, none.0, none.1, 16, &geo,
+    );
+    let cache = dir.join("utm");
+    let args = ["import", "--out", cache.to_str().unwrap(), tif.to_str().unwrap()];
+    let out = ridgeline(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    cache
+}
+
+/// A projected grid is drawn where the earth has it (issue 26): over the
+/// UTM grid above, the geodetic truth's p99.9 holds tau on the ellipsoid;
+/// in the chart (`--chart`, the projection's plane, headings from grid
+/// north) it does not, the picture turned by the grid's convergence.
+#[test]
+fn a_utm_grid_holds_the_bound_against_the_earth_on_the_ellipsoid() {
+    let dir = fresh_dir("cli-accuracy-utm");
+    let cache = import_utm(&dir);
+    let earth_p999 = |chart: bool| {
+        let mut args = vec!["accuracy", "--dataset", cache.to_str().unwrap()];
+        args.extend(["--views", "2", "--size", "320x180", "--earth-stride", "2", "--json"]);
+        if chart {
+            args.push("--chart");
+        }
+        let out = ridgeline(&args);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+        assert_eq!(json["earth"]["holes"], 0, "{json}");
+        json["earth"]["p999_px"].as_f64().expect("the earth's p99.9")
+    };
+    let (ellipsoid, chart) = (earth_p999(false), earth_p999(true));
+    println!(
+        "against the earth, p99.9: {ellipsoid:.3} px on the ellipsoid, {chart:.3} px in the chart"
+    );
+    assert!(ellipsoid <= 1.0, "on the ellipsoid: {ellipsoid} px");
+    assert!(chart > 2.0, "the chart's turn shows: {chart} px");
+}

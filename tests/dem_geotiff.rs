@@ -311,3 +311,72 @@ fn shared_srtm_tile_imports_with_its_georeference() {
     assert_eq!(grid.at(0, 999), north_west);
     assert_eq!(grid.at(999, 0), south_east);
 }
+
+/// Resamples the shared SRTM tile (bilinear, in its posts) onto a UTM
+/// zone 37 N grid of 75 m posts inside it (central meridian 39 E, so the
+/// grid's north is 0.64 degrees off true north there) and writes it as a
+/// float32 GeoTIFF tagged EPSG:32637, for the accuracy runs of projected
+/// grids on the ellipsoid (docs/earth.md). Run by hand:
+/// `OUT=/tmp/srtm3_utm37n.tif cargo test --test dem_geotiff -- --ignored make_srtm_utm37n`,
+/// then `ridgeline import --out cache/srtm_utm37n /tmp/srtm3_utm37n.tif`.
+#[test]
+#[ignore = "writes a file for the accuracy runs: OUT=path"]
+fn make_srtm_utm37n() {
+    use ridgeline::earth::Projection;
+    const SPACING: f64 = 75.0;
+    let out = std::env::var("OUT").expect("OUT=path/to/write.tif");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/dem/srtm3_n39e040_1000.tif");
+    let srtm = import_file(&path).unwrap();
+    let utm = Projection::from_epsg(32637).unwrap();
+    let [s, w] = [srtm.georef.spacing, srtm.georef.origin];
+    let last = [srtm.width - 1, srtm.height - 1].map(|n| n as f64);
+    // The projected rectangle inside the tile: its edges sampled (they are
+    // not straight in the projection).
+    let (mut lo, mut hi) = ([f64::NEG_INFINITY; 2], [f64::INFINITY; 2]);
+    for k in 0..=20 {
+        let f = k as f64 / 20.0;
+        let at = |u: f64, v: f64| {
+            utm.forward((w[1] + v * s[1]).to_radians(), (w[0] + u * s[0]).to_radians())
+        };
+        lo[0] = lo[0].max(at(0.0, f * last[1])[0]);
+        hi[0] = hi[0].min(at(last[0], f * last[1])[0]);
+        lo[1] = lo[1].max(at(f * last[0], 0.0)[1]);
+        hi[1] = hi[1].min(at(f * last[0], last[1])[1]);
+    }
+    let origin = lo.map(|x| (x / SPACING).ceil() * SPACING);
+    let size = [0, 1].map(|k| ((hi[k] - origin[k]) / SPACING).floor() as u32 + 1);
+    let mut data = Vec::new();
+    for r in 0..size[1] {
+        for c in 0..size[0] {
+            let north = origin[1] + (size[1] - 1 - r) as f64 * SPACING;
+            let (lat, lon) = utm.inverse([origin[0] + c as f64 * SPACING, north]);
+            let u = ((lon.to_degrees() - w[0]) / s[0]).clamp(0.0, last[0]);
+            let v = ((lat.to_degrees() - w[1]) / s[1]).clamp(0.0, last[1]);
+            let (i, j) =
+                ((u.floor() as u32).min(srtm.width - 2), (v.floor() as u32).min(srtm.height - 2));
+            let (fu, fv) = (u - i as f64, v - j as f64);
+            let h = |a: u32, b: u32| srtm.at(i + a, j + b) as f64;
+            let south = h(0, 0) * (1.0 - fu) + h(1, 0) * fu;
+            let north = h(0, 1) * (1.0 - fu) + h(1, 1) * fu;
+            data.push((south * (1.0 - fv) + north * fv) as f32);
+        }
+    }
+    // PixelIsArea: the tie point is the north-west post's outer corner.
+    let top = origin[1] + (size[1] - 1) as f64 * SPACING;
+    let geo = GeoTags {
+        scale: Some([SPACING, SPACING, 0.0]),
+        tiepoint: Some([0.0, 0.0, 0.0, origin[0] - SPACING / 2.0, top + SPACING / 2.0, 0.0]),
+        keys: projected_keys(32637),
+        ..GeoTags::default()
+    };
+    write_tiff_strips::<colortype::Gray32Float>(
+        Path::new(&out),
+        size,
+        &data,
+        Compression::Uncompressed,
+        Predictor::None,
+        16,
+        &geo,
+    );
+    eprintln!("{out}: {size:?} posts from {origin:?} (UTM 37 N), 75 m");
+}

@@ -5,11 +5,16 @@
 //! without. A GL call added to a pass without its twin in
 //! `render::cost` fails this test.
 
+use std::sync::Arc;
+
+use ridgeline::dem::ElevationGrid;
 use ridgeline::display::{DisplayConfig, DisplayParts};
 use ridgeline::earth::GridPlacement;
 use ridgeline::flight::default_flight;
+use ridgeline::geo::{Crs, GeoRef};
 use ridgeline::gl::{GlBackend, GlesVersion};
 use ridgeline::pipeline::FramePipeline;
+use ridgeline::pyramid::{BuildOptions, Pyramid};
 use ridgeline::render::{CallStats, NullBackend};
 use ridgeline::scene::TerrainSummary;
 use testkit::builtin_pyramid;
@@ -20,7 +25,11 @@ const FRAMES: u32 = 24;
 /// Flies the built-in approach through both backends; returns the totals
 /// and how many frames were cut into two depth slices.
 fn fly_both(config: &DisplayConfig) -> (CallStats, u32) {
-    let pyramid = builtin_pyramid();
+    fly_both_over(config, builtin_pyramid())
+}
+
+/// [`fly_both`] over `pyramid`, its own built-in approach.
+fn fly_both_over(config: &DisplayConfig, pyramid: Arc<Pyramid>) -> (CallStats, u32) {
     let summary = TerrainSummary::from_pyramid(pyramid.info());
     let mut gl = DisplayParts::open(config, pyramid.clone(), summary.clone()).expect("EGL display");
     let mut null_pipeline =
@@ -91,7 +100,7 @@ fn the_counts_agree_with_clusters() {
 }
 
 /// On the ellipsoid (`fly`'s default since issue 26's phase B) the pass
-/// writes `u_earth` with the frame's uniforms and four vectors a member:
+/// writes `u_earth` with the frame's uniforms and six vectors a member:
 /// the model counts the same, tile by tile on ES 3 and clustered on ES 2.0.
 #[test]
 fn the_counts_agree_on_the_ellipsoid() {
@@ -104,6 +113,40 @@ fn the_counts_agree_on_the_ellipsoid() {
         earth.scene.clusters = clusters;
         let (total, sliced) = fly_both(&earth);
         println!("ellipsoid, {version:?}, clusters {clusters}, {FRAMES} frames ({sliced} sliced): {total:?}");
+        assert!(total.draw_calls > 0, "the flight draws terrain");
+    }
+}
+
+/// A projected grid (UTM zone 37 N, 60 m posts, hills) drawn on the
+/// ellipsoid by its nodes' series: the same calls as the model counts.
+#[test]
+fn the_counts_agree_on_a_utm_grid_on_the_ellipsoid() {
+    let posts = [513, 513];
+    let georef = GeoRef {
+        crs: Crs::Projected { epsg: Some(32637) },
+        origin: [600_000.0, 4_350_000.0],
+        spacing: [60.0; 2],
+    };
+    let heights = (0..posts[1])
+        .flat_map(|j| (0..posts[0]).map(move |i| (i as f32, j as f32)))
+        .map(|(i, j)| 1500.0 + 400.0 * (i / 37.0).sin() * (j / 53.0).cos())
+        .collect();
+    let grid =
+        ElevationGrid { width: posts[0], height: posts[1], heights, georef, voids_filled: 0 };
+    let dir = testkit::fresh_dir("calls-utm37n");
+    testkit::pyramid::build_and_write(&grid, BuildOptions::default(), &dir);
+    let pyramid = Arc::new(Pyramid::open(&dir).expect("the UTM pyramid"));
+    let info = pyramid.info();
+    let placement = GridPlacement::new(&info.georef, info.layout.posts, info.layout.spacing_m);
+    assert!(placement.projected_lattice().is_some(), "placed by its projection");
+    for (version, clusters) in [(GlesVersion::Es3, false), (GlesVersion::Es2, true)] {
+        let mut earth = config(GlBackend::Egl, version);
+        earth.scene.earth = Some(placement);
+        earth.scene.clusters = clusters;
+        let (total, sliced) = fly_both_over(&earth, pyramid.clone());
+        println!(
+            "UTM, {version:?}, clusters {clusters}, {FRAMES} frames ({sliced} sliced): {total:?}"
+        );
         assert!(total.draw_calls > 0, "the flight draws terrain");
     }
 }

@@ -5,7 +5,9 @@
 //! column the topmost row the terrain pass drew is within 1 px of the
 //! topmost row whose pixel-centre ray meets the WGS 84 ellipsoid (solved
 //! exactly, in f64, from the true camera): the geometric horizon, 357 km
-//! away and 3.2 degrees below level.
+//! away and 3.2 degrees below level. The same over a UTM grid (zone 37 N,
+//! 1 km posts) seen from 250 km east of its central meridian, drawn by its
+//! nodes' series (`earth::Expansion`).
 
 use std::sync::Arc;
 
@@ -33,9 +35,26 @@ const POSTS: [u32; 2] = [961, 481];
 fn sea(name: &str, lat_deg: f64) -> Arc<Pyramid> {
     let origin = [40.5 - 8.0, lat_deg - 4.0];
     let georef = GeoRef { crs: Crs::Geographic, origin, spacing: [SPACING_DEG; 2] };
-    let heights = vec![0.0f32; (POSTS[0] * POSTS[1]) as usize];
+    flat(name, georef, POSTS)
+}
+
+/// A flat sea at 0 m over UTM zone 37 N (central meridian 39 E), 1 km
+/// posts, 800 km on a side, centred 250 km east of the central meridian
+/// at about 39.5 N (its grid north 1.8 degrees off true north there).
+fn utm_sea(name: &str) -> Arc<Pyramid> {
+    let georef = GeoRef {
+        crs: Crs::Projected { epsg: Some(32637) },
+        origin: [350_000.0, 3_975_000.0],
+        spacing: [1000.0; 2],
+    };
+    flat(name, georef, [801, 801])
+}
+
+/// A flat sea at 0 m of `posts` posts placed by `georef`, as a pyramid.
+fn flat(name: &str, georef: GeoRef, posts: [u32; 2]) -> Arc<Pyramid> {
+    let heights = vec![0.0f32; (posts[0] * posts[1]) as usize];
     let grid =
-        ElevationGrid { width: POSTS[0], height: POSTS[1], heights, georef, voids_filled: 0 };
+        ElevationGrid { width: posts[0], height: posts[1], heights, georef, voids_filled: 0 };
     let dir = testkit::fresh_dir(name);
     testkit::pyramid::build_and_write(&grid, BuildOptions::default(), &dir);
     Arc::new(Pyramid::open(&dir).expect("the sea's pyramid"))
@@ -84,12 +103,16 @@ fn horizon_offset(pyramid: &Arc<Pyramid>, heading_deg: f64) -> u32 {
 #[test]
 fn a_flat_sea_shows_its_horizon_where_the_ellipsoid_has_it() {
     let _turn = take_turn();
-    for (name, lat) in [("sea-39n", 39.5), ("sea-60n", 60.0)] {
-        let pyramid = sea(name, lat);
+    let seas = [
+        ("39.5 N", sea("sea-39n", 39.5)),
+        ("60 N", sea("sea-60n", 60.0)),
+        ("UTM 37 N", utm_sea("sea-utm37n")),
+    ];
+    for (name, pyramid) in seas {
         for heading in [90.0, 0.0] {
             let offset = horizon_offset(&pyramid, heading);
-            println!("{lat} N heading {heading}: drawn horizon within {offset} rows");
-            assert!(offset <= 1, "{lat} N heading {heading}: {offset} rows off the ellipsoid's");
+            println!("{name} heading {heading}: drawn horizon within {offset} rows");
+            assert!(offset <= 1, "{name} heading {heading}: {offset} rows off the ellipsoid's");
         }
     }
 }

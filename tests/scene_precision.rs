@@ -95,8 +95,22 @@ struct Globe {
 
 impl Globe {
     fn new() -> Globe {
-        let posts = [360_001, 180_001];
         let georef = GeoRef { crs: Crs::Geographic, origin: [0.0, -90.0], spacing: [0.001; 2] };
+        Globe::of(georef, [360_001, 180_001])
+    }
+
+    /// A UTM grid of 30 m posts, 600 km on a side, from 200 km east (3.5
+    /// degrees west of the central meridian at 39 N) and `northing` north.
+    fn utm(epsg: u32, northing: f64) -> Globe {
+        let georef = GeoRef {
+            crs: Crs::Projected { epsg: Some(epsg) },
+            origin: [200_000.0, northing],
+            spacing: [30.0; 2],
+        };
+        Globe::of(georef, [20_001, 20_001])
+    }
+
+    fn of(georef: GeoRef, posts: [u32; 2]) -> Globe {
         let spacing_m = georef.spacing_m(posts);
         let levels = NodeLayout::levels_for(posts, 64);
         let layout = NodeLayout { levels, node_size: 64, border: 1, posts, spacing_m };
@@ -189,6 +203,26 @@ fn earth_corner_error(globe: &Arc<Globe>, (lat, lon): (f64, f64), radius: f64) -
         }
     }
     (worst, corners)
+}
+
+/// A projected grid is drawn on the ellipsoid by its nodes' series
+/// (`earth::Expansion`): the corners within 20 km of views near and far
+/// off a UTM zone's central meridian, north and south, within a centimetre
+/// of the exact inverse projection's points.
+#[test]
+fn a_view_over_a_utm_grid_is_as_precise_as_a_geographic_one() {
+    for (epsg, northing, places) in [
+        (32637, 4_000_000.0, [(39.5, 35.7), (40.2, 39.0), (38.0, 42.3)]),
+        (32737, 5_600_000.0, [(-38.0, 36.0), (-36.5, 39.1), (-35.5, 42.0)]),
+    ] {
+        let globe = Arc::new(Globe::utm(epsg, northing));
+        for place in places {
+            let (error, corners) = earth_corner_error(&globe, place, 20_000.0);
+            println!("EPSG:{epsg} {place:?}: {error:.2e} m over {corners} corners");
+            assert!(corners > 20, "{place:?}: the view sees tiles");
+            assert!(error < 0.01, "{place:?}: vertex positions within a centimetre: {error} m");
+        }
+    }
 }
 
 #[test]

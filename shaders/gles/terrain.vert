@@ -13,7 +13,8 @@
 // longitude about its node's centre, its offset from the centre's surface
 // point written with small terms only, rotated into the camera's axes and
 // added to the centre's camera-relative position. Height, morph and skirts
-// move along the vertex's geodetic up.
+// move along the vertex's geodetic up. A projected grid's latitude and
+// longitude differences come from its node's series (src/earth/expansion.rs).
 //
 // The morph mirrors src/lod/morph.rs line for line: the factor grows from 0 at
 // u_morph.x to 1 at u_morph.y with the vertex's distance to the camera,
@@ -26,20 +27,24 @@ attribute vec4 a_normal;  // normal xy at this level, at the parent level
 uniform mat4 u_view_projection;
 // Per member tile of the draw (a cluster's up to 16, or the one tile at
 // slot 0), selected by the vertex's slot (a_grid.w):
-// [4 slot]:     south-west post numbered from the anchor (xy), level-0 posts
+// [6 slot]:     south-west post numbered from the anchor (xy), level-0 posts
 //               per vertex post (z), skirt shares (w: bits 4(k-1) to 4k-1
 //               for edge k, fifteenths of the skirt depth it hangs, 0 none);
-// [4 slot + 1]: morph start, morph end, skirt depth (the deepest), the
+// [6 slot + 1]: morph start, morph end, skirt depth (the deepest), the
 //               node centre's post row from the anchor (ellipsoid);
-// [4 slot + 2]: the node centre's surface point from the camera (xyz,
+// [6 slot + 2]: the node centre's surface point from the camera (xyz,
 //               camera axes), its post column from the anchor (w);
-// [4 slot + 3]: the rotation from the centre's ENU axes to the camera's
+// [6 slot + 3]: the rotation from the centre's ENU axes to the camera's
 //               (a unit quaternion xyzw). Zero in the chart.
-uniform vec4 u_members[64];
+// [6 slot + 4], [6 slot + 5]: a projected grid's node series: the centre's
+//               latitude, then z, z^2, z^3's complex coefficients.
+uniform vec4 u_members[96];
 uniform vec4 u_posts;     // level-0 post spacing (xy), camera minus anchor post (zw), metres
 uniform vec4 u_frame;     // camera altitude, 1 / (2 R) or 0 for a flat earth, the data's last post numbered from the anchor (zw)
 // [0]: radians between posts east and north, the anchor row's latitude,
-//      1 on the ellipsoid (0: the chart); [1]: semi-major axis, e^2.
+//      1 on the ellipsoid (0: the chart; 2: a projected grid, with
+//      projected metres between posts over a in xy); [1]: semi-major axis,
+//      e^2, the isometric latitude's e^2.
 uniform vec4 u_earth[2];
 
 varying vec3 v_normal;
@@ -63,17 +68,40 @@ vec2 sin_hav(float d) {
     return vec2(s, h);
 }
 
-// The vertex at level-0 post number `post` relative to its node's centre
-// `centre`: its surface point (returned) and geodetic up (`up`), in the
-// centre's east-north-up axes.
-vec3 earth_local(vec2 post, vec2 centre, out vec3 up) {
+vec2 complex_mul(vec2 a, vec2 b) {
+    return vec2(a.x * b.x - a.y * b.y, a.x * b.y + a.y * b.x);
+}
+
+// A projected grid's vertex at post number `post`: its longitude and
+// latitude differences from its node's centre `centre` by the node's
+// series `e0`, `e1` (NodePlace::projected_offsets).
+vec2 projected_offsets(vec2 post, vec2 centre, vec4 e0, vec4 e1) {
+    vec2 z = (post - centre) * u_earth[0].xy;
+    vec2 w = complex_mul(z, vec2(e0.w, e1.x) + complex_mul(z, e1.yz));
+    w = complex_mul(z, e0.yz + w);
+    // Latitude from isometric latitude (expansion::latitude_series).
+    float s0 = sin(e0.x);
+    float c0 = cos(e0.x);
+    float e2 = u_earth[1].z;
+    float k = 1.0 / (1.0 - e2);
+    float m = 1.0 - e2 * s0 * s0 + 2.0 * e2 * c0 * c0;
+    float f = c0 * (1.0 - e2 * s0 * s0) * k;
+    float f1 = -s0 * m * k;
+    float f2 = (-c0 * m + 6.0 * e2 * s0 * s0 * c0) * k;
+    float g3 = (f2 * f + f1 * f1) * f / 6.0;
+    return vec2(w.x, w.y * (f + w.y * (f1 * f / 2.0 + w.y * g3)));
+}
+
+// The vertex whose latitude and longitude differ by `d` (east, north) from
+// its node's centre at latitude `phi0`: its surface point (returned) and
+// geodetic up (`up`), in the centre's east-north-up axes.
+vec3 earth_local(float phi0, vec2 d, out vec3 up) {
     float a = u_earth[1].x;
     float e2 = u_earth[1].y;
-    float phi0 = u_earth[0].z + centre.y * u_earth[0].y;
     float s0 = sin(phi0);
     float c0 = cos(phi0);
-    vec2 lam = sin_hav((post.x - centre.x) * u_earth[0].x);
-    vec2 phi = sin_hav((post.y - centre.y) * u_earth[0].y);
+    vec2 lam = sin_hav(d.x);
+    vec2 phi = sin_hav(d.y);
     // sin and cos of the latitude, as changes from the centre's.
     float ds = c0 * phi.x - s0 * phi.y;
     float dc = -c0 * phi.y - s0 * phi.x;
@@ -101,8 +129,8 @@ vec3 rotate(vec4 q, vec3 v) {
 
 void main() {
     int slot = int(a_grid.w);
-    vec4 tile = u_members[4 * slot];
-    vec4 ranges = u_members[4 * slot + 1];
+    vec4 tile = u_members[6 * slot];
+    vec4 ranges = u_members[6 * slot + 1];
     vec2 post = tile.xy + a_grid.xy * tile.z;
     // Linear across every triangle, so the clip at 0 is the data's edge.
     v_beyond = post - u_frame.zw;
@@ -120,10 +148,18 @@ void main() {
     float morph;
     float height;
     if (u_earth[0].w > 0.5) {
-        vec4 place = u_members[4 * slot + 2];
-        vec4 q = u_members[4 * slot + 3];
+        vec4 place = u_members[6 * slot + 2];
+        vec4 q = u_members[6 * slot + 3];
+        vec2 centre = vec2(place.w, ranges.w);
+        float phi0 = u_earth[0].z + centre.y * u_earth[0].y;
+        vec2 d = (post - centre) * u_earth[0].xy;
+        if (u_earth[0].w > 1.5) {
+            vec4 e0 = u_members[6 * slot + 4];
+            phi0 = e0.x;
+            d = projected_offsets(post, centre, e0, u_members[6 * slot + 5]);
+        }
         vec3 up;
-        vec3 surface = earth_local(post, vec2(place.w, ranges.w), up);
+        vec3 surface = earth_local(phi0, d, up);
         surface = rotate(q, surface) + place.xyz;
         up = rotate(q, up);
         float distance = length(surface + up * own);

@@ -84,9 +84,10 @@ pub struct ViewArgs {
     #[arg(long, allow_hyphen_values = true)]
     pub max_speed: Option<f64>,
     /// Draw in the planar chart (equirectangular at the grid's centre
-    /// latitude, lowered by d^2 / 2R), as before issue 26's phase B,
-    /// instead of on the WGS 84 ellipsoid: a fallback, and the "before" of
-    /// a comparison. Projected grids are drawn in the chart either way.
+    /// latitude, or a projected grid's own plane, lowered by d^2 / 2R), as
+    /// before issue 26's phase B, instead of on the WGS 84 ellipsoid: a
+    /// fallback, and the "before" of a comparison. Grids of an unknown
+    /// projection, and local grids, are drawn in the chart either way.
     #[arg(long)]
     pub chart: bool,
 }

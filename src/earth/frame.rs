@@ -22,19 +22,24 @@
 //! radius ([`NodePlace::vertex`], `shaders/gles/terrain.vert`): 0.8 mm
 //! across a 7.7 km node, whatever the latitude. Tiles of one node share the
 //! node's centre, so the posts they share get the same bits from both.
+//!
+//! **A projected grid** (a known projection: UTM, Web Mercator) is placed
+//! the same way but for its latitude and longitude differences, which come
+//! from its node's [`Expansion`] (a third-order series in the post offset,
+//! its coefficients from the exact inverse projection); grids of unknown
+//! projection stay in the chart.
 
 use glam::{DMat3, DQuat, DVec3, Vec3};
 
 use super::ellipsoid::{self, A, E2};
-use super::placement::GridPlacement;
+use super::expansion::Expansion;
+use super::placement::{GridPlacement, ProjectedLattice};
 
 /// Where the camera and the grid are for one frame (f64, CPU only).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EarthFrame {
-    /// Longitude and latitude of post (0, 0), radians.
-    origin: [f64; 2],
-    /// Radians between neighbouring posts, east and north.
-    step: [f64; 2],
+    /// How posts become latitude and longitude.
+    lattice: Lattice,
     /// The level-0 post the shader's post numbers count from.
     anchor: [i64; 2],
     /// The eye, ECEF metres.
@@ -43,8 +48,19 @@ pub struct EarthFrame {
     to_camera: DMat3,
 }
 
+/// How a frame's posts become latitude and longitude.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Lattice {
+    /// A geographic grid: longitude and latitude of post (0, 0) and
+    /// between neighbouring posts, east and north, radians.
+    Geographic { origin: [f64; 2], step: [f64; 2] },
+    /// A projected grid of a known projection: by its inverse (exact), and
+    /// per node by its [`Expansion`] (the shader).
+    Projected(ProjectedLattice),
+}
+
 /// One node's placement as the vertex shader takes it (two vec4 and a
-/// float of its member's uniforms).
+/// float of its member's uniforms; two vec4 more for a projected grid).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct NodePlace {
     /// The node's centre post, numbered from the frame's anchor.
@@ -54,18 +70,26 @@ pub struct NodePlace {
     /// The rotation from the centre's ENU axes to the camera's, as a unit
     /// quaternion (x, y, z, w).
     pub rotation: [f32; 4],
+    /// A projected grid's node: its [`Expansion::uniforms`] (zero for a
+    /// geographic grid).
+    pub expansion: [f32; 8],
 }
 
 impl EarthFrame {
     /// The frame of an eye at chart point and altitude `eye_chart` over the
     /// grid `placement` places, post numbers counted from `anchor`. `None`
-    /// for a projected grid (drawn in the chart).
+    /// for a grid placed by assumption (a local grid, or a projected one of
+    /// an unknown projection: drawn in the chart).
     pub fn new(placement: &GridPlacement, eye_chart: DVec3, anchor: [i64; 2]) -> Option<Self> {
-        let (origin, step) = placement.geographic_lattice()?;
+        let lattice = match (placement.geographic_lattice(), placement.projected_lattice()) {
+            (Some((origin, step)), _) => Lattice::Geographic { origin, step },
+            (None, Some(projected)) => Lattice::Projected(projected),
+            (None, None) => return None,
+        };
         let (lat, lon) = placement.geodetic_of_chart([eye_chart.x, eye_chart.y]);
         let eye = ellipsoid::to_ecef(lat, lon, eye_chart.z);
         let to_camera = ellipsoid::enu_to_ecef(lat, lon).transpose();
-        Some(EarthFrame { origin, step, anchor, eye, to_camera })
+        Some(EarthFrame { lattice, anchor, eye, to_camera })
     }
 
     /// The eye, ECEF metres.
@@ -73,31 +97,55 @@ impl EarthFrame {
         self.eye
     }
 
-    /// `u_earth[2]`: radians between posts east and north, the latitude
-    /// of the anchor's row, 1 (the ellipsoid on); the semi-major axis and
-    /// the first eccentricity squared.
+    /// `u_earth[2]`: for a geographic grid radians between posts east and
+    /// north, the latitude of the anchor's row, 1 (the ellipsoid on); for
+    /// a projected one projected metres between posts over `a`, 0, 2; then
+    /// the semi-major axis, the first eccentricity squared and the
+    /// isometric latitude's ([`super::Projection::isometric_e2`], projected
+    /// grids).
     pub fn uniforms(&self) -> [f32; 8] {
-        let anchor_lat = self.origin[1] + self.anchor[1] as f64 * self.step[1];
-        let [east, north] = self.step.map(|s| s as f32);
-        [east, north, anchor_lat as f32, 1.0, A as f32, E2 as f32, 0.0, 0.0]
+        let (a, e2) = (A as f32, E2 as f32);
+        match self.lattice {
+            Lattice::Geographic { origin, step } => {
+                let anchor_lat = origin[1] + self.anchor[1] as f64 * step[1];
+                let [east, north] = step.map(|s| s as f32);
+                [east, north, anchor_lat as f32, 1.0, a, e2, 0.0, 0.0]
+            }
+            Lattice::Projected(projected) => {
+                let [east, north] = projected.step.map(|s| (s / A) as f32);
+                let isometric_e2 = projected.projection.isometric_e2() as f32;
+                [east, north, 0.0, 2.0, a, e2, isometric_e2, 0.0]
+            }
+        }
     }
 
-    /// Latitude and longitude, radians, of level-0 post `post` (not
-    /// clamped: a node centre past a pole is placed by the same formula
-    /// the shader uses).
+    /// Latitude and longitude, radians, of level-0 post `post` (for a
+    /// geographic grid not clamped: a node centre past a pole is placed by
+    /// the same formula the shader uses).
     fn geodetic(&self, post: [f64; 2]) -> (f64, f64) {
-        (self.origin[1] + post[1] * self.step[1], self.origin[0] + post[0] * self.step[0])
+        match &self.lattice {
+            Lattice::Geographic { origin, step } => {
+                (origin[1] + post[1] * step[1], origin[0] + post[0] * step[0])
+            }
+            Lattice::Projected(projected) => projected.geodetic(post),
+        }
     }
 
     /// The placement of a node whose centre is level-0 post `centre`.
     pub fn place(&self, centre: [i64; 2]) -> NodePlace {
-        let (lat, lon) = self.geodetic(centre.map(|c| c as f64));
+        let post = centre.map(|c| c as f64);
+        let (lat, lon) = self.geodetic(post);
         let offset = self.to_camera * (ellipsoid::to_ecef(lat, lon, 0.0) - self.eye);
         let rotation = DQuat::from_mat3(&(self.to_camera * ellipsoid::enu_to_ecef(lat, lon)));
+        let expansion = match &self.lattice {
+            Lattice::Geographic { .. } => [0.0; 8],
+            Lattice::Projected(projected) => Expansion::new(projected, post).uniforms(),
+        };
         NodePlace {
             centre: [0, 1].map(|k| (centre[k] - self.anchor[k]) as f32),
             offset: offset.as_vec3().to_array(),
             rotation: rotation.normalize().as_quat().to_array(),
+            expansion,
         }
     }
 
@@ -118,9 +166,30 @@ impl EarthFrame {
     pub fn camera_box(&self, p0: [f64; 2], p1: [f64; 2], (lo, hi): (f64, f64)) -> (DVec3, DVec3) {
         let span = self.point(p0, 0.0).distance(self.point(p1, 0.0));
         let n = ((span / 55_000.0).ceil() as usize).clamp(2, 32);
+        let (min, max) = match self.lattice {
+            // Latitude and longitude depend on both post numbers.
+            Lattice::Projected(_) => self.sampled_box(p0, p1, n, (lo, hi)),
+            Lattice::Geographic { .. } => self.lattice_box(p0, p1, n, (lo, hi)),
+        };
+        // The smallest radius of curvature (the meridian's at the equator)
+        // bends most; the highest surface is farthest out.
+        let step = span / n as f64 / SMALLEST_RADIUS_M;
+        let bow = 2.0 * (LARGEST_RADIUS_M + hi.max(0.0)) * (1.0 - (step / 2.0).cos());
+        (min - DVec3::splat(bow), max + DVec3::splat(bow))
+    }
+
+    /// The box of a geographic grid's patch sampled on an `n` x `n`
+    /// lattice at both heights (sines and cosines once a column and a row).
+    fn lattice_box(
+        &self,
+        p0: [f64; 2],
+        p1: [f64; 2],
+        n: usize,
+        (lo, hi): (f64, f64),
+    ) -> (DVec3, DVec3) {
         let (mut min, mut max) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-        // Sines and cosines once a column and a row (on the stack: the
-        // selector calls this for every tile it visits, every frame).
+        // On the stack: the selector calls this for every tile it visits,
+        // every frame.
         let mut columns = [[0.0; 2]; 33];
         let mut rows = [[0.0; 2]; 33];
         for k in 0..=n {
@@ -140,11 +209,33 @@ impl EarthFrame {
                 }
             }
         }
-        // The smallest radius of curvature (the meridian's at the equator)
-        // bends most; the highest surface is farthest out.
-        let step = span / n as f64 / SMALLEST_RADIUS_M;
-        let bow = 2.0 * (LARGEST_RADIUS_M + hi.max(0.0)) * (1.0 - (step / 2.0).cos());
-        (min - DVec3::splat(bow), max + DVec3::splat(bow))
+        (min, max)
+    }
+
+    /// The box of a projected grid's patch sampled on an `n` x `n` lattice
+    /// of posts at both heights (its latitude and longitude depend on both
+    /// post numbers).
+    fn sampled_box(
+        &self,
+        p0: [f64; 2],
+        p1: [f64; 2],
+        n: usize,
+        (lo, hi): (f64, f64),
+    ) -> (DVec3, DVec3) {
+        let (mut min, mut max) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        for i in 0..=n {
+            for j in 0..=n {
+                let (fu, fv) = (i as f64 / n as f64, j as f64 / n as f64);
+                let post = [p0[0] + (p1[0] - p0[0]) * fu, p0[1] + (p1[1] - p0[1]) * fv];
+                let (lat, lon) = self.geodetic(post);
+                for h in [lo, hi] {
+                    let p = self.camera_of(ellipsoid::to_ecef(lat, lon, h));
+                    min = min.min(p);
+                    max = max.max(p);
+                }
+            }
+        }
+        (min, max)
     }
 
     /// The ECEF point of camera-relative point `d` (camera axes).
@@ -186,10 +277,15 @@ impl NodePlace {
     /// frame (`terrain.vert`'s `earth_local`).
     pub fn local(&self, earth: &[f32; 8], post: [f32; 2]) -> (Vec3, Vec3) {
         let (a, e2) = (earth[4], earth[5]);
-        let phi0 = earth[2] + self.centre[1] * earth[1];
+        let (phi0, [dlam, dphi]) = if earth[3] > 1.5 {
+            (self.expansion[0], self.projected_offsets(earth, post))
+        } else {
+            let d = [0, 1].map(|k| (post[k] - self.centre[k]) * earth[k]);
+            (earth[2] + self.centre[1] * earth[1], d)
+        };
         let (s0, c0) = (phi0.sin(), phi0.cos());
-        let [sl, hl] = sin_hav((post[0] - self.centre[0]) * earth[0]);
-        let [sp, hp] = sin_hav((post[1] - self.centre[1]) * earth[1]);
+        let [sl, hl] = sin_hav(dlam);
+        let [sp, hp] = sin_hav(dphi);
         // sin and cos of the latitude, as changes from the centre's.
         let ds = c0 * sp - s0 * hp;
         let dc = -c0 * hp - s0 * sp;
@@ -207,6 +303,27 @@ impl NodePlace {
         let up = [c * (1.0 - hl), c * sl, s];
         let enu = |[x, y, z]: [f32; 3]| Vec3::new(y, -s0 * x + c0 * z, c0 * x + s0 * z);
         (enu([dx, dy, dz]), enu(up))
+    }
+
+    /// A projected grid's vertex: its longitude and latitude differences
+    /// from the node's centre by the node's series (`terrain.vert`'s
+    /// `projected_offsets`; [`Expansion::offsets`] in f32).
+    fn projected_offsets(&self, earth: &[f32; 8], post: [f32; 2]) -> [f32; 2] {
+        let e = &self.expansion;
+        let z = [0, 1].map(|k| (post[k] - self.centre[k]) * earth[k]);
+        let mul = |[a, b]: [f32; 2], [c, d]: [f32; 2]| [a * c - b * d, a * d + b * c];
+        let inner = mul(z, [e[5], e[6]]);
+        let inner = mul(z, [e[3] + inner[0], e[4] + inner[1]]);
+        let [dlam, dpsi] = mul(z, [e[1] + inner[0], e[2] + inner[1]]);
+        // Latitude from isometric latitude (expansion::latitude_series).
+        let (s0, c0, e2) = (e[0].sin(), e[0].cos(), earth[6]);
+        let k = 1.0 / (1.0 - e2);
+        let m = 1.0 - e2 * s0 * s0 + 2.0 * e2 * c0 * c0;
+        let f = c0 * (1.0 - e2 * s0 * s0) * k;
+        let f1 = -s0 * m * k;
+        let f2 = (-c0 * m + 6.0 * e2 * s0 * s0 * c0) * k;
+        let [g1, g2, g3] = [f, f1 * f / 2.0, (f2 * f + f1 * f1) * f / 6.0];
+        [dlam, dpsi * (g1 + dpsi * (g2 + dpsi * g3))]
     }
 
     /// A point of the centre's ENU frame, camera-relative.
@@ -243,10 +360,19 @@ mod tests {
         GridPlacement::new(&georef, posts, georef.spacing_m(posts))
     }
 
+    fn utm() -> GridPlacement {
+        let georef = GeoRef {
+            crs: Crs::Projected { epsg: Some(32637) },
+            origin: [250_000.0, 4_000_000.0],
+            spacing: [30.0; 2],
+        };
+        GridPlacement::new(&georef, [16_385, 16_385], [30.0; 2])
+    }
+
     /// The shader's f32 mirror against the exact f64 point, for nodes near
     /// and far from the eye, small and huge, from the equator to 89.9 N and
-    /// across the antimeridian: within 1e-6 of the distance to the node's
-    /// centre plus a millimetre.
+    /// across the antimeridian, and a UTM grid's: within 1e-6 of the
+    /// distance to the node's centre plus a millimetre.
     #[test]
     fn the_shaders_vertex_is_the_earths_point() {
         // 3-second data at 39 N; 5-minute global data.
@@ -257,12 +383,15 @@ mod tests {
             (grid([0.0, -90.0], 1.0 / 12.0, [4321, 2161]), [2160.3, 1860.0], 256, 3),
             (grid([0.0, -90.0], 1.0 / 12.0, [4321, 2161]), [5.0, 2158.8], 256, 1),
             (grid([0.0, -90.0], 1.0 / 12.0, [4321, 2161]), [4319.0, 1300.0], 256, 5),
+            // 30 m UTM (zone 37 N) by its nodes' series.
+            (utm(), [10.0, 16_000.0], 256, 0),
+            (utm(), [8000.5, 3000.25], 256, 3),
         ];
         for (placement, eye_post, node, level) in cases {
             let chart = placement.chart_of_post(eye_post);
             let eye = DVec3::new(chart[0], chart[1], 3000.0);
             let anchor = eye_post.map(|p| p.floor() as i64);
-            let frame = EarthFrame::new(&placement, eye, anchor).expect("geographic");
+            let frame = EarthFrame::new(&placement, eye, anchor).expect("placed");
             let earth = frame.uniforms();
             let span = (node as i64) << level;
             for (i, j) in [(0, 0), (1, 0), (-1, 2), (3, -2)] {
@@ -291,15 +420,24 @@ mod tests {
 
     /// Every point of a patch, at any height between its bounds, lies in
     /// its camera box: a fine patch near the eye and a coarse one spanning
-    /// 20 degrees, at 60 N.
+    /// 20 degrees, at 60 N; a UTM grid's near the eye and 240 km across.
     #[test]
     fn a_patch_lies_in_its_camera_box() {
-        let placement = grid([0.0, -90.0], 1.0 / 12.0, [4321, 2161]);
-        let chart = placement.chart_of_post([120.0, 1800.0]);
-        let frame =
-            EarthFrame::new(&placement, DVec3::new(chart[0], chart[1], 5000.0), [120, 1800])
-                .expect("geographic");
-        for (p0, p1) in [([100.0, 1790.0], [132.0, 1822.0]), ([0.0, 1700.0], [240.0, 1940.0])] {
+        let geographic = grid([0.0, -90.0], 1.0 / 12.0, [4321, 2161]);
+        let cases = [
+            (geographic, [120.0, 1800.0], [([100.0, 1790.0], [132.0, 1822.0])]),
+            (geographic, [120.0, 1800.0], [([0.0, 1700.0], [240.0, 1940.0])]),
+            (utm(), [8000.0, 8000.0], [([7980.0, 7990.0], [8012.0, 8022.0])]),
+            (utm(), [8000.0, 8000.0], [([4000.0, 4000.0], [12_000.0, 12_000.0])]),
+        ];
+        for (placement, eye, [(p0, p1)]) in cases {
+            let chart = placement.chart_of_post(eye);
+            let frame = EarthFrame::new(
+                &placement,
+                DVec3::new(chart[0], chart[1], 5000.0),
+                eye.map(|p| p as i64),
+            )
+            .expect("placed");
             let (min, max) = frame.camera_box(p0, p1, (-100.0, 4000.0));
             for i in 0..=20 {
                 for j in 0..=20 {

@@ -7,6 +7,7 @@
 //! | [`ellipsoid`] | geodetic latitude, longitude and height to ECEF and back (Vermeille), the geodetic normal, east-north-up frames, longitude normalisation |
 //! | [`projection`] | transverse Mercator by Krüger's series (UTM, ETRS89 / UTM) and Web Mercator, by EPSG code |
 //! | [`bounds`] | oriented boxes of grid patches on the ellipsoid, the ellipsoid's horizon (for culling and distances on the earth) |
+//! | [`expansion`] | [`Expansion`]: a projected grid's posts about a node's centre as a short conformal series (what the shader places a projected grid's vertices with) |
 //! | [`frame`] | [`EarthFrame`]: a frame's eye and each node's placement in f64, the f32 uniforms and small-term formula the vertex shader places vertices with |
 //! | [`placement`] | [`GridPlacement`]: a grid's posts to latitude, longitude and ECEF and back, longitude that wraps, the chart |
 //!
@@ -19,12 +20,14 @@
 
 pub mod bounds;
 pub mod ellipsoid;
+pub mod expansion;
 pub mod frame;
 pub mod placement;
 pub mod projection;
 
 pub use bounds::{EarthBox, EllipsoidHorizon};
 pub use ellipsoid::{geodetic_of, normalize_longitude, Geodetic};
+pub use expansion::Expansion;
 pub use frame::{EarthFrame, NodePlace};
-pub use placement::GridPlacement;
+pub use placement::{GridPlacement, ProjectedLattice};
 pub use projection::{Projection, TransverseMercator, UnsupportedEpsg};

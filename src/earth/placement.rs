@@ -54,6 +54,26 @@ pub struct GridPlacement {
     assumed: Option<&'static str>,
 }
 
+/// A projected grid's posts ([`GridPlacement::projected_lattice`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProjectedLattice {
+    /// The projection.
+    pub projection: Projection,
+    /// Projected metres of post (0, 0), east and north.
+    pub origin: [f64; 2],
+    /// Projected metres between neighbouring posts, east and north.
+    pub step: [f64; 2],
+}
+
+impl ProjectedLattice {
+    /// Latitude and longitude, radians, of post `(u, v)` (any fraction):
+    /// the exact inverse projection.
+    pub fn geodetic(&self, [u, v]: [f64; 2]) -> (f64, f64) {
+        self.projection
+            .inverse([self.origin[0] + u * self.step[0], self.origin[1] + v * self.step[1]])
+    }
+}
+
 /// A grid whose columns span this close to 360 degrees wraps.
 const WRAP_TOLERANCE_DEG: f64 = 1e-6;
 
@@ -123,6 +143,19 @@ impl GridPlacement {
                 Some((self.origin.map(f64::to_radians), self.step.map(f64::to_radians)))
             }
             Kind::Projected(_) => None,
+        }
+    }
+
+    /// For a projected grid of a known projection, its projection and
+    /// posts: what [`super::EarthFrame`] places its tiles with and expands
+    /// its nodes' posts from ([`super::Expansion`]). `None` for geographic
+    /// grids and for grids placed by assumption (drawn in the chart).
+    pub fn projected_lattice(&self) -> Option<ProjectedLattice> {
+        match self.kind {
+            Kind::Projected(projection) if self.assumed.is_none() => {
+                Some(ProjectedLattice { projection, origin: self.origin, step: self.step })
+            }
+            _ => None,
         }
     }
 

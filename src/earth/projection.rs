@@ -64,6 +64,18 @@ impl Projection {
         }
     }
 
+    /// The eccentricity squared of the latitude whose isometric form,
+    /// with longitude, is conformal to the projection's plane: the
+    /// ellipsoid's for a transverse Mercator (a conformal map of the
+    /// ellipsoid), 0 for Web Mercator (a conformal map of the sphere, fed
+    /// the ellipsoid's latitudes). See [`super::Expansion`].
+    pub fn isometric_e2(&self) -> f64 {
+        match self {
+            Projection::TransverseMercator(_) => E2,
+            Projection::WebMercator => 0.0,
+        }
+    }
+
     /// Easting and northing, metres, of latitude `lat` and longitude `lon` (radians).
     pub fn forward(&self, lat: f64, lon: f64) -> [f64; 2] {
         match self {

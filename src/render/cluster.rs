@@ -12,7 +12,7 @@
 //! is a vertex array bind (without vertex array objects, three pointers;
 //! clusters of one window share them either way). The vertex
 //! shader takes the member's placement, morph and skirts from
-//! `u_members[4 slot]` to `u_members[4 slot + 3]` (a uniform array indexed
+//! `u_members[6 slot]` to `u_members[6 slot + 5]` (a uniform array indexed
 //! by a vertex attribute: GLSL ES 1.00 allows it in vertex shaders).
 
 use crate::tiles::block::VERTEX_BYTES;
@@ -49,10 +49,11 @@ pub fn window_of(offset: u32) -> u32 {
     offset / WINDOW_STRIDE
 }
 
-/// Floats of one member's uniforms: four vec4 (placement, morph and
-/// skirts; the node's place on the ellipsoid). Sixteen members take 64 of
-/// GLES 2.0's 128 vertex uniform vectors; the frame's take 8 more.
-pub const MEMBER_FLOATS: usize = 16;
+/// Floats of one member's uniforms: six vec4 (placement, morph and
+/// skirts; the node's place on the ellipsoid; a projected grid's node
+/// series). Sixteen members take 96 of GLES 2.0's 128 vertex uniform
+/// vectors; the frame's take 8 more.
+pub const MEMBER_FLOATS: usize = 24;
 
 /// Which morph range each member of a cluster takes.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]

@@ -17,18 +17,20 @@ pub fn part_bit(slice: Slice, no_data: bool) -> u8 {
 }
 
 impl TileUniforms {
-    /// The tile's four uniform vectors, as `u_members[4 slot]` to
-    /// `u_members[4 slot + 3]` take them: south-west post, vertex step and
+    /// The tile's six uniform vectors, as `u_members[6 slot]` to
+    /// `u_members[6 slot + 5]` take them: south-west post, vertex step and
     /// skirt shares (four bits per edge); morph start, end, the deepest
     /// skirt's depth and its node centre's row; on the ellipsoid, the node
     /// centre's camera-relative offset and column, and its rotation
-    /// ([`crate::earth::NodePlace::vectors`]; zero in the chart).
+    /// ([`crate::earth::NodePlace::vectors`]; zero in the chart); a
+    /// projected grid's node series ([`crate::earth::Expansion::uniforms`]).
     pub fn member_uniforms(&self) -> [f32; MEMBER_FLOATS] {
         let [x, y] = self.first_post;
         let [start, end] = self.morph;
         let shares = self.packed_skirt_shares();
         let [ox, oy, oz, cx, qx, qy, qz, qw] = self.place.vectors();
         let cy = self.place.centre[1];
+        let e = self.place.expansion;
         [
             x,
             y,
@@ -46,6 +48,14 @@ impl TileUniforms {
             qy,
             qz,
             qw,
+            e[0],
+            e[1],
+            e[2],
+            e[3],
+            e[4],
+            e[5],
+            e[6],
+            e[7],
         ]
     }
 }
