@@ -84,7 +84,8 @@ impl Progress for Bar {
             Bar::Log(log) => {
                 log.end_phase();
                 log.done.store(0, Ordering::Relaxed);
-                let phase = Phase { name: name.into(), total, started: Instant::now(), quarters: 0 };
+                let phase =
+                    Phase { name: name.into(), total, started: Instant::now(), quarters: 0 };
                 *log.phase.lock().unwrap_or_else(|e| e.into_inner()) = Some(phase);
             }
         }
