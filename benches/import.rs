@@ -17,7 +17,9 @@
 //! with the release binary as a child process: time, posts per second,
 //! peak resident memory, bytes per level-0 post (see `import_scale/`).
 //!
-//! `cargo bench --bench import [-- --quick]` prints the tables and writes
+//! `cargo bench --bench import [-- --quick] [--scale-only]` prints the
+//! tables (`--scale-only`: the third alone, e.g. for the full run's 64
+//! tiles and 30" world without the rest) and writes
 //! `target/bench/import.json` and `target/bench/import.svg`, and the scale
 //! table to `target/bench/import_scale.json` and `import_scale.svg`.
 
@@ -82,6 +84,9 @@ fn main() {
     let json = support::write_json("import_scale", &scale_report);
     let svg = support::write_svg("import_scale", &[scale::scale_panel(&scale_rows)]);
     println!("\nwrote {} and {}\n", json.display(), svg.display());
+    if std::env::args().any(|a| a == "--scale-only") {
+        return;
+    }
     let (sizes, repeats): (&[u32], usize) =
         if quick { (&[1024, 2048], 2) } else { (&[1024, 2048, 4096, 8192], 3) };
     let scratch = support::out_dir().join("import-scratch");
