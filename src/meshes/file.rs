@@ -496,15 +496,26 @@ impl MapFile {
     /// Checks every record against its entry (bounds and checksum), in
     /// parallel, naming the first damaged node found.
     pub fn verify(&self) -> Result<(), MeshesError> {
-        let damaged = (0..self.nodes).into_par_iter().find_map_any(|index| {
-            let entry = self.entry(index);
-            let problem = entry.is_record().then(|| self.record(index, &entry).err()).flatten();
-            problem.map(|problem| format!("node {index}: {problem}"))
-        });
-        match damaged {
-            None => Ok(()),
-            Some(problem) => Err(MeshesError::Corrupt { path: self.path.clone(), problem }),
+        for first in (0..self.nodes).step_by(RECORDS_PER_RELEASE) {
+            let end = (first + RECORDS_PER_RELEASE as u64).min(self.nodes);
+            let damaged = (first..end).into_par_iter().find_map_any(|index| {
+                let entry = self.entry(index);
+                let problem = entry.is_record().then(|| self.record(index, &entry).err()).flatten();
+                problem.map(|problem| format!("node {index}: {problem}"))
+            });
+            self.release_pages();
+            if let Some(problem) = damaged {
+                return Err(MeshesError::Corrupt { path: self.path.clone(), problem });
+            }
         }
+        Ok(())
+    }
+
+    /// Drops the map's resident pages (MADV_DONTNEED): reading a whole
+    /// file (a verify, a merge's copy) would otherwise keep all of it
+    /// mapped, and a merge of 64 tiles' parts reads 2 GB of them.
+    pub fn release_pages(&self) {
+        release_map(&self.map);
     }
 
     /// Whether every stored node has its map (not a shard's part).
@@ -618,10 +629,13 @@ pub fn merge_parts(
             let mut table = vec![Entry::ABSENT; layout.node_count() as usize];
             let mut ids = all_nodes(layout);
             record_order(layout, info.options.depth, &mut ids);
-            for id in ids {
+            for (k, id) in ids.into_iter().enumerate() {
                 let index = layout.node_index(id).expect("a node of the layout");
                 table[index as usize] = merged_entry(files, index, &mut writer)
                     .map_err(|e| e.into_meshes_error(temporary))?;
+                if k % RECORDS_PER_RELEASE == RECORDS_PER_RELEASE - 1 {
+                    files.iter().for_each(MapFile::release_pages);
+                }
             }
             writer.finish(&info, &table).map_err(|e| io(temporary, e))
         },
@@ -680,6 +694,22 @@ fn merged_entry(
         }
     }
 }
+
+/// Records read between two releases of a map's pages.
+const RECORDS_PER_RELEASE: usize = 512;
+
+#[cfg(unix)]
+#[allow(unsafe_code)]
+fn release_map(map: &Mmap) {
+    // SAFETY: as for the pyramid's (`pyramid::open::release_pages`): a
+    // read-only shared mapping of a file that is never written in place;
+    // DONTNEED only unmaps its pages, the next access reads the same bytes
+    // back, and no slice of the map outlives the call that made it.
+    let _ = unsafe { map.unchecked_advise(memmap2::UncheckedAdvice::DontNeed) };
+}
+
+#[cfg(not(unix))]
+fn release_map(_map: &Mmap) {}
 
 #[allow(unsafe_code)]
 fn map_file(file: &File) -> std::io::Result<Mmap> {
