@@ -224,20 +224,9 @@ fn a_child_refines_its_parent_and_morphs_onto_its_surface() {
 /// stored level-0 node has a neighbour read from a coarser ancestor, and
 /// the two disagree on their shared posts.
 fn layered_pyramid_in(dir: &Path) -> Arc<Pyramid> {
-    use ridgeline::dem::ElevationGrid;
-    use ridgeline::geo::{Crs, GeoRef};
     let terrain = |x: f64, y: f64| 600.0 + 250.0 * (x / 3000.0).sin() * (y / 4100.0).cos();
     let layer = |origin: [f64; 2], spacing: f64, posts: [u32; 2], offset: f64| {
-        let heights = (0..posts[1])
-            .flat_map(|j| (0..posts[0]).map(move |i| (i, j)))
-            .map(|(i, j)| {
-                let (x, y) = (origin[0] + i as f64 * spacing, origin[1] + j as f64 * spacing);
-                (terrain(x, y) + offset) as f32
-            })
-            .collect();
-        let crs = Crs::Projected { epsg: Some(32632) };
-        let georef = GeoRef { crs, origin, spacing: [spacing; 2] };
-        ElevationGrid { width: posts[0], height: posts[1], heights, georef, voids_filled: 0 }
+        testkit::pyramid::projected_grid(origin, [spacing; 2], posts, |x, y| terrain(x, y) + offset)
     };
     let layers =
         [layer([0.0, 0.0], 400.0, [40, 40], 0.0), layer([2_000.0, 3_000.0], 100.0, [61, 75], 12.0)];

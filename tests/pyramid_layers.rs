@@ -32,14 +32,7 @@ fn layer(
     posts: [u32; 2],
     h: impl Fn(f64, f64) -> f64,
 ) -> ElevationGrid {
-    let heights = (0..posts[1])
-        .flat_map(|j| (0..posts[0]).map(move |i| (i, j)))
-        .map(|(i, j)| {
-            h(origin[0] + i as f64 * spacing[0], origin[1] + j as f64 * spacing[1]) as f32
-        })
-        .collect();
-    let georef = GeoRef { crs: Crs::Projected { epsg: Some(32637) }, origin, spacing };
-    ElevationGrid { width: posts[0], height: posts[1], heights, georef, voids_filled: 0 }
+    testkit::pyramid::projected_grid(origin, spacing, posts, h)
 }
 
 fn coarse(h: impl Fn(f64, f64) -> f64) -> ElevationGrid {

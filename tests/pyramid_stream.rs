@@ -8,7 +8,6 @@
 use std::path::{Path, PathBuf};
 
 use ridgeline::dem::{import_layers, ElevationGrid, GridView};
-use ridgeline::geo::{Crs, GeoRef};
 use ridgeline::pyramid::spilled::spill_layers;
 use ridgeline::pyramid::{
     build_layers, build_streaming, write_atomic, BuildOptions, Silent, StreamError, StreamOptions,
@@ -25,16 +24,7 @@ fn terrain(x: f64, y: f64) -> f64 {
 }
 
 fn layer(origin: [f64; 2], spacing: f64, posts: [u32; 2], offset: f64) -> ElevationGrid {
-    let heights = (0..posts[1])
-        .flat_map(|j| (0..posts[0]).map(move |i| (i, j)))
-        .map(|(i, j)| {
-            let (x, y) = (origin[0] + i as f64 * spacing, origin[1] + j as f64 * spacing);
-            (terrain(x, y) + offset) as f32
-        })
-        .collect();
-    let georef =
-        GeoRef { crs: Crs::Projected { epsg: Some(32637) }, origin, spacing: [spacing; 2] };
-    ElevationGrid { width: posts[0], height: posts[1], heights, georef, voids_filled: 0 }
+    testkit::pyramid::projected_grid(origin, [spacing; 2], posts, |x, y| terrain(x, y) + offset)
 }
 
 /// The in-memory build's bytes.

@@ -23,6 +23,25 @@ pub fn random_grid(width: u32, height: u32, seed: u64) -> ElevationGrid {
     ElevationGrid { width, height, heights, georef, voids_filled: 3 }
 }
 
+/// A grid in UTM zone 37 N metres (EPSG:32637) whose post `(i, j)` has
+/// height `h(x, y)` at its place: the layers the layered-pyramid tests
+/// stack.
+pub fn projected_grid(
+    origin: [f64; 2],
+    spacing: [f64; 2],
+    posts: [u32; 2],
+    h: impl Fn(f64, f64) -> f64,
+) -> ElevationGrid {
+    let heights = (0..posts[1])
+        .flat_map(|j| (0..posts[0]).map(move |i| (i, j)))
+        .map(|(i, j)| {
+            h(origin[0] + i as f64 * spacing[0], origin[1] + j as f64 * spacing[1]) as f32
+        })
+        .collect();
+    let georef = GeoRef { crs: Crs::Projected { epsg: Some(32637) }, origin, spacing };
+    ElevationGrid { width: posts[0], height: posts[1], heights, georef, voids_filled: 0 }
+}
+
 /// Builds `grid` and writes it to `dir/pyramid.rlp`.
 pub fn build_and_write(
     grid: &ElevationGrid,
