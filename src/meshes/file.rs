@@ -515,7 +515,7 @@ impl MapFile {
     /// file (a verify, a merge's copy) would otherwise keep all of it
     /// mapped, and a merge of 64 tiles' parts reads 2 GB of them.
     pub fn release_pages(&self) {
-        release_map(&self.map);
+        crate::pyramid::release_map_pages(&self.map);
     }
 
     /// Whether every stored node has its map (not a shard's part).
@@ -697,19 +697,6 @@ fn merged_entry(
 
 /// Records read between two releases of a map's pages.
 const RECORDS_PER_RELEASE: usize = 512;
-
-#[cfg(unix)]
-#[allow(unsafe_code)]
-fn release_map(map: &Mmap) {
-    // SAFETY: as for the pyramid's (`pyramid::open::release_pages`): a
-    // read-only shared mapping of a file that is never written in place;
-    // DONTNEED only unmaps its pages, the next access reads the same bytes
-    // back, and no slice of the map outlives the call that made it.
-    let _ = unsafe { map.unchecked_advise(memmap2::UncheckedAdvice::DontNeed) };
-}
-
-#[cfg(not(unix))]
-fn release_map(_map: &Mmap) {}
 
 #[allow(unsafe_code)]
 fn map_file(file: &File) -> std::io::Result<Mmap> {

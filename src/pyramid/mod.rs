@@ -60,6 +60,7 @@ pub mod format;
 pub mod layers;
 mod limits;
 mod open;
+pub(crate) use open::release_map_pages;
 mod progress;
 pub mod shard;
 pub mod spilled;

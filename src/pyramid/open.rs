@@ -312,10 +312,11 @@ fn node_at(layout: &NodeLayout, mut index: u64) -> NodeId {
     unreachable!("index beyond the node table")
 }
 
-/// Drops the map's resident pages (MADV_DONTNEED).
+/// Drops a read-only file map's resident pages (MADV_DONTNEED): the
+/// pyramid's and the map file's.
 #[cfg(unix)]
 #[allow(unsafe_code)]
-fn release_pages(map: &Mmap) {
+pub(crate) fn release_map_pages(map: &Mmap) {
     // SAFETY: the map is a read-only shared mapping of a file: DONTNEED
     // only unmaps its pages, and the next access reads the same bytes back
     // from the page cache or the file, so live slices into it stay valid.
@@ -323,7 +324,7 @@ fn release_pages(map: &Mmap) {
 }
 
 #[cfg(not(unix))]
-fn release_pages(_map: &Mmap) {}
+pub(crate) fn release_map_pages(_map: &Mmap) {}
 
 #[allow(unsafe_code)]
 fn map_file(file: &File) -> std::io::Result<Mmap> {
@@ -347,7 +348,7 @@ impl NodeSource for Pyramid {
     }
 
     fn release_pages(&self) {
-        release_pages(&self.map);
+        release_map_pages(&self.map);
     }
 
     fn has_node(&self, id: NodeId) -> bool {
