@@ -21,7 +21,12 @@ fn info_json_describes_an_imported_cache() {
         &["import", "--synthetic", "257", "--node-size", "32", "--border", "1", "--out"],
         &cache,
     );
-    assert!(imported.status.success(), "{}", String::from_utf8_lossy(&imported.stderr));
+    let said = String::from_utf8_lossy(&imported.stderr);
+    assert!(imported.status.success(), "{said}");
+    // Not a terminal: each phase's time on a line of the log.
+    for phase in ["level 0: done in", "meshes: done in"] {
+        assert!(said.contains(phase), "{said:?} lacks {phase:?}");
+    }
     let info = ridgeline(&["info", "--json"], &cache);
     assert!(info.status.success(), "{}", String::from_utf8_lossy(&info.stderr));
     let json: serde_json::Value =
