@@ -25,7 +25,7 @@ use crate::allocator::{
 use crate::lod::TileKey;
 use crate::render::cluster::{window, window_count, window_of, MAX_MEMBERS, WINDOW_VERTICES};
 use crate::render::cluster_draws::part_bit;
-use crate::render::{Cluster, ClusterOrder, DrawList, Member, Slice, TileUniforms};
+use crate::render::{Cluster, ClusterDraws, ClusterOrder, DrawList, Member, Slice, TileUniforms};
 use crate::tiles::block::{INDEX_BYTES, VERTEX_BYTES};
 use crate::tiles::TileVertex;
 use std::collections::HashMap;
@@ -44,6 +44,8 @@ pub struct ClusterConfig {
     pub transfer_cap: Option<u32>,
     /// Frames a released block stays out of reuse.
     pub frames_in_flight: u32,
+    /// In which order the clusters are drawn.
+    pub order: ClusterOrder,
 }
 
 /// Why the frame's clusters could not be made.
@@ -254,12 +256,14 @@ impl ClusterCache {
 
     /// Forms `list`'s clusters, makes the blocks of new or changed ones
     /// from the tile blocks in `tile_staging` (`tile_dirty`: the tile
-    /// ranges remade this frame), and lists the clusters in `list`.
+    /// ranges remade this frame), and writes the frame's cluster draws
+    /// into `draws` (the list's own, [`DrawList::cluster`]).
     pub fn update(
         &mut self,
-        list: &mut DrawList,
+        list: &DrawList,
         tile_staging: &[u8],
         tile_dirty: &[Range<u32>],
+        draws: ClusterDraws<'_>,
     ) -> Result<(), ClusterError> {
         self.frame += 1;
         self.allocator.begin_frame();
@@ -272,7 +276,7 @@ impl ClusterCache {
         self.stats = ClusterFrameStats::default();
         let mut formation = std::mem::take(&mut self.formation);
         formation.form(&list.tiles);
-        let outcome = self.update_with(&formation, list, tile_staging, tile_dirty);
+        let outcome = self.update_with(&formation, list, tile_staging, tile_dirty, draws);
         self.formation = formation;
         outcome
     }
@@ -280,9 +284,10 @@ impl ClusterCache {
     fn update_with(
         &mut self,
         formation: &Formation,
-        list: &mut DrawList,
+        list: &DrawList,
         tile_staging: &[u8],
         tile_dirty: &[Range<u32>],
+        draws: ClusterDraws<'_>,
     ) -> Result<(), ClusterError> {
         let placements = formation.placements();
         let clusters = formation.clusters().count();
@@ -290,7 +295,24 @@ impl ClusterCache {
             let max = self.config.max_clusters;
             return Err(ClusterError::TooManyClusters { clusters, max });
         }
-        // Which clusters are kept as they are.
+        self.keep_unchanged(placements, list, tile_dirty);
+        self.release_unused();
+        self.announce_changed(placements, list);
+        if !self.jobs.is_empty() {
+            self.make(placements, list, tile_staging)?;
+        }
+        self.list(placements, list, draws);
+        Ok(())
+    }
+
+    /// Marks the clusters of `placements` that are resident with the same
+    /// members, none of them remade (`tile_dirty`), as kept this frame.
+    fn keep_unchanged(
+        &mut self,
+        placements: &[Placement],
+        list: &DrawList,
+        tile_dirty: &[Range<u32>],
+    ) {
         let mut start = 0;
         while start < placements.len() {
             let end = group_end(placements, start);
@@ -310,8 +332,11 @@ impl ClusterCache {
             }
             start = end;
         }
-        self.release_unused();
-        // New and changed clusters announce their size.
+    }
+
+    /// New and changed clusters take a slot and announce their size (a
+    /// job each).
+    fn announce_changed(&mut self, placements: &[Placement], list: &DrawList) {
         let mut start = 0;
         while start < placements.len() {
             let end = group_end(placements, start);
@@ -354,11 +379,6 @@ impl ClusterCache {
             self.slots[slot as usize] = Some(resident);
             start = end;
         }
-        if !self.jobs.is_empty() {
-            self.make(placements, list, tile_staging)?;
-        }
-        self.list(placements, list);
-        Ok(())
     }
 
     /// Clusters the frame no longer has give their blocks back.
@@ -509,20 +529,21 @@ impl ClusterCache {
     /// Lists the frame's clusters in `list`, in draw order: by attribute
     /// base, the bases in the order of their nearest cluster, and nearest
     /// first within one base (so each base's pointers are set once).
-    fn list(&mut self, placements: &[Placement], list: &mut DrawList) {
-        list.clusters.clear();
-        list.members.clear();
+    fn list(&mut self, placements: &[Placement], list: &DrawList, draws: ClusterDraws<'_>) {
+        let ClusterDraws { clusters, members } = draws;
+        clusters.clear();
+        members.clear();
         let mut start = 0;
         while start < placements.len() {
             let end = group_end(placements, start);
             let key = placements[start].key;
             let resident = self.slots[self.by_key[&key] as usize].expect("made");
-            let first_member = list.members.len() as u32;
+            let first_member = members.len() as u32;
             let mut first_index = 0;
             let mut no_data = false;
             for p in &placements[start..end] {
                 let tile = &list.tiles[p.tile as usize];
-                list.members.push(Member {
+                members.push(Member {
                     tile: p.tile,
                     slot: p.slot,
                     first_index,
@@ -540,7 +561,7 @@ impl ClusterCache {
                     }
                 }
             }
-            list.clusters.push(Cluster {
+            clusters.push(Cluster {
                 base: resident.base,
                 index_byte_offset: resident.index_byte_offset,
                 first_member,
@@ -552,7 +573,7 @@ impl ClusterCache {
         }
         // Nearest member (tiles are listed nearest first), then the
         // nearest cluster of each base.
-        let members = &list.members;
+        let members = &*members;
         let nearest = |c: &Cluster| {
             let first = c.first_member as usize;
             members[first..first + c.member_count as usize]
@@ -561,9 +582,9 @@ impl ClusterCache {
                 .min()
                 .unwrap_or(0)
         };
-        list.clusters.sort_unstable_by_key(|c| (c.base, nearest(c)));
+        clusters.sort_unstable_by_key(|c| (c.base, nearest(c)));
         self.bases.clear();
-        for cluster in &list.clusters {
+        for cluster in clusters.iter() {
             if self.bases.last().map(|b| b.0) != Some(cluster.base) {
                 self.bases.push((cluster.base, nearest(cluster)));
             }
@@ -576,13 +597,12 @@ impl ClusterCache {
             let at = bases.binary_search_by_key(&c.base, |b| b.0).expect("every base listed");
             bases[at].1
         };
-        match list.cluster_order {
-            ClusterOrder::ByBase => list.clusters.sort_unstable_by_key(|c| (group(c), nearest(c))),
-            ClusterOrder::NearestFirst => list.clusters.sort_unstable_by_key(nearest),
+        match self.config.order {
+            ClusterOrder::ByBase => clusters.sort_unstable_by_key(|c| (group(c), nearest(c))),
+            ClusterOrder::NearestFirst => clusters.sort_unstable_by_key(nearest),
         }
-        list.clustered = true;
         let used = self.allocator.stats().live_bytes + self.index_allocator.stats().live_bytes;
-        self.stats.clusters = list.clusters.len();
+        self.stats.clusters = clusters.len();
         self.stats.used_bytes = used;
     }
 }
@@ -676,6 +696,7 @@ mod tests {
             max_clusters: 8,
             transfer_cap: None,
             frames_in_flight: 0,
+            order: ClusterOrder::ByBase,
         };
         let mut cache = ClusterCache::new(config).expect("a cache");
         assert_eq!(cache.allocator.stats().live_blocks, 3, "a fence after each window");

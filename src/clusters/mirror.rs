@@ -16,10 +16,7 @@ use crate::tiles::TileVertex;
 /// vertices carry. Returns the per-tile list and that staging copy; a
 /// list drawn tile by tile comes back as it is.
 pub fn drawn_tiles(list: &DrawList, vertices: &[u8], indices: &[u8]) -> (DrawList, Vec<u8>) {
-    let mut out = list.clone();
-    out.clustered = false;
-    out.clusters.clear();
-    out.members.clear();
+    let mut out = list.per_tile();
     let mut staging = Vec::new();
     if !list.clustered() {
         return (out, staging);

@@ -368,7 +368,7 @@ fn measure_one(
             passes.positions.read_positions(truth_positions)?;
             stats
         }
-        Truth::Rays(ground) => trace_view(display, &geometry, &ground, camera, truth_positions),
+        Truth::Rays(ground) => trace_view(display, &geometry, &ground, truth_positions),
     };
     display.context.bind_target();
     let scene = display.pipeline.scene();
@@ -470,14 +470,14 @@ fn trace_view(
     display: &DisplayParts,
     geometry: &ViewGeometry,
     ground: &RayGround<'_>,
-    camera: &Camera,
     out: &mut PositionImage,
 ) -> TruthFrameStats {
     let start = Instant::now();
     trace_truth(geometry, ground, out);
     let frame_ms = start.elapsed().as_secs_f64() * 1e3;
-    let census = display.pipeline.scene().census(camera, &display.pipeline.terrain());
-    TruthFrameStats { triangles: 2 * census.cells, draw_calls: 0, frame_ms }
+    // The frame just drawn was of this view's camera: its view is the census's.
+    let census = display.pipeline.scene().census(&display.pipeline.terrain());
+    TruthFrameStats { triangles: census.map_or(0, |c| 2 * c.cells), draw_calls: 0, frame_ms }
 }
 
 /// The uniforms of the frame the pipeline drew last.

@@ -135,12 +135,8 @@ impl TruthPass {
                 ground: None,
             })
             .collect();
-        let mut list = DrawList {
-            uniforms: Some(*frame),
-            tiles,
-            grid_size: CHUNK_CELLS,
-            ..DrawList::default()
-        };
+        let mut list = DrawList::default();
+        (list.uniforms, list.tiles, list.grid_size) = (Some(*frame), tiles, CHUNK_CELLS);
         // As the display does: a fair brute force gets early z too.
         list.sort_front_to_back(CHUNK_CELLS);
         self.terrain.draw(&list, frame, output)

@@ -27,11 +27,11 @@ use crate::camera::Camera;
 use crate::clipmap::{
     Clipmap, ClipmapConfig, ClipmapError, ClipmapStats, LoaderMode, NodeAtlas, ViewId,
 };
-use crate::lod::budget::{BudgetConfig, BudgetError, BudgetTarget, TauController};
+use crate::lod::budget::{BudgetConfig, BudgetError, TauController};
 use crate::node::NodeSource;
 use crate::render::{BufferPlan, CallStats, DrawList, FrameOutput, RenderBackend, SymbolBackend};
 use crate::scene::{
-    ClipmapTerrain, Scene, SceneConfig, SceneError, SceneStats, TerrainSummary, TriangleBand,
+    ClipmapTerrain, Scene, SceneConfig, SceneError, SceneStats, TerrainSummary, View,
 };
 use crate::symbology::SymbolMesh;
 
@@ -155,7 +155,6 @@ pub struct FramePipeline {
     view: ViewId,
     summary: TerrainSummary,
     memory: Option<MemoryPlan>,
-    budget: Option<TauController>,
 }
 
 impl FramePipeline {
@@ -195,10 +194,9 @@ impl FramePipeline {
         clipmap.set_earth(config.scene.earth);
         let view = clipmap.add_view(view_config, DVec3::ZERO)?;
         let terrain = ClipmapTerrain { clipmap: &clipmap, summary: &summary };
-        let scene = Scene::new(scene_config, &terrain)?;
-        let tau = config.scene.lod.tau_px;
-        let budget = config.budget.map(|b| TauController::new(tau, b)).transpose()?;
-        Ok(FramePipeline { clipmap, scene, view, summary, memory, budget })
+        let mut scene = Scene::new(scene_config, &terrain)?;
+        scene.set_budget(config.budget)?;
+        Ok(FramePipeline { clipmap, scene, view, summary, memory })
     }
 
     /// Pages, tiles, uploads and draws one frame for `camera` on `backend`,
@@ -258,14 +256,14 @@ impl FramePipeline {
         overlay: impl FnOnce(&mut B) -> Result<(), B::Error>,
     ) -> Result<FrameStats, FrameError<B::Error>> {
         let start = Instant::now();
-        let update = self.page(camera)?;
+        // The view first: it refuses a camera that is not valid before its
+        // position reaches the clipmap, and every stage after reads it.
+        let view = View::new(camera, &self.terrain(), self.scene.config())
+            .map_err(|e| PipelineError::from(SceneError::from(e)))?;
+        let update = self.page_at(&view)?;
         let paged = Instant::now();
-        if let Some(budget) = &self.budget {
-            self.scene.set_tau(budget.tau_px()).map_err(PipelineError::from)?;
-            self.scene.set_triangle_band(triangle_band(budget.config()));
-        }
         let terrain = ClipmapTerrain { clipmap: &self.clipmap, summary: &self.summary };
-        let scene = self.scene.frame(camera, &terrain).map_err(PipelineError::from)?;
+        let scene = self.scene.frame_in(&view, &terrain).map_err(PipelineError::from)?;
         let tiled = Instant::now();
         let (staging, dirty) = self.scene.gpu_uploads();
         let indices = self.scene.index_uploads();
@@ -287,27 +285,20 @@ impl FramePipeline {
             frame_ms: ms(start, done),
             tau_requested_px: self.scene.config().lod.tau_px,
         };
-        self.observe_budget(&stats);
+        self.scene.observe_budget(&stats.scene, stats.frame_ms);
         Ok(stats)
     }
 
-    /// Feeds the frame budget's controller the frame's triangles or time.
-    fn observe_budget(&mut self, stats: &FrameStats) {
-        if let Some(budget) = &mut self.budget {
-            budget.set_ceiling(self.scene.tau_ceiling());
-            if stats.scene.reselected > 0 && stats.scene.coarsened == 0 {
-                budget.adopt(stats.scene.tau_px);
-            }
-            budget.observe(match budget.config().target {
-                BudgetTarget::Triangles(_) => stats.scene.triangles as f64,
-                BudgetTarget::FrameMs(_) => stats.frame_ms,
-            });
-        }
+    /// The frame budget's controller, when there is a budget (the scene's
+    /// tau policy owns it).
+    pub fn budget(&self) -> Option<&TauController> {
+        self.scene.budget()
     }
 
-    /// The frame budget's controller, when there is a budget.
-    pub fn budget(&self) -> Option<&TauController> {
-        self.budget.as_ref()
+    /// Paging: the clipmap's view moves to `view`'s eye and updates.
+    fn page_at(&mut self, view: &View) -> Result<ClipmapStats, PipelineError> {
+        self.clipmap.set_view_position(self.view, view.camera.position)?;
+        Ok(self.clipmap.update()?)
     }
 
     fn page(&mut self, camera: &Camera) -> Result<ClipmapStats, PipelineError> {
@@ -399,22 +390,6 @@ fn plan(
         let least = least_budget(node_bytes, queue, copies, buffer) + table_bytes;
         PipelineError::MemoryBudget { budget, least, node_bytes }
     })
-}
-
-/// The band a triangle budget holds within each frame: 2 %, under half the
-/// 5 % the budget promises, since the estimate of tiles yet to be remade
-/// at another error is itself off by up to 3 % (measured on the default
-/// flight); none for a frame-time target, which only the next frame can
-/// measure.
-const IN_FRAME_BAND: f64 = 0.02;
-
-fn triangle_band(config: &BudgetConfig) -> Option<TriangleBand> {
-    match config.target {
-        BudgetTarget::Triangles(n) => {
-            Some(TriangleBand { target: n as f64, tolerance: IN_FRAME_BAND })
-        }
-        BudgetTarget::FrameMs(_) => None,
-    }
 }
 
 fn ms(from: Instant, to: Instant) -> f64 {

@@ -17,7 +17,7 @@ use crate::tiles::errors::MeshErrors;
 use crate::tiles::{TileBlock, TileCoverage, TileDraw};
 use glam::{DVec2, Mat4, Vec3};
 
-use super::cluster::{Cluster, ClusterMorph, ClusterOrder, Member};
+use super::cluster::{Cluster, ClusterMorph, Member};
 
 /// Uniforms shared by every tile of a frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -328,16 +328,24 @@ pub struct DrawList {
     /// The frame's tiles, sorted by tile: what [`skirt_edges`] looks
     /// neighbours up in.
     pub drawn: Vec<DrawnTile>,
-    /// Drawn as clusters (`clusters`, `members`), not one draw per tile.
-    pub(crate) clustered: bool,
+    /// Drawn as clusters (`clusters`, `members`), not one draw per tile:
+    /// set by [`DrawList::cluster`] alone.
+    pub(super) clustered: bool,
     /// The frame's clusters, in draw order (when clustered).
     pub clusters: Vec<Cluster>,
     /// Every cluster's members.
     pub members: Vec<Member>,
     /// Which morph range a cluster's members take.
     pub cluster_morph: ClusterMorph,
-    /// In which order clusters are drawn.
-    pub cluster_order: ClusterOrder,
+}
+
+/// Where a frame's cluster draws go: the draw list's own vectors, lent to
+/// the cluster cache by [`DrawList::cluster`].
+pub struct ClusterDraws<'a> {
+    /// The clusters, in draw order.
+    pub clusters: &'a mut Vec<Cluster>,
+    /// Every cluster's members.
+    pub members: &'a mut Vec<Member>,
 }
 
 /// What [`skirt_edges`] needs of a neighbour.
@@ -414,8 +422,28 @@ impl DrawList {
             clusters: Vec::with_capacity(tiles),
             members: Vec::with_capacity(tiles),
             cluster_morph: ClusterMorph::PerMember,
-            cluster_order: ClusterOrder::ByBase,
         }
+    }
+
+    /// Draws the list's tiles as clusters: `make` (the cluster cache)
+    /// reads the list's tiles and writes the clusters' draws into the
+    /// list's own vectors. The list is drawn as clusters from then until
+    /// the next [`DrawList::build`], unless `make` fails.
+    pub fn cluster<E>(
+        &mut self,
+        make: impl FnOnce(&DrawList, ClusterDraws<'_>) -> Result<(), E>,
+    ) -> Result<(), E> {
+        let mut clusters = std::mem::take(&mut self.clusters);
+        let mut members = std::mem::take(&mut self.members);
+        let made = make(self, ClusterDraws { clusters: &mut clusters, members: &mut members });
+        (self.clusters, self.members) = (clusters, members);
+        self.clustered = made.is_ok();
+        made
+    }
+
+    /// The same list drawn one draw per tile: its clusters left out.
+    pub fn per_tile(&self) -> DrawList {
+        DrawList { clustered: false, clusters: Vec::new(), members: Vec::new(), ..self.clone() }
     }
 
     /// Triangles of the list's tiles, skirts included, each tile once.

@@ -14,7 +14,7 @@ pub mod plan;
 pub use cluster::{Cluster, ClusterMorph, ClusterOrder, ClusterRun, Member};
 pub use cost::{CallStats, CostModel};
 pub use draw_list::{
-    DepthSlices, DrawList, DrawnTile, FrameUniforms, PostFrame, Slice, TileUniforms,
+    ClusterDraws, DepthSlices, DrawList, DrawnTile, FrameUniforms, PostFrame, Slice, TileUniforms,
 };
 pub use null::NullBackend;
 pub use plan::BufferPlan;

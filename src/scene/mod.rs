@@ -8,30 +8,31 @@
 
 mod band;
 mod clipmap_terrain;
+mod tau;
 mod terrain;
+mod view;
 
 pub use band::{TileEstimate, TriangleBand, MAX_RESELECTIONS};
 
 pub use clipmap_terrain::{ClipmapTerrain, TerrainSummary};
 pub use terrain::{PreloadedTerrain, TerrainData};
+pub use view::{clip_planes, clip_planes_computed, View};
 
-use crate::camera::{Camera, CameraError, Frustum, EARTH_RADIUS_M};
+use crate::camera::{Camera, CameraError};
 use crate::clusters::{ClusterCache, ClusterConfig, ClusterError};
-use crate::earth::{EarthFrame, EllipsoidHorizon, GridPlacement};
-use crate::lod::census::{frustum_census, Census, CensusView};
-use crate::lod::horizon::Horizon;
+use crate::earth::GridPlacement;
+use crate::lod::budget::{BudgetConfig, BudgetError, TauController};
+use crate::lod::census::{frustum_census, Census};
 use crate::lod::life::LifeStats;
 use crate::lod::rings::RingInputs;
-use crate::lod::select::{EarthView, View};
-use crate::lod::{LevelRings, LodConfig, LodError, TileKey, TileSelector};
-use crate::mesh::code::threshold_code;
-use crate::node::{NodeId, NodeLayout};
+use crate::lod::{LevelRings, LodConfig, LodError, TileSelector};
+use crate::node::NodeLayout;
 use crate::render::draw_list::{made_delta, TileGeometry};
-use crate::render::draw_list::{DepthSlices, PostFrame};
-use crate::render::{palette, BufferPlan, ClusterMorph, ClusterOrder, DrawList, FrameUniforms};
+use crate::render::{palette, BufferPlan, ClusterMorph, ClusterOrder, DrawList};
 use crate::tiles::errors::{MapErrors, MeshErrors};
 use crate::tiles::{TileCache, TileCacheConfig, TileError};
 use std::time::Instant;
+use tau::TauPolicy;
 
 /// The default longest single upload, 196 608 bytes: four of Polok's 64 x 64
 /// tiles of heights, morph targets and normals (12 bytes a vertex; a tile's
@@ -198,26 +199,17 @@ pub struct Scene {
     deltas: Vec<f64>,
     /// The regular grid's deltas (what tiles made as grids err by).
     grid_deltas: Vec<f64>,
-    height_range_m: f64,
-    /// Tau of the next frame, pixels: the configured one unless a budget set it.
-    tau_px: f64,
-    /// Rings without Ulrich's rule, and the tau past which rings stop
-    /// shrinking (a budget's ceiling), of the last frame.
-    loose_rings: LevelRings,
-    tau_ceiling: f64,
-    band: band::BandState,
+    /// Tau: the one owner of it, the band's search and a budget's controller.
+    tau: TauPolicy,
     /// With clusters on: their blocks, which the GPU buffer then mirrors.
     clusters: Option<ClusterCache>,
     /// What the terrain's error maps can do per level.
     map_errors: MapErrors,
     /// The errors this frame's tiles are extracted at.
     mesh_errors: MeshErrors,
+    /// The last frame's view.
+    view: Option<View>,
 }
-
-/// How far, as a share, the tiles made may miss a triangle budget before
-/// the frame selects once more with their real count: under the 5 % a
-/// budget promises, over the in-frame band the estimate aims at.
-const CORRECTION_BAND: f64 = 0.04;
 
 /// The near plane sits this share of the way to the nearest drawn tile's
 /// bounding box (the rest is margin for the curvature drop and rounding).
@@ -236,10 +228,8 @@ impl Scene {
             frames_in_flight: config.frames_in_flight,
         };
         let deltas = terrain.delta_per_level();
-        let (lo, hi) = terrain.height_range();
         let mut draw_list = DrawList::with_capacity(cache_config.max_tiles as usize);
         draw_list.cluster_morph = config.cluster_morph;
-        draw_list.cluster_order = config.cluster_order;
         let plan = BufferPlan::new(config.buffer_bytes, config.clusters);
         let clusters = if let Some(index_capacity_bytes) = plan.cluster_index_bytes {
             Some(ClusterCache::new(ClusterConfig {
@@ -248,6 +238,7 @@ impl Scene {
                 max_clusters: cache_config.max_tiles,
                 transfer_cap: config.transfer_cap,
                 frames_in_flight: config.frames_in_flight,
+                order: config.cluster_order,
             })?)
         } else {
             None
@@ -258,22 +249,20 @@ impl Scene {
             height_range_m: 0.0,
             perspective_scale: 1.0,
         };
+        let map_errors = terrain.map_errors();
         Ok(Scene {
-            loose_rings: LevelRings::new(&config.lod, inputs),
-            tau_ceiling: f64::INFINITY,
-            band: band::BandState::default(),
+            tau: TauPolicy::new(config.lod, !map_errors.is_empty(), inputs),
             clusters,
             config,
             selector: TileSelector::new(config.lod),
             cache: TileCache::new(cache_config, terrain)?,
             rings: LevelRings::new(&config.lod, inputs),
             draw_list,
-            height_range_m: (hi - lo) as f64,
             deltas,
             grid_deltas: terrain.grid_delta_per_level(),
-            tau_px: config.lod.tau_px,
-            map_errors: terrain.map_errors(),
+            map_errors,
             mesh_errors: MeshErrors::default(),
+            view: None,
         })
     }
 
@@ -281,11 +270,31 @@ impl Scene {
     /// Kühnert's view distance shrinks by the same factor, down to 1 tile.
     /// Refused when it is not finite or below the configured tau.
     pub fn set_tau(&mut self, tau_px: f64) -> Result<(), SceneError> {
-        if !(tau_px.is_finite() && tau_px >= self.config.lod.tau_px) {
-            return Err(LodError::Tau(tau_px).into());
-        }
-        self.tau_px = tau_px;
-        Ok(())
+        Ok(self.tau.set_tau(tau_px)?)
+    }
+
+    /// Keeps the next frames' triangles inside `band` (a triangle budget's)
+    /// by selecting again within the frame; `None`: no band.
+    pub fn set_triangle_band(&mut self, band: Option<TriangleBand>) {
+        self.tau.set_band(band);
+    }
+
+    /// Holds every next frame to `budget` (triangles or milliseconds): its
+    /// controller sets each frame's tau and band, and learns from what the
+    /// frames report to [`Scene::observe_budget`]. `None`: tau as set.
+    pub fn set_budget(&mut self, budget: Option<BudgetConfig>) -> Result<(), BudgetError> {
+        self.tau.set_budget(budget)
+    }
+
+    /// The frame budget's controller, when there is a budget.
+    pub fn budget(&self) -> Option<&TauController> {
+        self.tau.controller()
+    }
+
+    /// Feeds the frame budget's controller a frame's `stats` and its whole
+    /// time, `frame_ms` (backend included), for the next frame's tau.
+    pub fn observe_budget(&mut self, stats: &SceneStats, frame_ms: f64) {
+        self.tau.observe(stats, frame_ms);
     }
 
     /// The configuration the scene was built with.
@@ -311,17 +320,11 @@ impl Scene {
         (self.cache.staging(), self.cache.dirty_ranges())
     }
 
-    /// Keeps the next frames' triangles inside `band` (a triangle budget's)
-    /// by selecting again within the frame; `None`: no band.
-    pub fn set_triangle_band(&mut self, band: Option<TriangleBand>) {
-        self.band.band = band;
-    }
-
     /// The tau past which the last frame's rings stop shrinking, pixels,
     /// with the view distance shrinking alongside ([`Scene::set_tau`]): a
     /// budget raising tau further gains nothing.
     pub fn tau_ceiling(&self) -> f64 {
-        self.tau_ceiling
+        self.tau.ceiling()
     }
 
     /// The staging copy the GPU buffer mirrors and the ranges it must
@@ -350,176 +353,141 @@ impl Scene {
         &self.rings
     }
 
-    /// Prepares one frame for `camera`.
+    /// Prepares one frame for `camera`: [`Scene::frame_in`] its [`View`].
     pub fn frame(
         &mut self,
         camera: &Camera,
         terrain: &dyn TerrainData,
     ) -> Result<SceneStats, SceneError> {
-        camera.validate()?;
-        let layout = *terrain.layout();
-        let grid_size = self.config.lod.grid_size;
-        // Culling uses the widest frustum (the conservative near plane);
-        // drawing uses one pushed out to the nearest selected tile.
-        let (near, far) = clip_planes(camera, terrain);
-        let frustum = Frustum::from_view_projection(camera.projection(near, far) * camera.view());
+        let view = View::new(camera, terrain, &self.config)?;
+        self.frame_in(&view, terrain)
+    }
+
+    /// Prepares one frame for `view`, stage by stage: the tau policy
+    /// starts the frame; selection (again while the band's search moves
+    /// tau); tiles (again once with a budget's correction); the draw list.
+    /// A buffer too full for the tiles or their clusters coarsens the
+    /// selection and goes round again.
+    pub fn frame_in(
+        &mut self,
+        view: &View,
+        terrain: &dyn TerrainData,
+    ) -> Result<SceneStats, SceneError> {
+        self.view = Some(*view);
         let mut report = SceneStats::default();
-        let horizon = self.horizon(camera, terrain);
-        let earth_view = self.earth_view(camera, terrain, horizon.is_some());
-        // With error maps tau coarsens the meshes; without, only the rings,
-        // so Kühnert's view distance shrinks with it.
-        let maps = !self.map_errors.is_empty();
-        let mut lod = loosened(&self.config.lod, self.tau_px, !maps);
-        let mut nearest_m: f64;
-        let inputs = ring_inputs(&layout, grid_size, &self.deltas, self.height_range_m, camera);
-        let requested = self.config.lod;
-        self.tau_ceiling = if maps {
-            let (rings, errors) = (&mut self.loose_rings, &mut self.mesh_errors);
-            let k = camera.perspective_scale();
-            mesh_ceiling(rings, errors, &self.map_errors, &requested, inputs, layout.levels, k)
-        } else {
-            let loosest = LodConfig { view_distance: 1.0, ..requested };
-            let ceiling = LevelRings::tau_ceiling(&mut self.loose_rings, &loosest, inputs);
-            ceiling.max(requested.tau_px * requested.view_distance)
-        };
-        let mut search = self.band.search(requested.tau_px, self.tau_ceiling);
-        let mut retaking = false;
+        let levels = terrain.layout().levels;
+        let (deltas, maps) = (&self.deltas, &self.map_errors);
+        self.tau.begin(view, deltas, maps, &mut self.mesh_errors, levels)?;
         loop {
-            let start = Instant::now();
-            let inputs = ring_inputs(&layout, grid_size, &self.deltas, self.height_range_m, camera);
-            self.rings.update(&lod, inputs);
-            let rings = &self.rings;
-            self.mesh_errors.update(
-                |level| rings.split_distance(level),
-                layout.levels,
-                camera.perspective_scale(),
-                lod.tau_px,
-                lod.morph_range,
-                &self.map_errors,
-            );
-            let view = View {
-                eye: camera.position,
-                frustum: &frustum,
-                rings: &self.rings,
-                curvature: self.config.curvature,
-                horizon,
-                earth: earth_view,
-            };
-            let selected = self.selector.select(&view, terrain);
-            let retarget = match (&mut search, report.coarsened) {
-                (Some(search), 0) => {
-                    let (cache, errors) = (&self.cache, &self.mesh_errors);
-                    let tiles = selected.iter().map(|t| {
-                        let leaf = !terrain.has_finer_data(t.key, grid_size);
-                        let wanted = errors.for_tile(t.key.level, t.distance, leaf).own.metres();
-                        // Scaled by the source's map where it is resident
-                        // (then as made at the wanted error), else by the
-                        // errors' ratio in the band.
-                        // Skirts follow a tile's edge vertices: the square
-                        // root of what its surface does.
-                        let resident = cache.resident_parts(t.key).map(|(n, skirts, made)| {
-                            match map_scale(cache, terrain, t.key, grid_size, made, wanted) {
-                                Some(s) => {
-                                    let scaled = n as f64 * s + skirts as f64 * s.sqrt();
-                                    (scaled.round() as u64, wanted)
-                                }
-                                None => (n + skirts, made),
-                            }
-                        });
-                        TileEstimate { level: t.key.level, resident, error_m: wanted }
-                    });
-                    let estimate = self.band.estimate(tiles);
-                    search.next(estimate, lod.tau_px)
-                }
-                _ => None,
-            };
-            if let Some(tau_px) = retarget {
-                lod = loosened(&self.config.lod, tau_px, !maps);
+            let nearest_m = self.select(view, terrain, &mut report);
+            let made = self.make_tiles(terrain, &mut report);
+            if made.is_ok() && self.tau.correct(self.cache.drawn_triangles() as f64) {
                 report.reselected += 1;
-                report.cpu_ms.select_ms += ms(start, Instant::now());
                 continue;
             }
-            nearest_m = selected.iter().map(|t| t.distance).fold(f64::INFINITY, f64::min);
-            let selected_at = Instant::now();
-            report.cpu_ms.select_ms += ms(start, selected_at);
-            let tiles = match retaking {
-                true => self.cache.retake(selected, terrain, &self.mesh_errors),
-                false => self.cache.update(selected, terrain, &self.mesh_errors),
-            };
-            let outcome = tiles.map(|_| ()).map_err(SceneError::from);
-            report.cpu_ms.tiles_ms += ms(selected_at, Instant::now());
-            // The tiles remade at another error hold counts the estimate
-            // only foretold: off the budget's promise, select once more
-            // with the real count (the tiles made stay for this frame).
-            if let (Ok(()), Some(search), false) = (&outcome, &mut search, retaking) {
-                let drawn = self.cache.drawn_triangles() as f64;
-                let off = (drawn / search.target() - 1.0).abs();
-                if off > CORRECTION_BAND {
-                    if let Some(tau_px) = search.correct(drawn, lod.tau_px) {
-                        lod = loosened(&self.config.lod, tau_px, !maps);
-                        report.reselected += 1;
-                        retaking = true;
-                        continue;
-                    }
-                }
-            }
-            let outcome = outcome.and_then(|()| {
-                let near_m = (nearest_m * NEAR_SHARE).min(f32::MAX as f64) as f32;
-                let uniforms = frame_uniforms(&self.config, camera, terrain, near_m);
-                let start = Instant::now();
-                let geometry = TileGeometry {
-                    grid_size,
-                    node_size: layout.node_size,
-                    spacing_m: layout.spacing_m,
-                    delta_per_level: &self.deltas,
-                    grid_delta_per_level: &self.grid_deltas,
-                    mesh_errors: &self.mesh_errors,
-                };
-                self.draw_list.build(uniforms, self.cache.draws(), &self.rings, geometry);
-                if let Some(clusters) = &mut self.clusters {
-                    let (staging, dirty) = (self.cache.staging(), self.cache.dirty_ranges());
-                    clusters.update(&mut self.draw_list, staging, dirty)?;
-                }
-                report.cpu_ms.draw_list_ms = ms(start, Instant::now());
-                Ok(())
-            });
-            // A cluster that no window has room for is a full buffer too:
-            // coarser tiles make smaller clusters.
-            let full = matches!(
-                outcome,
-                Err(SceneError::Tiles(TileError::BufferFull(_)))
-                    | Err(SceneError::Clusters(
-                        ClusterError::BufferFull(_) | ClusterError::NoWindow { .. }
-                    ))
-            );
-            match outcome {
+            match made.and_then(|()| self.draw(view, terrain, nearest_m, &mut report)) {
                 Ok(()) => break,
-                Err(_) if full && (lod.view_distance > 1.0 || lod.tau_px < 1e6) => {
-                    retaking = false;
-                    // Coarser: half the rings (Ulrich's rule through tau, Kühnert's through distance).
-                    lod.view_distance = (lod.view_distance / 2.0).max(1.0);
-                    lod.tau_px *= 2.0;
-                    report.coarsened += 1;
-                }
+                Err(error) if buffer_full(&error) && self.tau.coarsen() => report.coarsened += 1,
                 Err(error) => return Err(error),
             }
         }
+        self.report(view, &mut report);
+        let cache = &self.cache;
+        self.tau.end(
+            &report,
+            self.draw_list.tiles.iter().map(|t| {
+                let made = cache.resident_triangles(t.key).map_or(f64::NAN, |(_, e)| e);
+                (t.key.level, t.triangles(), made)
+            }),
+        );
+        Ok(report)
+    }
+
+    /// Selection: the rings and extraction errors of the policy's tiling,
+    /// then the tiles, until the policy keeps them. Returns the nearest
+    /// tile's distance, metres.
+    fn select(&mut self, view: &View, terrain: &dyn TerrainData, report: &mut SceneStats) -> f64 {
+        let (grid_size, levels) = (self.config.lod.grid_size, terrain.layout().levels);
+        loop {
+            let start = Instant::now();
+            let lod = *self.tau.lod();
+            self.rings.update(&lod, view.ring_inputs(&self.deltas));
+            let rings = &self.rings;
+            let split = |level| rings.split_distance(level);
+            let (tau, morph) = (lod.tau_px, lod.morph_range);
+            self.mesh_errors.update(split, levels, view.k, tau, morph, &self.map_errors);
+            let selection = view.selection(&self.rings, self.config.curvature);
+            let selected = self.selector.select(&selection, terrain);
+            let errors = &self.mesh_errors;
+            let tiles = tau::estimates(selected, &self.cache, errors, terrain, grid_size);
+            let again = self.tau.retarget(tiles, report.coarsened);
+            report.cpu_ms.select_ms += ms(start, Instant::now());
+            if !again {
+                return selected.iter().map(|t| t.distance).fold(f64::INFINITY, f64::min);
+            }
+            report.reselected += 1;
+        }
+    }
+
+    /// Tiles: the cache releases, places and makes the selection's tiles
+    /// (remakes them at the corrected errors when the policy is retaking).
+    fn make_tiles(
+        &mut self,
+        terrain: &dyn TerrainData,
+        report: &mut SceneStats,
+    ) -> Result<(), SceneError> {
+        let start = Instant::now();
+        let selected = self.selector.selected();
+        let made = match self.tau.retaking() {
+            true => self.cache.retake(selected, terrain, &self.mesh_errors),
+            false => self.cache.update(selected, terrain, &self.mesh_errors),
+        };
+        report.cpu_ms.tiles_ms += ms(start, Instant::now());
+        made.map(|_| ()).map_err(SceneError::from)
+    }
+
+    /// The draw list: the view's uniforms, with the near plane pushed out
+    /// toward the tile `nearest_m` away, the tiles' uniforms, and with
+    /// clusters on, the clusters' draws.
+    fn draw(
+        &mut self,
+        view: &View,
+        terrain: &dyn TerrainData,
+        nearest_m: f64,
+        report: &mut SceneStats,
+    ) -> Result<(), SceneError> {
+        let near_m = (nearest_m * NEAR_SHARE).min(f32::MAX as f64) as f32;
+        let uniforms = view.uniforms(&self.config, terrain, near_m);
+        let start = Instant::now();
+        let layout = terrain.layout();
+        let geometry = TileGeometry {
+            grid_size: self.config.lod.grid_size,
+            node_size: layout.node_size,
+            spacing_m: layout.spacing_m,
+            delta_per_level: &self.deltas,
+            grid_delta_per_level: &self.grid_deltas,
+            mesh_errors: &self.mesh_errors,
+        };
+        self.draw_list.build(uniforms, self.cache.draws(), &self.rings, geometry);
+        if let Some(clusters) = &mut self.clusters {
+            let (staging, dirty) = (self.cache.staging(), self.cache.dirty_ranges());
+            self.draw_list.cluster(|list, draws| clusters.update(list, staging, dirty, draws))?;
+        }
+        report.cpu_ms.draw_list_ms = ms(start, Instant::now());
+        Ok(())
+    }
+
+    /// What the frame drew and cost, besides the stage times and tries
+    /// `report` already holds.
+    fn report(&self, view: &View, report: &mut SceneStats) {
         let stats = self.cache.stats();
         report.tiles = self.draw_list.tiles.len();
         report.culled = self.selector.culled();
         report.horizon_culled = self.selector.horizon_culled();
-        report.tau_px = lod.tau_px;
-        (report.fallback_tiles, report.bound_px) = self.fallback_bound(camera, lod.tau_px);
+        report.tau_px = self.tau.lod().tau_px;
+        (report.fallback_tiles, report.bound_px) = self.fallback_bound(view.k, report.tau_px);
         report.split_tests = self.selector.life_stats().unwrap_or_default();
         report.triangles = self.draw_list.triangles();
-        if report.coarsened == 0 {
-            self.band.observe(report.triangles);
-        }
-        let cache = &self.cache;
-        self.band.learn(self.draw_list.tiles.iter().map(|t| {
-            let made = cache.resident_triangles(t.key).map_or(f64::NAN, |(_, e)| e);
-            (t.key.level, t.triangles(), made)
-        }));
         report.bytes_uploaded = stats.bytes_uploaded;
         report.transfers = stats.transfers;
         report.tiles_generated = stats.generated;
@@ -533,8 +501,18 @@ impl Scene {
             report.cluster_windows = stats.bases;
             report.cluster_windows_least = stats.least_bases;
         }
-        Ok(report)
     }
+}
+
+/// Whether `error` is a buffer too full for the frame: of tiles, or of
+/// clusters (a cluster that no window has room for is a full buffer too:
+/// coarser tiles make smaller clusters).
+fn buffer_full(error: &SceneError) -> bool {
+    matches!(
+        error,
+        SceneError::Tiles(TileError::BufferFull(_))
+            | SceneError::Clusters(ClusterError::BufferFull(_) | ClusterError::NoWindow { .. })
+    )
 }
 
 impl Scene {
@@ -543,9 +521,9 @@ impl Scene {
     /// node's delta seen from the tile's distance, or its parent's seen
     /// from where the morph starts (the grid's deltas for a tile made as a
     /// grid of the source's posts), so the frame's bound is the largest of
-    /// those and `tau_px`.
-    fn fallback_bound(&self, camera: &Camera, tau_px: f64) -> (usize, f64) {
-        let scale = camera.perspective_scale();
+    /// those and `tau_px`. `k` is Ulrich's K.
+    fn fallback_bound(&self, k: f64, tau_px: f64) -> (usize, f64) {
+        let scale = k;
         let mut fallback = 0;
         let mut bound = tau_px;
         for tile in self.selector.selected() {
@@ -573,86 +551,13 @@ impl Scene {
         (fallback, bound)
     }
 
-    /// The horizon tiles are culled below for `camera`: over the data's
-    /// lowest height, when the curvature is drawn, horizon culling is on and
-    /// the camera is over the data's rectangle (see [`crate::lod::horizon`]).
-    fn horizon(&self, camera: &Camera, terrain: &dyn TerrainData) -> Option<Horizon> {
-        let layout = terrain.layout();
-        let inside = |at: f64, posts: u32, spacing: f64| {
-            at >= 0.0 && at <= posts.saturating_sub(1) as f64 * spacing
-        };
-        let p = camera.position;
-        let over_data = inside(p.x, layout.posts[0], layout.spacing_m[0])
-            && inside(p.y, layout.posts[1], layout.spacing_m[1]);
-        let on = self.config.horizon_culling && self.config.curvature && over_data;
-        on.then(|| Horizon::new(p.z, terrain.height_range().0 as f64)).flatten()
-    }
-
-    /// What the selector measures tiles with on the ellipsoid, when the
-    /// display draws there: the frame's eye and, when `culling` (the
-    /// chart's conditions for horizon culling hold), the ellipsoid's
-    /// horizon under the data's lowest height.
-    fn earth_view(
-        &self,
-        camera: &Camera,
-        terrain: &dyn TerrainData,
-        culling: bool,
-    ) -> Option<EarthView> {
-        let frame = EarthFrame::new(&self.config.earth?, camera.position, [0, 0])?;
-        let floor = terrain.height_range().0 as f64;
-        let horizon = culling.then(|| EllipsoidHorizon::new(frame.eye(), floor)).flatten();
-        Some(EarthView { frame, horizon })
-    }
-
-    /// The level-0 cells a frame for `camera` holds in its frustum, above
-    /// and below the horizon (counted, not drawn; see [`frustum_census`]).
-    pub fn census(&self, camera: &Camera, terrain: &dyn TerrainData) -> Census {
-        let (near, far) = clip_planes(camera, terrain);
-        let frustum = Frustum::from_view_projection(camera.projection(near, far) * camera.view());
-        let view = CensusView {
-            eye: camera.position,
-            frustum: &frustum,
-            curvature: self.config.curvature,
-            horizon: self.horizon(camera, terrain),
-            grid_size: self.config.lod.grid_size,
-            root: terrain.layout().levels - 1,
-        };
-        frustum_census(&view, terrain)
-    }
-}
-
-/// The uniforms every pass of a frame for `camera` shares: projection,
-/// bands, sun, curvature. The far plane comes from [`clip_planes`]; the
-/// near plane is `near_m` (at least [`clip_planes`]' near): [`Scene::frame`]
-/// puts it 80 % of the way to the nearest tile it selected, since a 24-bit
-/// depth buffer resolves `d^2 / (near 2^24)` metres at distance `d` (560 m
-/// at 68 km with a 0.5 m near plane: far ridges then fought over pixels;
-/// 1.5 m with the near plane at 180 m).
-pub fn frame_uniforms(
-    config: &SceneConfig,
-    camera: &Camera,
-    terrain: &dyn TerrainData,
-    near_m: f32,
-) -> FrameUniforms {
-    let (near, far) = clip_planes(camera, terrain);
-    let near = near.max(near_m.min(far / 10.0));
-    FrameUniforms {
-        view_projection: camera.projection(near, far) * camera.view(),
-        camera_altitude: camera.position.z,
-        sun_direction: palette::sun_direction(),
-        curvature: config.curvature,
-        horizon_floor_m: horizon_floor_m(config.earth.as_ref(), terrain.height_range().0),
-        warning_above_m: config.warning_above_m,
-        caution_below_m: config.caution_below_m,
-        viewport: camera.viewport,
-        fog_distance_m: far,
-        posts: PostFrame::new(camera.position.truncate(), terrain.layout().spacing_m),
-        last_post: terrain.layout().posts.map(|p| p as i64 - 1),
-        slices: DepthSlices::new(camera, near, far, terrain.height_range()),
-        earth: config.earth.and_then(|placement| {
-            let anchor = PostFrame::new(camera.position.truncate(), terrain.layout().spacing_m);
-            EarthFrame::new(&placement, camera.position, anchor.anchor)
-        }),
+    /// The level-0 cells the last frame's view holds in its frustum, above
+    /// and below the horizon (counted, not drawn; see [`frustum_census`]);
+    /// `None` before a frame.
+    pub fn census(&self, terrain: &dyn TerrainData) -> Option<Census> {
+        let (grid_size, root) = (self.config.lod.grid_size, terrain.layout().levels - 1);
+        let view = self.view.as_ref()?.census(self.config.curvature, grid_size, root);
+        Some(frustum_census(&view, terrain))
     }
 }
 
@@ -689,84 +594,6 @@ pub fn ring_inputs<'a>(
     }
 }
 
-/// The tiling for a budget's `tau_px`: tau itself, and, when `shrink`
-/// (tiles made as grids, whose triangles tau cannot change), Kühnert's
-/// view distance shrunk by as much as tau grew (never below 1 tile), so the
-/// rings shrink even where his rule, not Ulrich's, sets them. Tiles
-/// extracted from error maps coarsen with tau instead: their rings stay.
-/// The bound drawn is still `tau_px`: Ulrich's rule is kept at every level.
-fn loosened(requested: &LodConfig, tau_px: f64, shrink: bool) -> LodConfig {
-    let factor = if shrink { tau_px / requested.tau_px } else { 1.0 };
-    let view_distance = (requested.view_distance / factor).max(1.0);
-    LodConfig { tau_px, view_distance, ..*requested }
-}
-
-/// How a resident tile's triangles scale from the error it was made at to
-/// `wanted`, read from its source node's error map: the posts whose split
-/// the one error makes and the other does not (`ErrorMap::above`). `None`
-/// for a grid or a node no longer resident.
-fn map_scale(
-    cache: &TileCache,
-    terrain: &dyn TerrainData,
-    key: TileKey,
-    grid_size: u32,
-    made: f64,
-    wanted: f64,
-) -> Option<f64> {
-    let from = cache.made_from(key)?;
-    if !(from.node_mesh && made > 0.0 && wanted > 0.0) {
-        return None;
-    }
-    let (node, _) = crate::tiles::vertex::tile_node(key, grid_size, terrain.layout().node_size);
-    let shift = from.source_level.checked_sub(node.level)?;
-    let source = NodeId::new(from.source_level, node.x >> shift, node.y >> shift);
-    let map = &terrain.resident(source)?.map;
-    let quadrants = tile_quadrants(key, grid_size, terrain.layout().node_size, source);
-    let above = |error: f64| map.above_in(quadrants, threshold_code(error));
-    // The corners and forced posts every mesh has keep small meshes finite.
-    let base = 16.0;
-    Some((above(wanted) as f64 + base) / (above(made) as f64 + base))
-}
-
-/// The quadrants of node `source` tile `key` covers (a bit each, `x + 2 y`).
-fn tile_quadrants(key: TileKey, grid_size: u32, node_size: u32, source: NodeId) -> u8 {
-    let span = |level: u8, cells: u32| (cells as u64) << level;
-    let (tile, node) = (span(key.level, grid_size), span(source.level, node_size));
-    let half = node / 2;
-    let lo = [key.x as u64 * tile, key.y as u64 * tile];
-    let origin = [source.x as u64 * node, source.y as u64 * node];
-    let mut bits = 0;
-    for q in 0..4u8 {
-        let (qx, qy) = ((q & 1) as u64, (q >> 1) as u64);
-        let q0 = [origin[0] + qx * half, origin[1] + qy * half];
-        let meets = (0..2).all(|k| lo[k] < q0[k] + half && lo[k] + tile > q0[k]);
-        if meets {
-            bits |= 1 << q;
-        }
-    }
-    bits.max(1)
-}
-
-/// The tau past which tiles extracted from error maps get no coarser
-/// (every level at its coarsest meshes), for the rings of `requested`
-/// (made in `rings`, the errors in `errors`).
-fn mesh_ceiling(
-    rings: &mut LevelRings,
-    errors: &mut MeshErrors,
-    maps: &MapErrors,
-    requested: &LodConfig,
-    inputs: RingInputs<'_>,
-    levels: u8,
-    k: f64,
-) -> f64 {
-    rings.update(requested, inputs);
-    let rings = &*rings;
-    let split = |level| rings.split_distance(level);
-    let (tau, morph) = (requested.tau_px, requested.morph_range);
-    errors.update(split, levels, k, tau, morph, maps);
-    errors.tau_ceiling(maps, k, tau)
-}
-
 fn ms(from: Instant, to: Instant) -> f64 {
     (to - from).as_secs_f64() * 1e3
 }
@@ -775,29 +602,4 @@ fn root_tiles(terrain: &dyn TerrainData, grid_size: u32) -> u32 {
     let layout = terrain.layout();
     let [nx, ny] = crate::lod::select::tiles_at(layout.posts, grid_size, layout.levels - 1);
     nx * ny
-}
-
-/// Near and far planes: near shrinks as the aircraft nears the terrain (never
-/// below half a metre), far reaches the farthest corner of the data or the
-/// horizon, whichever is nearer.
-pub fn clip_planes(camera: &Camera, terrain: &dyn TerrainData) -> (f32, f32) {
-    let layout = terrain.layout();
-    let (lo, hi) = terrain.height_range();
-    let above = (camera.position.z - hi as f64).max(camera.position.z - lo as f64).abs();
-    let clearance = (camera.position.z - hi as f64).max(1.0);
-    let near = (clearance * 0.25).clamp(0.5, 50.0);
-    let extent = glam::DVec2::new(
-        layout.posts[0] as f64 * layout.spacing_m[0],
-        layout.posts[1] as f64 * layout.spacing_m[1],
-    );
-    let eye = camera.position.truncate();
-    let corners = [
-        glam::DVec2::ZERO,
-        glam::DVec2::new(extent.x, 0.0),
-        glam::DVec2::new(0.0, extent.y),
-        extent,
-    ];
-    let data_far = corners.iter().map(|c| c.distance(eye)).fold(0.0, f64::max) + above;
-    let horizon = (2.0 * EARTH_RADIUS_M * above.max(1.0)).sqrt() + 200_000.0;
-    (near as f32, data_far.min(horizon).max(near * 10.0) as f32)
 }
