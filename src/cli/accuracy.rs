@@ -7,6 +7,7 @@
 //! only over more than 0.01 % of its pixels: the bound is only a promise if
 //! this confirms it.
 
+use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -17,6 +18,7 @@ use ridgeline::camera::Camera;
 use ridgeline::display::measure::{measure_flight_on_earth, AccuracyRun, EarthTruth, Truth};
 use ridgeline::display::{DisplayConfig, DisplayParts};
 use ridgeline::earth::GridPlacement;
+use ridgeline::flight::FlightPath;
 use ridgeline::gl::{GlBackend, TruthMesh, TruthPass, TruthRegion};
 use serde_json::json;
 
@@ -52,104 +54,13 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
     let terrain = args.view.open_terrain(&bar)?;
     bar.finish();
     let path = terrain.flight_path(args.view.path.as_deref(), args.view.flight)?;
-    let layout = *terrain.source.layout();
-    let dataset_name = terrain.name.clone();
-    let source = Arc::clone(&terrain.source);
-    let summary = terrain.summary.clone();
-    let mut config = DisplayConfig::new(headless(args.backend), args.view.size);
-    config.scene.horizon_culling = terrain.gapless;
-    args.view.configure_earth(&mut config, &terrain);
-    config.scene.lod.tau_px = args.view.tau;
-    config.fov_x_deg = args.view.fov;
-    // Views are far apart: each is a jump, so every view re-tests all tiles.
-    args.view.configure(&mut config, &path, 0.1);
-    let grid_size = config.scene.lod.grid_size;
-    let mut display = DisplayParts::open(&config, Arc::clone(&source), summary)
-        .context("opening a headless display")?;
+    let (mut display, config) = open_display(args, &terrain, &path)?;
     let views: Vec<(f64, Camera)> = path
         .frame_times(args.views.max(1))
         .map(|t| (t, path.sample(t).camera(args.view.fov, [args.view.size.x, args.view.size.y])))
         .collect();
-    let exact = |x: f64, y: f64| terrain.exact_height(x, y);
-    let placement = GridPlacement::new(&terrain.georef(), layout.posts, layout.spacing_m);
-    let ground = earth_ground(args, &terrain, placement, &views)?;
-    let on_earth = ground.as_ref().map(|(ground, reach_m)| EarthTruth {
-        placement,
-        ground,
-        stride: args.earth_stride,
-        reach_m: *reach_m,
-    });
-    let on_earth = on_earth.as_ref();
-    let run = match &terrain.ground {
-        Ground::Procedural(earth) => {
-            // Out to the horizon the full-resolution mesh is 10^8 triangles
-            // and more: follow each pixel's ray on the CPU instead.
-            let ground = RayGround {
-                exact: &exact,
-                slope: earth.slope_bound(),
-                top_m: earth.height_bounds()[1],
-                spacing_m: layout.spacing_m[0].min(layout.spacing_m[1]),
-            };
-            let truth = Truth::Rays(ground);
-            measure_flight_on_earth(&mut display, truth, on_earth, &exact, layout.spacing_m, &views)
-        }
-        Ground::Pyramid(_) => {
-            // The full-resolution mesh around the flight: all of a single
-            // tile, a window of a layered pyramid's level 0 (which spans its
-            // whole base).
-            let positions = views.iter().map(|(_, c)| [c.position.x, c.position.y]);
-            // On the ellipsoid a global grid's truth is not cut at its seam.
-            let period = config.scene.earth.and_then(|p| p.period_posts()).map(|p| p as u32);
-            let region = match period {
-                Some(period) => {
-                    TruthRegion::around_positions_wrapping(&layout, grid_size, positions, period)
-                }
-                None => TruthRegion::around_positions(&layout, grid_size, positions),
-            };
-            let mesh = TruthMesh::load_wrapped(source.as_ref(), region, period)
-                .with_context(|| format!("{dataset_name}: the full-resolution mesh"))?;
-            let truth = TruthPass::new(display.context.gl(), &mesh)
-                .context("uploading the full-resolution mesh")?;
-            let truth = Truth::Mesh(&truth);
-            measure_flight_on_earth(&mut display, truth, on_earth, &exact, layout.spacing_m, &views)
-        }
-    }
-    .context("measuring the views")?;
-    let info = display.context.info();
-    let report = json!({
-        "dataset": dataset_name,
-        "backend": info.backend.name(),
-        "gl_renderer": info.renderer,
-        "size": [args.view.size.x, args.view.size.y],
-        "fov_x_deg": args.view.fov,
-        "tau_px": run.tau_px,
-        "flight": format!("{:?}", args.view.flight).to_lowercase(),
-        "truth": run.truth,
-        "horizon_culled": mean(&run, |v| v.horizon_culled as f64),
-        "tau_achieved_max_px": run.tau_achieved_max_px,
-        "tau_loosened_views": run.tau_loosened_views,
-        "triangle_budget": args.view.triangle_budget,
-        "frame_ms_target": args.view.frame_ms,
-        "p50_px": run.summary.p50_px,
-        "p99_px": run.summary.p99_px,
-        "p999_px": run.summary.p999_px,
-        "max_px": run.summary.max_px,
-        "mean_px": run.summary.mean_px,
-        "terrain_pixels": run.summary.pixels,
-        "coverage_mismatch": run.coverage_mismatch,
-        "coverage_mismatch_worst_view": run.views.iter().map(|v| v.coverage_mismatch).fold(0.0, f64::max),
-        "holes": run.holes,
-        "skirt_pixels": run.skirt_pixels,
-        "max_surface_px": run.max_surface_px,
-        "triangles_lod": mean(&run, |v| v.triangles_lod as f64),
-        "triangles_truth": mean(&run, |v| v.triangles_truth as f64),
-        "lod_frame_ms": mean(&run, |v| v.lod_frame_ms),
-        "truth_frame_ms": mean(&run, |v| v.truth_frame_ms),
-        "views": run.views.len(),
-        "worst_view": run.worst.as_ref().map(|w| w.index),
-        "earth": run.earth,
-        "per_view": run.views,
-    });
+    let run = measure(args, &terrain, &config, &mut display, &views)?;
+    let report = report_json(args, &display, &run, &terrain.name);
     write_outputs(args, &run, &report)?;
     // The views flown, to edit or to measure one alone (`--path`).
     super::write_beside(&args.out.join("path.csv"), path.to_csv().as_bytes())?;
@@ -174,6 +85,135 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The headless display the views are drawn on, configured as `fly` would
+/// draw `terrain` along `path`.
+fn open_display(
+    args: &AccuracyArgs,
+    terrain: &super::terrain::Terrain,
+    path: &FlightPath,
+) -> Result<(DisplayParts, DisplayConfig)> {
+    let mut config = DisplayConfig::new(headless(args.backend), args.view.size);
+    config.scene.horizon_culling = terrain.gapless;
+    args.view.configure_earth(&mut config, terrain);
+    config.scene.lod.tau_px = args.view.tau;
+    config.fov_x_deg = args.view.fov;
+    // Views are far apart: each is a jump, so every view re-tests all tiles.
+    args.view.configure(&mut config, path, 0.1);
+    let display = DisplayParts::open(&config, Arc::clone(&terrain.source), terrain.summary.clone())
+        .context("opening a headless display")?;
+    Ok((display, config))
+}
+
+/// Measures `views` on `display` against the truth `terrain` gives: the
+/// full-resolution mesh drawn on the GPU, or for a procedural earth each
+/// pixel's ray; and against the ellipsoid's geodetic truth.
+fn measure(
+    args: &AccuracyArgs,
+    terrain: &super::terrain::Terrain,
+    config: &DisplayConfig,
+    display: &mut DisplayParts,
+    views: &[(f64, Camera)],
+) -> Result<AccuracyRun> {
+    let layout = *terrain.source.layout();
+    let exact = |x: f64, y: f64| terrain.exact_height(x, y);
+    let placement = GridPlacement::new(&terrain.georef(), layout.posts, layout.spacing_m);
+    let ground = earth_ground(args, terrain, placement, views)?;
+    let on_earth = ground.as_ref().map(|(ground, reach_m)| EarthTruth {
+        placement,
+        ground,
+        stride: args.earth_stride,
+        reach_m: *reach_m,
+    });
+    let on_earth = on_earth.as_ref();
+    let spacing = layout.spacing_m;
+    match &terrain.ground {
+        Ground::Procedural(earth) => {
+            // Out to the horizon the full-resolution mesh is 10^8 triangles
+            // and more: follow each pixel's ray on the CPU instead.
+            let ground = RayGround {
+                exact: &exact,
+                slope: earth.slope_bound(),
+                top_m: earth.height_bounds()[1],
+                spacing_m: spacing[0].min(spacing[1]),
+            };
+            let truth = Truth::Rays(ground);
+            measure_flight_on_earth(display, truth, on_earth, &exact, spacing, views)
+        }
+        Ground::Pyramid(_) => {
+            let mesh = truth_mesh(terrain, config, views)?;
+            let truth = TruthPass::new(display.context.gl(), &mesh)
+                .context("uploading the full-resolution mesh")?;
+            let truth = Truth::Mesh(&truth);
+            measure_flight_on_earth(display, truth, on_earth, &exact, spacing, views)
+        }
+    }
+    .context("measuring the views")
+}
+
+/// The full-resolution mesh around the flight: all of a single tile, a
+/// window of a layered pyramid's level 0 (which spans its whole base).
+fn truth_mesh(
+    terrain: &super::terrain::Terrain,
+    config: &DisplayConfig,
+    views: &[(f64, Camera)],
+) -> Result<TruthMesh> {
+    let layout = *terrain.source.layout();
+    let grid_size = config.scene.lod.grid_size;
+    let positions = views.iter().map(|(_, c)| [c.position.x, c.position.y]);
+    // On the ellipsoid a global grid's truth is not cut at its seam.
+    let period = config.scene.earth.and_then(|p| p.period_posts()).map(|p| p as u32);
+    let region = match period {
+        Some(period) => TruthRegion::around_positions_wrapping(&layout, grid_size, positions, period),
+        None => TruthRegion::around_positions(&layout, grid_size, positions),
+    };
+    TruthMesh::load_wrapped(terrain.source.as_ref(), region, period)
+        .with_context(|| format!("{}: the full-resolution mesh", terrain.name))
+}
+
+/// `accuracy.json`: the run's settings, its summary and every view.
+fn report_json(
+    args: &AccuracyArgs,
+    display: &DisplayParts,
+    run: &AccuracyRun,
+    dataset_name: &str,
+) -> serde_json::Value {
+    let info = display.context.info();
+    json!({
+        "dataset": dataset_name,
+        "backend": info.backend.name(),
+        "gl_renderer": info.renderer,
+        "size": [args.view.size.x, args.view.size.y],
+        "fov_x_deg": args.view.fov,
+        "tau_px": run.tau_px,
+        "flight": format!("{:?}", args.view.flight).to_lowercase(),
+        "truth": run.truth,
+        "horizon_culled": mean(run, |v| v.horizon_culled as f64),
+        "tau_achieved_max_px": run.tau_achieved_max_px,
+        "tau_loosened_views": run.tau_loosened_views,
+        "triangle_budget": args.view.triangle_budget,
+        "frame_ms_target": args.view.frame_ms,
+        "p50_px": run.summary.p50_px,
+        "p99_px": run.summary.p99_px,
+        "p999_px": run.summary.p999_px,
+        "max_px": run.summary.max_px,
+        "mean_px": run.summary.mean_px,
+        "terrain_pixels": run.summary.pixels,
+        "coverage_mismatch": run.coverage_mismatch,
+        "coverage_mismatch_worst_view": run.views.iter().map(|v| v.coverage_mismatch).fold(0.0, f64::max),
+        "holes": run.holes,
+        "skirt_pixels": run.skirt_pixels,
+        "max_surface_px": run.max_surface_px,
+        "triangles_lod": mean(run, |v| v.triangles_lod as f64),
+        "triangles_truth": mean(run, |v| v.triangles_truth as f64),
+        "lod_frame_ms": mean(run, |v| v.lod_frame_ms),
+        "truth_frame_ms": mean(run, |v| v.truth_frame_ms),
+        "views": run.views.len(),
+        "worst_view": run.worst.as_ref().map(|w| w.index),
+        "earth": run.earth,
+        "per_view": run.views,
+    })
 }
 
 /// The best data on the ellipsoid for the geodetic truth, loaded as far as
@@ -255,9 +295,37 @@ fn write_outputs(args: &AccuracyArgs, run: &AccuracyRun, report: &serde_json::Va
     Ok(())
 }
 
+/// Prints the per-view table, the run's summary and the verdicts.
 fn print_tables(run: &AccuracyRun) -> Result<()> {
-    use std::fmt::Write as _;
     let mut out = String::new();
+    view_table(&mut out, run)?;
+    writeln!(out)?;
+    error_lines(&mut out, run)?;
+    cost_lines(&mut out, run)?;
+    let s = &run.summary;
+    // Two decimals at most: a budget's tau is any number.
+    let bound = (run.tau_achieved_max_px * 100.0).round() / 100.0;
+    let verdict = if s.p999_px <= run.tau_achieved_max_px { "confirmed" } else { "NOT confirmed" };
+    writeln!(out, "  bound             p99.9 {:.3} px <= tau {bound} px: {verdict}", s.p999_px)?;
+    if let Some(earth) = &run.earth {
+        let p999 = earth.errors.p999_px;
+        let verdict = if p999 <= run.tau_achieved_max_px { "confirmed" } else { "NOT confirmed" };
+        writeln!(out, "  bound on earth    p99.9 {p999:.3} px <= tau {bound} px: {verdict}")?;
+    }
+
+    let worst = run.views.iter().map(|v| v.coverage_mismatch).fold(0.0, f64::max);
+    let verdict = if worst <= MISMATCH_PER_VIEW { "confirmed" } else { "NOT confirmed" };
+    writeln!(
+        out,
+        "  coverage          worst view {:.4} % <= {:.2} % of its pixels: {verdict}",
+        100.0 * worst,
+        100.0 * MISMATCH_PER_VIEW
+    )?;
+    super::print(&out)
+}
+
+/// A row per view: its tau, errors, mismatch and triangles.
+fn view_table(out: &mut String, run: &AccuracyRun) -> Result<()> {
     writeln!(
         out,
         "{:>8} {:>7} {:>8} {:>8} {:>8} {:>8} {:>9} {:>9} {:>9} {:>9}",
@@ -289,8 +357,12 @@ fn print_tables(run: &AccuracyRun) -> Result<()> {
             v.mirror_p99_m
         )?;
     }
+    Ok(())
+}
+
+/// The run's tau, errors, skirts, coverage and triangles.
+fn error_lines(out: &mut String, run: &AccuracyRun) -> Result<()> {
     let s = &run.summary;
-    writeln!(out)?;
     if run.tau_loosened_views == 0 {
         writeln!(out, "  tau               {} px", run.tau_px)?;
     } else {
@@ -330,6 +402,11 @@ fn print_tables(run: &AccuracyRun) -> Result<()> {
     if run.truth == "cpu_rays" {
         writeln!(out, "  truth             each pixel's ray on the CPU against the exact heights")?;
     }
+    Ok(())
+}
+
+/// Against the earth, horizon culling, frame times and the worst view.
+fn cost_lines(out: &mut String, run: &AccuracyRun) -> Result<()> {
     if let Some(earth) = &run.earth {
         let e = &earth.errors;
         writeln!(
@@ -368,23 +445,5 @@ fn print_tables(run: &AccuracyRun) -> Result<()> {
             run.views[worst.index].t
         )?;
     }
-    // Two decimals at most: a budget's tau is any number.
-    let bound = (run.tau_achieved_max_px * 100.0).round() / 100.0;
-    let verdict = if s.p999_px <= run.tau_achieved_max_px { "confirmed" } else { "NOT confirmed" };
-    writeln!(out, "  bound             p99.9 {:.3} px <= tau {bound} px: {verdict}", s.p999_px)?;
-    if let Some(earth) = &run.earth {
-        let p999 = earth.errors.p999_px;
-        let verdict = if p999 <= run.tau_achieved_max_px { "confirmed" } else { "NOT confirmed" };
-        writeln!(out, "  bound on earth    p99.9 {p999:.3} px <= tau {bound} px: {verdict}")?;
-    }
-
-    let worst = run.views.iter().map(|v| v.coverage_mismatch).fold(0.0, f64::max);
-    let verdict = if worst <= MISMATCH_PER_VIEW { "confirmed" } else { "NOT confirmed" };
-    writeln!(
-        out,
-        "  coverage          worst view {:.4} % <= {:.2} % of its pixels: {verdict}",
-        100.0 * worst,
-        100.0 * MISMATCH_PER_VIEW
-    )?;
-    super::print(&out)
+    Ok(())
 }

@@ -384,11 +384,23 @@ fn write_stats(
 }
 
 fn print_summary(rows: &[Row], memory: &MemoryReport, input: Option<&InputReport>) -> Result<()> {
-    use std::fmt::Write as _;
     if rows.is_empty() {
         return Ok(());
     }
     let mut out = String::new();
+    write_frames(&mut out, rows)?;
+    write_memory(&mut out, memory)?;
+    write_tau(&mut out, rows)?;
+    write_split_tests(&mut out, rows)?;
+    if let Some(input) = input {
+        input.write(&mut out, rows.len())?;
+    }
+    super::print(&out)
+}
+
+/// The frames' times, tiles, calls, uploads and culling (`rows` is not empty).
+fn write_frames(out: &mut String, rows: &[Row]) -> Result<()> {
+    use std::fmt::Write as _;
     let mut frame_ms: Vec<f64> = rows.iter().map(|r| r.stats.frame_ms).collect();
     frame_ms.sort_by(f64::total_cmp);
     let pick = |q: f64| frame_ms[((frame_ms.len() - 1) as f64 * q).round() as usize];
@@ -397,7 +409,7 @@ fn print_summary(rows: &[Row], memory: &MemoryReport, input: Option<&InputReport
     };
     // What the GPU received: tile blocks, or cluster blocks with clusters on.
     let uploaded: u64 = rows.iter().map(|r| r.stats.calls.bytes_uploaded).sum();
-    let last = rows.last().expect("rows is not empty");
+    let Some(last) = rows.last() else { return Ok(()) };
     writeln!(out)?;
     writeln!(out, "  frames            {}", rows.len())?;
     writeln!(
@@ -450,6 +462,12 @@ fn print_summary(rows: &[Row], memory: &MemoryReport, input: Option<&InputReport
         "  horizon culled    mean {hidden:.0} tiles a frame ({:.1} % of the tiles the frustum kept)",
         100.0 * hidden / (hidden + kept).max(1.0)
     )?;
+    Ok(())
+}
+
+/// The memory line: Ridgeline's own bytes against the budget, and the process's.
+fn write_memory(out: &mut String, memory: &MemoryReport) -> Result<()> {
+    use std::fmt::Write as _;
     let mb = |b: u64| b as f64 / MB as f64;
     let budget =
         memory.budget_bytes.map_or("no budget".to_string(), |b| format!("of {:.0} MB", mb(b)));
@@ -464,12 +482,7 @@ fn print_summary(rows: &[Row], memory: &MemoryReport, input: Option<&InputReport
         mb(memory.resident_peak_bytes),
         mb(memory.driver_and_rest_bytes)
     )?;
-    write_tau(&mut out, rows)?;
-    write_split_tests(&mut out, rows)?;
-    if let Some(input) = input {
-        input.write(&mut out, rows.len())?;
-    }
-    super::print(&out)
+    Ok(())
 }
 
 /// The tau line: the bound asked for and, when it was loosened (by a

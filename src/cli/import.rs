@@ -15,13 +15,13 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
-use ridgeline::dem::GridView;
+use ridgeline::dem::{ElevationGrid, GridView};
 use ridgeline::meshes::shards::{self, ShardOptions};
 use ridgeline::meshes::{MeshOptions, MeshedSource};
 use ridgeline::pyramid::shard::Shard;
 use ridgeline::pyramid::spilled::{raise_to_sea_surface, spill_layers, SpilledLayer};
 use ridgeline::pyramid::{
-    self, BuildOptions, Pyramid, StreamOptions, FILE_NAME, MAX_SYNTHETIC_SIZE,
+    self, BuildOptions, Pyramid, PyramidInfo, StreamOptions, FILE_NAME, MAX_SYNTHETIC_SIZE,
 };
 use ridgeline::spill::ScratchDir;
 
@@ -109,36 +109,14 @@ fn shard_scratch(args: &ImportArgs, shard: Shard) -> PathBuf {
 
 fn import(args: &ImportArgs) -> Result<()> {
     let started = Instant::now();
-    if args.memory_mb < MIN_MEMORY_MB {
-        bail!("--memory-mb {}: at least {MIN_MEMORY_MB} MB is needed", args.memory_mb);
-    }
-    if let Some(count) = args.merge_shards {
-        // Before the sources are read: a merge without its parts is refused at once.
-        shards::check_parts_exist(&args.out, count).context("--merge-shards")?;
-    }
+    check_args(args)?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("{}: cannot create the cache", args.out.display()))?;
     let scratch_in = scratch_parent(args)?;
     let scratch = ScratchDir::create(&scratch_in)
         .with_context(|| format!("{}: cannot create the import's scratch", scratch_in.display()))?;
     let bar = Bar::new();
-    let mut synthetic = match args.synthetic {
-        Some(size) => Some(pyramid::synthetic_grid(size).with_context(|| {
-            format!("--synthetic {size}: the size must be 1..={MAX_SYNTHETIC_SIZE}")
-        })?),
-        None => None,
-    };
-    let mut spilled: Vec<SpilledLayer> = match synthetic {
-        Some(_) => Vec::new(),
-        None => spill_layers(&args.files, &scratch, &bar)?,
-    };
-    if args.sea_surface {
-        let raised = raise_to_sea_surface(&mut spilled)
-            + synthetic
-                .as_mut()
-                .map_or(0, |g| ridgeline::dem::sea::raise_to_sea_surface(&mut g.heights));
-        eprintln!("--sea-surface: {raised} posts below sea level raised to it");
-    }
+    let (synthetic, spilled) = read_sources(args, &scratch, &bar)?;
     let views: Vec<GridView> = match &synthetic {
         Some(grid) => vec![grid.view()],
         None => spilled.iter().map(SpilledLayer::view).collect(),
@@ -189,6 +167,58 @@ fn import(args: &ImportArgs) -> Result<()> {
         }
     };
     bar.finish();
+    print_written(args, &path, &info, input_bytes, started);
+    Ok(())
+}
+
+/// Refuses what the import cannot run with before anything is read: too
+/// little memory, a merge without its parts.
+fn check_args(args: &ImportArgs) -> Result<()> {
+    if args.memory_mb < MIN_MEMORY_MB {
+        bail!("--memory-mb {}: at least {MIN_MEMORY_MB} MB is needed", args.memory_mb);
+    }
+    if let Some(count) = args.merge_shards {
+        shards::check_parts_exist(&args.out, count).context("--merge-shards")?;
+    }
+    Ok(())
+}
+
+/// The import's heights: a synthetic grid, or every file spilled into its
+/// layer under `scratch`; raised to the sea's surface with `--sea-surface`.
+fn read_sources(
+    args: &ImportArgs,
+    scratch: &ScratchDir,
+    bar: &Bar,
+) -> Result<(Option<ElevationGrid>, Vec<SpilledLayer>)> {
+    let mut synthetic = match args.synthetic {
+        Some(size) => Some(pyramid::synthetic_grid(size).with_context(|| {
+            format!("--synthetic {size}: the size must be 1..={MAX_SYNTHETIC_SIZE}")
+        })?),
+        None => None,
+    };
+    let mut spilled: Vec<SpilledLayer> = match synthetic {
+        Some(_) => Vec::new(),
+        None => spill_layers(&args.files, scratch, bar)?,
+    };
+    if args.sea_surface {
+        let raised = raise_to_sea_surface(&mut spilled)
+            + synthetic
+                .as_mut()
+                .map_or(0, |g| ridgeline::dem::sea::raise_to_sea_surface(&mut g.heights));
+        eprintln!("--sea-surface: {raised} posts below sea level raised to it");
+    }
+    Ok((synthetic, spilled))
+}
+
+/// The line an import or a merge ends with: what it wrote, from how many
+/// bytes of heights (`input_bytes`), since `started`.
+fn print_written(
+    args: &ImportArgs,
+    path: &std::path::Path,
+    info: &PyramidInfo,
+    input_bytes: usize,
+    started: Instant,
+) {
     let present: u64 = info.levels.iter().map(|l| l.present).sum();
     let command = match args.merge_shards {
         Some(count) => format!("ridgeline import --merge-shards {count}"),
@@ -204,5 +234,4 @@ fn import(args: &ImportArgs) -> Result<()> {
         input_bytes as f64 / 1e6,
         started.elapsed().as_secs_f64()
     );
-    Ok(())
 }
