@@ -165,7 +165,9 @@ fn truth_mesh(
     // On the ellipsoid a global grid's truth is not cut at its seam.
     let period = config.scene.earth.and_then(|p| p.period_posts()).map(|p| p as u32);
     let region = match period {
-        Some(period) => TruthRegion::around_positions_wrapping(&layout, grid_size, positions, period),
+        Some(period) => {
+            TruthRegion::around_positions_wrapping(&layout, grid_size, positions, period)
+        }
         None => TruthRegion::around_positions(&layout, grid_size, positions),
     };
     TruthMesh::load_wrapped(terrain.source.as_ref(), region, period)

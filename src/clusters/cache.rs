@@ -571,9 +571,15 @@ impl ClusterCache {
             });
             start = end;
         }
+        self.order(placements, clusters, members);
+    }
+
+    /// Puts `clusters` in draw order ([`ClusterConfig::order`]) and counts
+    /// the attribute bases they use against the fewest `placements`'
+    /// vertices could fill.
+    fn order(&mut self, placements: &[Placement], clusters: &mut [Cluster], members: &[Member]) {
         // Nearest member (tiles are listed nearest first), then the
         // nearest cluster of each base.
-        let members = &*members;
         let nearest = |c: &Cluster| {
             let first = c.first_member as usize;
             members[first..first + c.member_count as usize]

@@ -22,6 +22,7 @@ use crate::accuracy::{
 use crate::camera::Camera;
 use crate::earth::GridPlacement;
 use crate::gl::{GlError, OffscreenTarget, TruthFrameStats, TruthPass};
+use crate::pipeline::FrameStats;
 use crate::render::{DrawList, FrameUniforms, RenderBackend};
 use std::time::Instant;
 
@@ -241,11 +242,8 @@ pub fn measure_flight_on_earth(
     let positions = OffscreenTarget::positions(display.context.gl(), size)?;
     let mut images = [PositionImage::default(), PositionImage::default()];
     let mut errors = ViewErrors::default();
-    let mut all_errors: Vec<f32> = Vec::new();
     let mut earth_buffers = (EarthImage::default(), EarthErrors::default());
-    let mut earth_all: Vec<f32> = Vec::new();
-    let (mut earth_mismatched, mut earth_pixels) = (0usize, 0usize);
-    let (mut mismatched, mut pixels, mut holes) = (0usize, 0usize, 0usize);
+    let mut tally = Tally::default();
     let mut rows: Vec<ViewRow> = Vec::with_capacity(views.len());
     let mut worst: Option<WorstView> = None;
     if let Some((_, first)) = views.first() {
@@ -261,16 +259,7 @@ pub fn measure_flight_on_earth(
         let buffers =
             Buffers { images: &mut images, errors: &mut errors, earth: &mut earth_buffers };
         let row = measure_one(display, passes, exact, spacing_m, *t, camera, buffers)?;
-        all_errors.extend(errors.errors_px.iter().copied().filter(|e| !e.is_nan()));
-        if earth.is_some() {
-            let errors = &earth_buffers.1;
-            earth_all.extend(errors.errors_px.iter().copied().filter(|e| !e.is_nan()));
-            earth_mismatched += errors.lod_only + errors.truth_only;
-            earth_pixels += errors.errors_px.len();
-        }
-        mismatched += errors.lod_only + errors.truth_only + errors.no_data;
-        pixels += errors.errors_px.len();
-        holes += errors.holes;
+        tally.add(&errors, earth.map(|_| &earth_buffers.1));
         let is_worse = |w: &WorstView| {
             let best = &rows[w.index].errors;
             (row.errors.p999_px, row.errors.max_px) > (best.p999_px, best.max_px)
@@ -284,34 +273,76 @@ pub fn measure_flight_on_earth(
         }
         rows.push(row);
     }
-    let summary = ErrorSummary::of(&mut all_errors);
-    let coverage_mismatch = if pixels == 0 { 0.0 } else { mismatched as f64 / pixels as f64 };
-    let skirt_pixels = rows.iter().map(|r| r.skirt_pixels).sum();
-    let max_surface_px = rows.iter().map(|r| r.max_surface_px).fold(0.0, f64::max);
-    let tau_achieved_max_px = rows.iter().map(|r| r.tau_px).fold(tau_px, f64::max);
-    let tau_loosened_views = rows.iter().filter(|r| r.tau_px > tau_px).count();
-    let earth = earth.map(|earth| EarthSummary {
-        errors: ErrorSummary::of(&mut earth_all),
-        coverage_mismatch: earth_mismatched as f64 / earth_pixels.max(1) as f64,
-        holes: rows.iter().filter_map(|r| r.earth.as_ref()).map(|e| e.holes).sum(),
-        stride: earth.stride,
-        truth_ms: rows.iter().filter_map(|r| r.earth.as_ref()).map(|e| e.truth_ms).sum::<f64>()
-            / rows.len().max(1) as f64,
-    });
-    Ok(AccuracyRun {
-        tau_px,
-        truth: truth.route(),
-        tau_achieved_max_px,
-        tau_loosened_views,
-        summary,
-        coverage_mismatch,
-        holes,
-        skirt_pixels,
-        max_surface_px,
-        views: rows,
-        worst,
-        earth,
-    })
+    Ok(tally.run(tau_px, truth.route(), earth, rows, worst))
+}
+
+/// The flight's pixels, summed over its views.
+#[derive(Default)]
+struct Tally {
+    errors: Vec<f32>,
+    mismatched: usize,
+    pixels: usize,
+    holes: usize,
+    earth_errors: Vec<f32>,
+    earth_mismatched: usize,
+    earth_pixels: usize,
+}
+
+impl Tally {
+    /// Adds a view's `errors`, and `earth`'s against the geodetic truth.
+    fn add(&mut self, errors: &ViewErrors, earth: Option<&EarthErrors>) {
+        self.errors.extend(errors.errors_px.iter().copied().filter(|e| !e.is_nan()));
+        if let Some(errors) = earth {
+            self.earth_errors.extend(errors.errors_px.iter().copied().filter(|e| !e.is_nan()));
+            self.earth_mismatched += errors.lod_only + errors.truth_only;
+            self.earth_pixels += errors.errors_px.len();
+        }
+        self.mismatched += errors.lod_only + errors.truth_only + errors.no_data;
+        self.pixels += errors.errors_px.len();
+        self.holes += errors.holes;
+    }
+
+    /// The run of `rows` at `tau_px` against `truth` (its route) and `earth`.
+    fn run(
+        mut self,
+        tau_px: f64,
+        truth: &'static str,
+        earth: Option<&EarthTruth<'_>>,
+        rows: Vec<ViewRow>,
+        worst: Option<WorstView>,
+    ) -> AccuracyRun {
+        let (mismatched, pixels, holes) = (self.mismatched, self.pixels, self.holes);
+        let summary = ErrorSummary::of(&mut self.errors);
+        let coverage_mismatch = if pixels == 0 { 0.0 } else { mismatched as f64 / pixels as f64 };
+        let (earth_mismatched, earth_pixels) = (self.earth_mismatched, self.earth_pixels);
+        let mut earth_all = self.earth_errors;
+        let skirt_pixels = rows.iter().map(|r| r.skirt_pixels).sum();
+        let max_surface_px = rows.iter().map(|r| r.max_surface_px).fold(0.0, f64::max);
+        let tau_achieved_max_px = rows.iter().map(|r| r.tau_px).fold(tau_px, f64::max);
+        let tau_loosened_views = rows.iter().filter(|r| r.tau_px > tau_px).count();
+        let earth = earth.map(|earth| EarthSummary {
+            errors: ErrorSummary::of(&mut earth_all),
+            coverage_mismatch: earth_mismatched as f64 / earth_pixels.max(1) as f64,
+            holes: rows.iter().filter_map(|r| r.earth.as_ref()).map(|e| e.holes).sum(),
+            stride: earth.stride,
+            truth_ms: rows.iter().filter_map(|r| r.earth.as_ref()).map(|e| e.truth_ms).sum::<f64>()
+                / rows.len().max(1) as f64,
+        });
+        AccuracyRun {
+            tau_px,
+            truth,
+            tau_achieved_max_px,
+            tau_loosened_views,
+            summary,
+            coverage_mismatch,
+            holes,
+            skirt_pixels,
+            max_surface_px,
+            views: rows,
+            worst,
+            earth,
+        }
+    }
 }
 
 /// The passes drawn beside each LOD frame.
@@ -339,18 +370,7 @@ fn measure_one(
     buffers: Buffers<'_>,
 ) -> Result<ViewRow, DisplayError> {
     let Buffers { images, errors, earth: earth_buffers } = buffers;
-    display.pipeline.settle(camera, SETTLE_UPDATES)?;
-    // The first frame at a new pose makes and uploads its tiles; the timed
-    // one is the steady frame a display shows there.
-    display.frame(camera)?;
-    // A frame budget's controller settles at the pose first.
-    for _ in 0..BUDGET_FRAMES {
-        match display.pipeline.budget() {
-            Some(budget) if !budget.steady() => display.frame(camera)?,
-            _ => break,
-        };
-    }
-    let lod_stats = display.frame(camera)?;
+    let lod_stats = steady_frame(display, camera)?;
     let [lod, truth_positions] = images;
     let frame = frame_of(display.pipeline.draw_list())?;
     passes.positions.bind();
@@ -358,18 +378,7 @@ fn measure_one(
     passes.positions.read_positions(lod)?;
     let placement = display.pipeline.scene().config().earth;
     let geometry = ViewGeometry::new(camera, &frame).on_earth(&frame, placement);
-    let truth_stats = match passes.truth {
-        Truth::Mesh(truth) => {
-            let stats = draw_truth(display, truth)?;
-            passes.positions.bind();
-            // No tiles: the cleared target under the truth's positions.
-            display.renderer.draw_positions(&DrawList::default(), &frame)?;
-            truth.draw(&frame, crate::gl::TerrainOutput::Position)?;
-            passes.positions.read_positions(truth_positions)?;
-            stats
-        }
-        Truth::Rays(ground) => trace_view(display, &geometry, &ground, truth_positions),
-    };
+    let truth_stats = truth_positions_of(display, passes, &frame, &geometry, truth_positions)?;
     display.context.bind_target();
     let scene = display.pipeline.scene();
     let list = scene.draw_list();
@@ -387,11 +396,6 @@ fn measure_one(
         errors.errors_px.iter().copied().filter(|e| !e.is_nan()).collect();
     let mut mirror: Vec<f32> = errors.mirror_m.iter().copied().filter(|e| !e.is_nan()).collect();
     mirror.sort_unstable_by(f32::total_cmp);
-    let mut tiles_per_level =
-        vec![0; list.tiles.iter().map(|t| t.key.level as usize + 1).max().unwrap_or(0)];
-    for tile in &list.tiles {
-        tiles_per_level[tile.key.level as usize] += 1;
-    }
     Ok(ViewRow {
         t,
         tau_px: lod_stats.scene.bound_px,
@@ -415,12 +419,60 @@ fn measure_one(
         triangles_truth: truth_stats.triangles,
         draw_calls_lod: lod_stats.calls.draw_calls as usize,
         draw_calls_truth: truth_stats.draw_calls,
-        tiles_per_level,
+        tiles_per_level: tiles_per_level(list),
         horizon_culled: lod_stats.scene.horizon_culled,
         lod_frame_ms: lod_stats.frame_ms,
         truth_frame_ms: truth_stats.frame_ms,
         earth,
     })
+}
+
+/// The steady frame a display shows at `camera`, timed: paged in, then a
+/// first frame that makes and uploads its tiles, and with a frame budget
+/// the frames its controller takes to settle at the pose.
+fn steady_frame(display: &mut DisplayParts, camera: &Camera) -> Result<FrameStats, DisplayError> {
+    display.pipeline.settle(camera, SETTLE_UPDATES)?;
+    display.frame(camera)?;
+    for _ in 0..BUDGET_FRAMES {
+        match display.pipeline.budget() {
+            Some(budget) if !budget.steady() => display.frame(camera)?,
+            _ => break,
+        };
+    }
+    display.frame(camera)
+}
+
+/// The truth's positions of the view drawn in `frame` (by the truth pass
+/// drawn in the same context, or traced by rays), into `out`, and what
+/// drawing it cost.
+fn truth_positions_of(
+    display: &mut DisplayParts,
+    passes: Passes<'_>,
+    frame: &FrameUniforms,
+    geometry: &ViewGeometry,
+    out: &mut PositionImage,
+) -> Result<TruthFrameStats, DisplayError> {
+    Ok(match passes.truth {
+        Truth::Mesh(truth) => {
+            let stats = draw_truth(display, truth)?;
+            passes.positions.bind();
+            // No tiles: the cleared target under the truth's positions.
+            display.renderer.draw_positions(&DrawList::default(), frame)?;
+            truth.draw(frame, crate::gl::TerrainOutput::Position)?;
+            passes.positions.read_positions(out)?;
+            stats
+        }
+        Truth::Rays(ground) => trace_view(display, geometry, &ground, out),
+    })
+}
+
+/// How many of `list`'s tiles each level has.
+fn tiles_per_level(list: &DrawList) -> Vec<usize> {
+    let mut tiles = vec![0; list.tiles.iter().map(|t| t.key.level as usize + 1).max().unwrap_or(0)];
+    for tile in &list.tiles {
+        tiles[tile.key.level as usize] += 1;
+    }
+    tiles
 }
 
 /// One view against the geodetic truth: the true camera's rays, then the
