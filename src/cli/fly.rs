@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 use anyhow::{bail, Context, Result};
 use ridgeline::display::{Display, DisplayConfig};
 use ridgeline::flight::FlightPath;
-use ridgeline::gl::{GlBackend, GlesVersion, OpenedBackend};
+use ridgeline::gl::{GlBackend, GlInfo, GlesVersion, OpenedBackend};
 use ridgeline::input::place::DisplayFrame;
 use ridgeline::input::InputSpec;
 use ridgeline::pipeline::FrameStats;
@@ -34,21 +34,7 @@ impl FlyArgs {
 }
 
 pub fn run(args: &FlyArgs) -> Result<()> {
-    args.view.check()?;
-    live::check(args)?;
-    if !(args.warning_above.is_finite()
-        && args.caution_below.is_finite()
-        && args.caution_below >= 0.0)
-    {
-        bail!("--warning-above and --caution-below must be finite metres, the caution band not negative");
-    }
-    if let Some(mb) = args.memory().filter(|mb| !MEMORY_MB_RANGE.contains(mb)) {
-        bail!(
-            "--memory-mb {mb} must be between {} and {} MB",
-            MEMORY_MB_RANGE.start(),
-            MEMORY_MB_RANGE.end()
-        );
-    }
+    check_args(args)?;
     let bar = Bar::new();
     let terrain = args.view.open_terrain(&bar)?;
     bar.finish();
@@ -74,18 +60,7 @@ pub fn run(args: &FlyArgs) -> Result<()> {
     };
     let mut display = Display::new(&config, terrain.source, terrain.summary).context(opening)?;
     let info = display.info().clone();
-    println!(
-        "ridgeline fly: {} on {} ({}), {}",
-        dataset_name,
-        info.backend.name(),
-        info.version,
-        info.renderer
-    );
-    if info.requested == GlesVersion::Es2 {
-        // Mesa answers an ES 2.0 request with a newer context; the renderer
-        // then uses only what ES 2.0 has.
-        println!("ridgeline fly: OpenGL ES 2.0 requested: features capped to ES 2.0");
-    }
+    print_context(&dataset_name, &info);
     let window = info.backend == OpenedBackend::Window;
     let (rows, input) = match (path, args.input, frame) {
         (Some(path), _, _) => (fly_path(args, &mut display, &path, frame.as_ref(), window)?, None),
@@ -99,6 +74,42 @@ pub fn run(args: &FlyArgs) -> Result<()> {
         write_stats(args, &run, &rows, &memory, input.as_ref())?;
     }
     print_summary(&rows, &memory, input.as_ref())
+}
+
+/// Refuses settings no flight can run with before anything is opened.
+fn check_args(args: &FlyArgs) -> Result<()> {
+    args.view.check()?;
+    live::check(args)?;
+    if !(args.warning_above.is_finite()
+        && args.caution_below.is_finite()
+        && args.caution_below >= 0.0)
+    {
+        bail!("--warning-above and --caution-below must be finite metres, the caution band not negative");
+    }
+    if let Some(mb) = args.memory().filter(|mb| !MEMORY_MB_RANGE.contains(mb)) {
+        bail!(
+            "--memory-mb {mb} must be between {} and {} MB",
+            MEMORY_MB_RANGE.start(),
+            MEMORY_MB_RANGE.end()
+        );
+    }
+    Ok(())
+}
+
+/// The line naming the dataset and the context the flight draws with.
+fn print_context(dataset_name: &str, info: &GlInfo) {
+    println!(
+        "ridgeline fly: {} on {} ({}), {}",
+        dataset_name,
+        info.backend.name(),
+        info.version,
+        info.renderer
+    );
+    if info.requested == GlesVersion::Es2 {
+        // Mesa answers an ES 2.0 request with a newer context; the renderer
+        // then uses only what ES 2.0 has.
+        println!("ridgeline fly: OpenGL ES 2.0 requested: features capped to ES 2.0");
+    }
 }
 
 /// The display's configuration for `args` over `terrain`, along `path`
@@ -407,9 +418,6 @@ fn write_frames(out: &mut String, rows: &[Row]) -> Result<()> {
     let mean = |f: &dyn Fn(&FrameStats) -> f64| {
         rows.iter().map(|r| f(&r.stats)).sum::<f64>() / rows.len() as f64
     };
-    // What the GPU received: tile blocks, or cluster blocks with clusters on.
-    let uploaded: u64 = rows.iter().map(|r| r.stats.calls.bytes_uploaded).sum();
-    let Some(last) = rows.last() else { return Ok(()) };
     writeln!(out)?;
     writeln!(out, "  frames            {}", rows.len())?;
     writeln!(
@@ -443,6 +451,18 @@ fn write_frames(out: &mut String, rows: &[Row]) -> Result<()> {
         mean(&|s| s.calls.vertex_array_binds as f64),
         mean(&|s| s.calls.uniform_writes as f64)
     )?;
+    write_uploads(out, rows)
+}
+
+/// What the GPU received, the allocator and the atlas at the end, horizon culling.
+fn write_uploads(out: &mut String, rows: &[Row]) -> Result<()> {
+    use std::fmt::Write as _;
+    let mean = |f: &dyn Fn(&FrameStats) -> f64| {
+        rows.iter().map(|r| f(&r.stats)).sum::<f64>() / rows.len() as f64
+    };
+    // What the GPU received: tile blocks, or cluster blocks with clusters on.
+    let uploaded: u64 = rows.iter().map(|r| r.stats.calls.bytes_uploaded).sum();
+    let Some(last) = rows.last() else { return Ok(()) };
     writeln!(
         out,
         "  uploaded          {:.1} MB in all, {:.0} KB per frame",

@@ -16,7 +16,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use ridgeline::dem::{ElevationGrid, GridView};
-use ridgeline::meshes::shards::{self, ShardOptions};
+use ridgeline::meshes::shards::{self, ShardOptions, ShardReport};
 use ridgeline::meshes::{MeshOptions, MeshedSource};
 use ridgeline::pyramid::shard::Shard;
 use ridgeline::pyramid::spilled::{raise_to_sea_surface, spill_layers, SpilledLayer};
@@ -133,19 +133,7 @@ fn import(args: &ImportArgs) -> Result<()> {
             shards::build_shard(&views, &scratch, &sharded, shard, &args.out, &release, &bar)
                 .with_context(|| format!("building shard {shard}"))?;
         bar.finish();
-        println!(
-            "ridgeline import --shard {shard}: wrote {} and {} ({} nodes under {} of the {} nodes \
-             of level {}) in {:.1} s; merge all {} with --merge-shards {}",
-            report.paths.pyramid.display(),
-            report.paths.meshes.display(),
-            report.nodes,
-            report.split_nodes[0],
-            report.split_nodes[1],
-            report.split_level,
-            started.elapsed().as_secs_f64(),
-            shard.count,
-            shard.count
-        );
+        print_shard(shard, &report, started);
         return Ok(());
     }
     let path = args.out.join(FILE_NAME);
@@ -233,5 +221,22 @@ fn print_written(
         info.layout.node_count(),
         input_bytes as f64 / 1e6,
         started.elapsed().as_secs_f64()
+    );
+}
+
+/// The line a shard ends with: its parts, its nodes, how to merge.
+fn print_shard(shard: Shard, report: &ShardReport, started: Instant) {
+    println!(
+        "ridgeline import --shard {shard}: wrote {} and {} ({} nodes under {} of the {} nodes \
+         of level {}) in {:.1} s; merge all {} with --merge-shards {}",
+        report.paths.pyramid.display(),
+        report.paths.meshes.display(),
+        report.nodes,
+        report.split_nodes[0],
+        report.split_nodes[1],
+        report.split_level,
+        started.elapsed().as_secs_f64(),
+        shard.count,
+        shard.count
     );
 }
