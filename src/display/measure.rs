@@ -372,10 +372,7 @@ fn measure_one(
     let Buffers { images, errors, earth: earth_buffers } = buffers;
     let lod_stats = steady_frame(display, camera)?;
     let [lod, truth_positions] = images;
-    let frame = frame_of(display.pipeline.draw_list())?;
-    passes.positions.bind();
-    display.renderer.draw_positions(display.pipeline.draw_list(), &frame)?;
-    passes.positions.read_positions(lod)?;
+    let frame = lod_positions(display, passes.positions, lod)?;
     let placement = display.pipeline.scene().config().earth;
     let geometry = ViewGeometry::new(camera, &frame).on_earth(&frame, placement);
     let truth_stats = truth_positions_of(display, passes, &frame, &geometry, truth_positions)?;
@@ -394,8 +391,6 @@ fn measure_one(
     });
     let mut view_errors: Vec<f32> =
         errors.errors_px.iter().copied().filter(|e| !e.is_nan()).collect();
-    let mut mirror: Vec<f32> = errors.mirror_m.iter().copied().filter(|e| !e.is_nan()).collect();
-    mirror.sort_unstable_by(f32::total_cmp);
     Ok(ViewRow {
         t,
         tau_px: lod_stats.scene.bound_px,
@@ -410,11 +405,8 @@ fn measure_one(
         skirt_pixels: errors.skirt_pixels,
         max_surface_px: errors.max_surface_px,
         worst_skirt: probe_worst_skirt(&surface, staging, &geometry, lod, errors),
-        truth_only_probe: errors.truth_only_pixel.and_then(|pixel| {
-            let (ground, _) = geometry.ground(truth_positions.point(pixel)?.as_dvec3());
-            Some(surface.probe_coverage(staging, pixel, ground.into()))
-        }),
-        mirror_p99_m: if mirror.is_empty() { 0.0 } else { percentile(&mirror, 0.99) },
+        truth_only_probe: probe_truth_only(&surface, staging, &geometry, truth_positions, errors),
+        mirror_p99_m: mirror_p99_m(errors),
         triangles_lod: surface.surface_triangles(),
         triangles_truth: truth_stats.triangles,
         draw_calls_lod: lod_stats.calls.draw_calls as usize,
@@ -466,6 +458,18 @@ fn truth_positions_of(
     })
 }
 
+/// The 99th percentile of how far the mirror's surface lies from the
+/// drawn one, metres (0 without any).
+fn mirror_p99_m(errors: &ViewErrors) -> f64 {
+    let mut mirror: Vec<f32> = errors.mirror_m.iter().copied().filter(|e| !e.is_nan()).collect();
+    mirror.sort_unstable_by(f32::total_cmp);
+    if mirror.is_empty() {
+        0.0
+    } else {
+        percentile(&mirror, 0.99)
+    }
+}
+
 /// How many of `list`'s tiles each level has.
 fn tiles_per_level(list: &DrawList) -> Vec<usize> {
     let mut tiles = vec![0; list.tiles.iter().map(|t| t.key.level as usize + 1).max().unwrap_or(0)];
@@ -501,6 +505,34 @@ fn measure_view_on_earth(
         holes: errors.holes,
         truth_ms,
     }
+}
+
+/// The positions of the frame the pipeline drew last, into `out`
+/// (through the `positions` target); returns its uniforms.
+fn lod_positions(
+    display: &mut DisplayParts,
+    positions: &OffscreenTarget,
+    out: &mut PositionImage,
+) -> Result<FrameUniforms, DisplayError> {
+    let frame = frame_of(display.pipeline.draw_list())?;
+    positions.bind();
+    display.renderer.draw_positions(display.pipeline.draw_list(), &frame)?;
+    positions.read_positions(out)?;
+    Ok(frame)
+}
+
+/// The view's first pixel where only the truth shows terrain, followed to
+/// the drawn surface's coverage there.
+fn probe_truth_only(
+    surface: &LodSurface,
+    staging: &[u8],
+    geometry: &ViewGeometry,
+    truth_positions: &PositionImage,
+    errors: &ViewErrors,
+) -> Option<CoverageProbe> {
+    let pixel = errors.truth_only_pixel?;
+    let (ground, _) = geometry.ground(truth_positions.point(pixel)?.as_dvec3());
+    Some(surface.probe_coverage(staging, pixel, ground.into()))
 }
 
 /// The view's worst skirt pixel, followed to its tile edge.

@@ -287,35 +287,11 @@ impl TerrainPass {
         // pointers and index offsets stay inside the buffer (each tile's
         // indices number only its own block's vertices, as the allocator
         // placed and the tile cache filled it).
+        set_draw_state(calls, frame);
+        self.bind_blocks(calls, clusters, windows);
         unsafe {
-            calls.viewport(frame.viewport[0], frame.viewport[1]);
-            calls.enable(glow::DEPTH_TEST);
-            calls.depth_func(glow::LESS);
-            calls.depth_mask(true);
-            calls.enable(glow::CULL_FACE);
-            calls.cull_face(glow::BACK);
-            calls.front_face(glow::CCW);
-            calls.disable(glow::BLEND);
-            // The depth clear between slices must reach the whole target.
-            calls.disable(glow::SCISSOR_TEST);
             calls.use_program(&program.program);
             set_frame_uniforms(calls, &program.at, frame);
-            if windows.is_none() {
-                if let Some(vertex_array) = &self.vertex_array {
-                    calls.bind_vertex_array(Some(vertex_array));
-                }
-                // The index binding is the vertex array's state where there
-                // is one, the context's where there is none (ES 2.0): bound
-                // here, every frame, either way.
-                let indices = clusters.map_or(&self.blocks, |c| &c.indices);
-                calls.bind_buffer_to(indices, BufferTarget::Indices);
-            }
-            // The windows' vertex arrays hold their own bindings; this one
-            // is the context's, left bound for an embedding caller.
-            calls.bind_buffer(&self.blocks);
-            if windows.is_none() {
-                enable_attributes(calls, true);
-            }
             // Far slice first; then a clear depth for the near slice.
             let mut on_plain = true;
             // The attribute base last set (clusters share theirs).
@@ -341,6 +317,37 @@ impl TerrainPass {
             }
         }
         gl_check!(self.gl)
+    }
+
+    /// Binds the buffers the frame's draws read: the index buffer (the
+    /// clusters' with clusters on) and the attributes, unless per-window
+    /// vertex arrays (`windows`) hold their own.
+    #[allow(unsafe_code)]
+    fn bind_blocks(
+        &self,
+        calls: Calls<'_>,
+        clusters: Option<&ClusterArrays>,
+        windows: Option<&[VertexArray]>,
+    ) {
+        // SAFETY: every object bound is live in this context.
+        unsafe {
+            if windows.is_none() {
+                if let Some(vertex_array) = &self.vertex_array {
+                    calls.bind_vertex_array(Some(vertex_array));
+                }
+                // The index binding is the vertex array's state where there
+                // is one, the context's where there is none (ES 2.0): bound
+                // here, every frame, either way.
+                let indices = clusters.map_or(&self.blocks, |c| &c.indices);
+                calls.bind_buffer_to(indices, BufferTarget::Indices);
+            }
+            // The windows' vertex arrays hold their own bindings; this one
+            // is the context's, left bound for an embedding caller.
+            calls.bind_buffer(&self.blocks);
+            if windows.is_none() {
+                enable_attributes(calls, true);
+            }
+        }
     }
 
     /// Draws the tiles of `list` that reach into depth slice `slice` with its
@@ -508,6 +515,25 @@ fn draw_cluster(
 }
 
 /// Sets the per-frame uniforms of the bound program `at` belongs to.
+/// The fixed state the terrain is drawn with: the frame's viewport, depth
+/// test and writes, back faces culled, no blending, no scissor.
+#[allow(unsafe_code)]
+fn set_draw_state(calls: Calls<'_>, frame: &FrameUniforms) {
+    // SAFETY: state calls only, on the current context.
+    unsafe {
+        calls.viewport(frame.viewport[0], frame.viewport[1]);
+        calls.enable(glow::DEPTH_TEST);
+        calls.depth_func(glow::LESS);
+        calls.depth_mask(true);
+        calls.enable(glow::CULL_FACE);
+        calls.cull_face(glow::BACK);
+        calls.front_face(glow::CCW);
+        calls.disable(glow::BLEND);
+        // The depth clear between slices must reach the whole target.
+        calls.disable(glow::SCISSOR_TEST);
+    }
+}
+
 #[allow(unsafe_code)]
 fn set_frame_uniforms(calls: Calls<'_>, at: &Locations, frame: &FrameUniforms) {
     let curvature = if frame.curvature { 1.0 / (2.0 * crate::camera::EARTH_RADIUS_M) } else { 0.0 };

@@ -214,6 +214,15 @@ pub(crate) fn encode_header(info: &PyramidInfo, nodes: &[Option<NodeSummary>]) -
     }
     let crc = crc32fast::hash(&e.bytes);
     e.u32(crc);
+    encode_nodes(&mut e, nodes, header_len, record_len);
+    e.bytes.resize(header_len as usize, 0);
+    e.bytes
+}
+
+/// The node table: each node's record offset (records follow the
+/// `header_len` bytes of header, `record_len` each, present nodes only)
+/// and summary, with a checksum that also covers its index.
+fn encode_nodes(e: &mut Encoder, nodes: &[Option<NodeSummary>], header_len: u64, record_len: u64) {
     let mut next = header_len;
     for (index, node) in nodes.iter().enumerate() {
         let start = e.bytes.len();
@@ -231,8 +240,37 @@ pub(crate) fn encode_header(info: &PyramidInfo, nodes: &[Option<NodeSummary>]) -
         let crc = indexed_crc(index as u64, &e.bytes[start..]);
         e.u32(crc);
     }
-    e.bytes.resize(header_len as usize, 0);
-    e.bytes
+}
+
+/// Checks that the `fixed` part of a header read from `path` (`file_len`
+/// bytes) agrees with the file's length and its own layout.
+fn check_sizes(path: &Path, fixed: &Fixed, file_len: usize) -> Result<(), PyramidError> {
+    let corrupt = |problem: String| PyramidError::corrupt(path, problem);
+    if fixed.file_len != file_len as u64 {
+        let problem = format!("header says {} bytes, the file has {}", fixed.file_len, file_len);
+        return Err(if fixed.file_len > file_len as u64 {
+            PyramidError::Truncated { path: path.to_path_buf(), problem }
+        } else {
+            corrupt(problem)
+        });
+    }
+    let layout = fixed.layout;
+    check_layout(&layout).map_err(corrupt)?;
+    let node_count = layout.node_count();
+    let expected_header = header_len(layout.levels as u64, node_count);
+    let expected_file = expected_header.and_then(|h| {
+        let present = fixed.present_count.min(node_count);
+        present.checked_mul(record_len(&layout))?.checked_add(h)
+    });
+    if fixed.node_count != node_count
+        || fixed.present_count > node_count
+        || fixed.record_len as u64 != record_len(&layout)
+        || expected_header != Some(fixed.header_len)
+        || expected_file != Some(fixed.file_len)
+    {
+        return Err(corrupt(format!("sizes disagree with the layout {layout:?}")));
+    }
+    Ok(())
 }
 
 /// A header read back and checked.
@@ -263,30 +301,9 @@ pub(crate) fn decode_header(path: &Path, bytes: &[u8]) -> Result<DecodedHeader, 
         });
     }
     let fixed = read_fixed(&mut d).ok_or_else(short)?;
-    if fixed.file_len != bytes.len() as u64 {
-        let problem = format!("header says {} bytes, the file has {}", fixed.file_len, bytes.len());
-        return Err(if fixed.file_len > bytes.len() as u64 {
-            truncated(problem)
-        } else {
-            corrupt(problem)
-        });
-    }
+    check_sizes(path, &fixed, bytes.len())?;
     let layout = fixed.layout;
-    check_layout(&layout).map_err(corrupt)?;
     let node_count = layout.node_count();
-    let expected_header = header_len(layout.levels as u64, node_count);
-    let expected_file = expected_header.and_then(|h| {
-        let present = fixed.present_count.min(node_count);
-        present.checked_mul(record_len(&layout))?.checked_add(h)
-    });
-    if fixed.node_count != node_count
-        || fixed.present_count > node_count
-        || fixed.record_len as u64 != record_len(&layout)
-        || expected_header != Some(fixed.header_len)
-        || expected_file != Some(fixed.file_len)
-    {
-        return Err(corrupt(format!("sizes disagree with the layout {layout:?}")));
-    }
     // From here every table lies inside the file: the lengths are bounded by it.
     // crc_at + 4 <= header_len <= file_len == bytes.len(), checked just above.
     let crc_at = crc_pos(layout.levels as u64) as usize;

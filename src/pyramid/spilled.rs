@@ -211,12 +211,7 @@ fn fill_voids(
     progress: &dyn Progress,
 ) -> Result<(), ImportError> {
     let (w, h) = (layer.width, layer.height);
-    let (mut voids, mut any_data) = (0u64, false);
-    for band in layer.heights.as_slice().chunks(BAND_POSTS) {
-        voids += band.par_iter().filter(|v| v.is_nan()).count() as u64;
-        any_data = any_data || band.par_iter().any(|v| !v.is_nan());
-        layer.heights.release();
-    }
+    let (voids, any_data) = count_voids(layer);
     if !any_data {
         return Err(ImportError::new(&layer.path, Problem::AllVoids));
     }
@@ -265,6 +260,18 @@ fn fill_voids(
     layer.heights.release();
     layer.voids_filled = fills.len() as u64;
     Ok(())
+}
+
+/// The layer's posts of no data, and whether it has any data, read band
+/// by band (each band's pages released after it).
+fn count_voids(layer: &SpilledLayer) -> (u64, bool) {
+    let (mut voids, mut any_data) = (0u64, false);
+    for band in layer.heights.as_slice().chunks(BAND_POSTS) {
+        voids += band.par_iter().filter(|v| v.is_nan()).count() as u64;
+        any_data = any_data || band.par_iter().any(|v| !v.is_nan());
+        layer.heights.release();
+    }
+    (voids, any_data)
 }
 
 /// Posts between two releases while a layer is scanned.
