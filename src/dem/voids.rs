@@ -69,9 +69,9 @@ pub fn fill_small(mut raw: RawGrid) -> Result<ElevationGrid, ImportError> {
     Ok(ElevationGrid { width, height, heights, georef, voids_filled: small })
 }
 
-/// The posts of every large void: chessboard distance to the nearest valid
-/// post above [`SMALL_VOID_RADIUS`] somewhere in its 4-connected region.
-fn large_voids(heights: &[f32], width: usize, height: usize) -> Vec<usize> {
+/// Each post's distance to the nearest post with data, in posts (8-
+/// connected, two chamfer passes; `u32::MAX / 2` where there is none).
+fn chamfer_distance(heights: &[f32], width: usize, height: usize) -> Vec<u32> {
     let far = u32::MAX / 2;
     let mut distance: Vec<u32> = heights.iter().map(|h| if h.is_nan() { far } else { 0 }).collect();
     for j in 0..height {
@@ -112,6 +112,13 @@ fn large_voids(heights: &[f32], width: usize, height: usize) -> Vec<usize> {
             distance[k] = d;
         }
     }
+    distance
+}
+
+/// The posts of every large void: chessboard distance to the nearest valid
+/// post above [`SMALL_VOID_RADIUS`] somewhere in its 4-connected region.
+fn large_voids(heights: &[f32], width: usize, height: usize) -> Vec<usize> {
+    let distance = chamfer_distance(heights, width, height);
     // Regions holding a post too far from data are large, whole.
     let mut seen = vec![false; heights.len()];
     let mut large = Vec::new();

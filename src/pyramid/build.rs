@@ -203,30 +203,12 @@ fn spacing_area(grid: &GridView) -> f64 {
     grid.georef.spacing[0] * grid.georef.spacing[1]
 }
 
-/// The level-0 lattice over the union of `layers`, its layout and
-/// georeference, and the layers placed on it, coarsest first.
-pub(super) fn place_layers<'a>(
-    layers: &[GridView<'a>],
-    weights: &[Option<&'a [f32]>],
-    options: &BuildOptions,
-) -> Result<(NodeLayout, GeoRef, Composite<'a>), BuildError> {
-    let Some(first) = layers.first() else {
-        return Err(BuildError::InvalidGrid("no layer to build".into()));
-    };
-    let crs = first.georef.crs;
-    if let Some((k, other)) = layers.iter().enumerate().find(|(_, l)| l.georef.crs != crs) {
-        return Err(BuildError::InvalidGrid(format!(
-            "layer {} is in {:?} but layer 1 in {crs:?}: all layers must share one coordinate system",
-            k + 1,
-            other.georef.crs
-        )));
-    }
-    let finest = layers
-        .iter()
-        .enumerate()
-        .min_by(|a, b| spacing_area(a.1).total_cmp(&spacing_area(b.1)).then(a.0.cmp(&b.0)))
-        .map(|(_, l)| l)
-        .expect("at least one layer");
+/// The lattice of `finest`'s spacing, through its posts, that spans every
+/// layer: its origin and posts per side.
+fn lattice(
+    layers: &[GridView<'_>],
+    finest: &GridView<'_>,
+) -> Result<([f64; 2], [u32; 2]), BuildError> {
     let spacing = finest.georef.spacing;
     let mut low = [f64::INFINITY; 2];
     let mut high = [f64::NEG_INFINITY; 2];
@@ -252,6 +234,35 @@ pub(super) fn place_layers<'a>(
         }
         posts[a] = count as u32;
     }
+    Ok((origin, posts))
+}
+
+/// The level-0 lattice over the union of `layers`, its layout and
+/// georeference, and the layers placed on it, coarsest first.
+pub(super) fn place_layers<'a>(
+    layers: &[GridView<'a>],
+    weights: &[Option<&'a [f32]>],
+    options: &BuildOptions,
+) -> Result<(NodeLayout, GeoRef, Composite<'a>), BuildError> {
+    let Some(first) = layers.first() else {
+        return Err(BuildError::InvalidGrid("no layer to build".into()));
+    };
+    let crs = first.georef.crs;
+    if let Some((k, other)) = layers.iter().enumerate().find(|(_, l)| l.georef.crs != crs) {
+        return Err(BuildError::InvalidGrid(format!(
+            "layer {} is in {:?} but layer 1 in {crs:?}: all layers must share one coordinate system",
+            k + 1,
+            other.georef.crs
+        )));
+    }
+    let finest = layers
+        .iter()
+        .enumerate()
+        .min_by(|a, b| spacing_area(a.1).total_cmp(&spacing_area(b.1)).then(a.0.cmp(&b.0)))
+        .map(|(_, l)| l)
+        .expect("at least one layer");
+    let spacing = finest.georef.spacing;
+    let (origin, posts) = lattice(layers, finest)?;
     let georef = GeoRef { crs, origin, spacing };
     if let Some(problem) = georef.problem(posts) {
         return Err(BuildError::InvalidGrid(problem));
