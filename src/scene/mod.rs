@@ -562,7 +562,7 @@ impl Scene {
 }
 
 /// The lowest height terrain can have where the display draws none (see
-/// [`FrameUniforms::horizon_floor_m`]): sea level, or the data's lowest
+/// [`crate::render::FrameUniforms::horizon_floor_m`]): sea level, or the data's lowest
 /// height where a grid `placement` puts around the whole earth goes lower.
 /// Only a grid that covers the earth may lower it: past a regional grid's
 /// edge the terrain is unknown, and the earth's surface there (land or the
