@@ -17,7 +17,7 @@
 //! | `smoke` | [`SmokePass`]: clear and one triangle, proving a context draws |
 //! | `terrain_pass`, `sky_pass` | the terrain tiles (heights as attributes, transforms as uniforms) and the sky |
 //! | `symbol_pass` | the reference symbols and the failure flag, one draw of a [`SymbolMesh`](crate::symbology::SymbolMesh) |
-//! | `chunked_baseline` | [`ChunkedBaseline`]: plain Chunked LOD, a vertex buffer and an upload per tile (the bench's baseline) |
+//! | `chunked_baseline` | `ChunkedBaseline`: plain Chunked LOD, a vertex buffer and an upload per tile (the bench's baseline; feature `test-support`) |
 //! | `truth_pass` | [`TruthPass`]: the brute-force ground truth, every level-0 post drawn with the terrain shaders |
 //! | `renderer` | [`GlRenderer`]: the GL [`RenderBackend`](crate::render::RenderBackend) |
 //!
@@ -26,6 +26,7 @@
 mod calls;
 mod caps;
 pub mod check;
+#[cfg(feature = "test-support")]
 mod chunked_baseline;
 mod context;
 mod egl;
@@ -44,6 +45,7 @@ mod truth_pass;
 mod window;
 
 pub use caps::{Capabilities, GlApi, GlesVersion, Limits, ReportedVersion};
+#[cfg(feature = "test-support")]
 pub use chunked_baseline::{BaselineFrameStats, ChunkedBaseline};
 pub use context::{ContextRequest, GlBackend, GlContext, GlInfo, OpenedBackend};
 pub use error::{GlError, ShaderStage};

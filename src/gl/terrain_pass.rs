@@ -66,7 +66,9 @@ pub enum TileBlocks<'a> {
     /// At the tile's byte offsets in the pass's one buffer (Polok's batching).
     Shared,
     /// In a buffer of the tile's own, from byte 0 (plain Chunked LOD: a
-    /// buffer swap per draw); tiles without a buffer are skipped.
+    /// buffer swap per draw); tiles without a buffer are skipped. Only
+    /// the baseline draws so (feature `test-support`).
+    #[cfg_attr(not(feature = "test-support"), allow(dead_code))]
     PerTile(&'a dyn Fn(&TileUniforms) -> Option<&'a Buffer>),
 }
 

@@ -55,7 +55,9 @@ pub fn window_of(offset: u32) -> u32 {
 /// vectors; the frame's take 8 more.
 pub const MEMBER_FLOATS: usize = 24;
 
-/// Which morph range each member of a cluster takes.
+/// Which morph range each member of a cluster takes (feature
+/// `test-support`: only tests choose).
+#[cfg(feature = "test-support")]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub enum ClusterMorph {
     /// Its own tile's (what per-tile drawing does): the right one.

@@ -3,7 +3,9 @@
 //! of members each draws per depth slice, and the members' uniform array.
 //! The GL terrain pass and the cost model both walk these.
 
-use super::cluster::{Cluster, ClusterMorph, ClusterRun, Member, MAX_MEMBERS, MEMBER_FLOATS};
+#[cfg(feature = "test-support")]
+use super::cluster::ClusterMorph;
+use super::cluster::{Cluster, ClusterRun, Member, MAX_MEMBERS, MEMBER_FLOATS};
 use super::draw_list::{DrawList, Slice, TileUniforms};
 
 /// The bit of the terrain pass's part that draws depth slice `slice` with
@@ -168,7 +170,9 @@ impl DrawList {
         for member in members {
             let at = member.slot as usize * MEMBER_FLOATS;
             let tile = &self.tiles[member.tile as usize];
+            #[cfg_attr(not(feature = "test-support"), allow(unused_mut))]
             let mut uniforms = tile.member_uniforms();
+            #[cfg(feature = "test-support")]
             if self.cluster_morph == ClusterMorph::FirstMember {
                 let first = &self.tiles[members[0].tile as usize];
                 uniforms[4..6].copy_from_slice(&first.morph);

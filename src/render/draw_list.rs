@@ -17,7 +17,9 @@ use crate::tiles::errors::MeshErrors;
 use crate::tiles::{TileBlock, TileCoverage, TileDraw};
 use glam::{DVec2, Mat4, Vec3};
 
-use super::cluster::{Cluster, ClusterMorph, Member};
+#[cfg(feature = "test-support")]
+use super::cluster::ClusterMorph;
+use super::cluster::{Cluster, Member};
 
 /// Uniforms shared by every tile of a frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -335,7 +337,8 @@ pub struct DrawList {
     pub clusters: Vec<Cluster>,
     /// Every cluster's members.
     pub members: Vec<Member>,
-    /// Which morph range a cluster's members take.
+    /// Which morph range a cluster's members take (tests break it).
+    #[cfg(feature = "test-support")]
     pub cluster_morph: ClusterMorph,
 }
 
@@ -421,6 +424,7 @@ impl DrawList {
             clustered: false,
             clusters: Vec::with_capacity(tiles),
             members: Vec::with_capacity(tiles),
+            #[cfg(feature = "test-support")]
             cluster_morph: ClusterMorph::PerMember,
         }
     }

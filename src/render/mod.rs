@@ -11,7 +11,9 @@ pub mod null;
 pub mod palette;
 pub mod plan;
 
-pub use cluster::{Cluster, ClusterMorph, ClusterOrder, ClusterRun, Member};
+#[cfg(feature = "test-support")]
+pub use cluster::ClusterMorph;
+pub use cluster::{Cluster, ClusterOrder, ClusterRun, Member};
 pub use cost::{CallStats, CostModel};
 pub use draw_list::{
     ClusterDraws, DepthSlices, DrawList, DrawnTile, FrameUniforms, PostFrame, Slice, TileUniforms,

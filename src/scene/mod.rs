@@ -28,7 +28,9 @@ use crate::lod::rings::RingInputs;
 use crate::lod::{LevelRings, LodConfig, LodError, TileSelector};
 use crate::node::NodeLayout;
 use crate::render::draw_list::{made_delta, TileGeometry};
-use crate::render::{palette, BufferPlan, ClusterMorph, ClusterOrder, DrawList};
+#[cfg(feature = "test-support")]
+use crate::render::ClusterMorph;
+use crate::render::{palette, BufferPlan, ClusterOrder, DrawList};
 use crate::tiles::errors::{MapErrors, MeshErrors};
 use crate::tiles::{TileCache, TileCacheConfig, TileError};
 use std::time::Instant;
@@ -77,7 +79,9 @@ pub struct SceneConfig {
     /// Draw the tiles as clusters (Judnich & Ling; `crate::clusters`): the
     /// GPU buffer then holds the clusters' blocks, not the tiles'.
     pub clusters: bool,
-    /// Which morph range a cluster's members take (tests break it on purpose).
+    /// Which morph range a cluster's members take (tests break it on
+    /// purpose; feature `test-support`).
+    #[cfg(feature = "test-support")]
     pub cluster_morph: ClusterMorph,
     /// In which order clusters are drawn.
     pub cluster_order: ClusterOrder,
@@ -99,6 +103,7 @@ impl Default for SceneConfig {
             warning_above_m: palette::DEFAULT_WARNING_ABOVE_M,
             caution_below_m: palette::DEFAULT_CAUTION_BELOW_M,
             clusters: false,
+            #[cfg(feature = "test-support")]
             cluster_morph: ClusterMorph::PerMember,
             cluster_order: ClusterOrder::ByBase,
             earth: None,
@@ -228,8 +233,12 @@ impl Scene {
             frames_in_flight: config.frames_in_flight,
         };
         let deltas = terrain.delta_per_level();
+        #[cfg_attr(not(feature = "test-support"), allow(unused_mut))]
         let mut draw_list = DrawList::with_capacity(cache_config.max_tiles as usize);
-        draw_list.cluster_morph = config.cluster_morph;
+        #[cfg(feature = "test-support")]
+        {
+            draw_list.cluster_morph = config.cluster_morph;
+        }
         let plan = BufferPlan::new(config.buffer_bytes, config.clusters);
         let clusters = if let Some(index_capacity_bytes) = plan.cluster_index_bytes {
             Some(ClusterCache::new(ClusterConfig {
