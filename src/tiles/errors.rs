@@ -6,6 +6,20 @@
 //! or more, so Ulrich's bound `delta K / D <= tau` holds for it, and for
 //! its morph toward the parent from `split_{l+1} (1 - morph)` on, with
 //! `delta_l = tau (1 - morph) split_l / K` less its map's reference delta.
+//!
+//! The bound alone would allow `tau split_l / K`, 1.4 times coarser: the
+//! rings' consistency rule starts every morph past the band's near end,
+//! and the blend's error is linear in the distance as the bound is
+//! (`morphs_start_past_their_band` below). Extracting there cut the lod
+//! bench's LOD/RTIN-floor ratio at 1280x720 from 4.1 to 2.8 (tau 1) and 6.3
+//! to 3.8 (tau 4), p99.9 within tau. The margin stays for the edges: leaf
+//! tiles of other nodes or sub-levels meet at cracks as deep as their
+//! errors and their targets' (each side morphs toward its own target), and
+//! 1.4 times coarser meshes made their skirts, seen past the data's edges,
+//! err up to 2.6 tau (`tests/render_data_edges.rs` holds 2.1). Keeping it
+//! on levels 0 to 2 alone kept the skirts and gave the whole gain back
+//! (4.10): those levels draw most of the triangles. It can go once leaf
+//! edges are watertight (docs/screen.md).
 //! A *leaf* tile (no finer node under it) is drawn however near the camera
 //! comes: nearer than its level's ring it takes *sub-levels*, the ring
 //! halved `k` times and the error with it, each morphing toward the one
@@ -223,5 +237,48 @@ mod tests {
         let (_, end) = errors.sub_level_morph(0, 3);
         assert!((end - 2_500.0).abs() < 1e-9);
         assert!(near.own.metres() * 1000.0 / 1_250.0 <= 0.7 + 1e-12);
+    }
+    /// Every morph starts past its band's near end, so a tile extracted at
+    /// the full error the bound allows there (the margin taken off) would
+    /// keep the bound all along its morph: within tau at the start, where
+    /// it draws its own mesh, and at the end, where it draws its target.
+    #[test]
+    fn morphs_start_past_their_band() {
+        use crate::lod::rings::RingInputs;
+        use crate::lod::{LevelRings, LodConfig};
+        let (k, levels) = (1108.5, 9u8);
+        for (tau, morph_range, view_distance) in [(1.0, 0.3, 3.0), (4.0, 0.5, 1.0), (2.0, 0.1, 5.0)]
+        {
+            let config =
+                LodConfig { tau_px: tau, morph_range, view_distance, ..LodConfig::default() };
+            let deltas = [0.0, 3.0, 9.0, 30.0, 80.0, 200.0, 400.0, 900.0, 2000.0];
+            let inputs = RingInputs {
+                tile_size_m: 32.0 * 90.0,
+                delta_per_level: &deltas,
+                height_range_m: 4_000.0,
+                perspective_scale: k,
+            };
+            let rings = LevelRings::new(&config, inputs);
+            let mut errors = MeshErrors::default();
+            let split = |l: u8| rings.split_distance(l);
+            errors.update(split, levels, k, tau, morph_range, &MapErrors::default());
+            // The error without the margin, against the bound at `d`.
+            let keep = 1.0 - morph_range;
+            let within = |e: ErrorStep, d: f64| e.metres() / keep * k / d <= tau * (1.0 + 1e-9);
+            for level in 0..levels - 1 {
+                let near = errors.leaf_ring[level as usize];
+                let (start, end) = rings.morph(level);
+                assert!(start >= near, "level {level}: morph from {start} before {near}");
+                assert!(within(errors.level[level as usize], near), "level {level} at {near}");
+                assert!(within(errors.level[level as usize + 1], end), "level {level}'s target");
+                for sub in 1..4u8 {
+                    let tile = errors.for_tile(level, near / f64::from(1u32 << sub), true);
+                    let (start, end) = errors.sub_level_morph(level, tile.sub_level);
+                    let band = near / f64::from(1u32 << tile.sub_level);
+                    assert!(start >= band && within(tile.own, band), "{level}.{sub}");
+                    assert!(within(tile.target, end), "{level}.{sub}'s target");
+                }
+            }
+        }
     }
 }
