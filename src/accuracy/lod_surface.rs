@@ -181,6 +181,7 @@ impl LodSurface {
             tile: [tile.key.level as u32, tile.key.x, tile.key.y],
             source_level: source.map_or(tile.key.level, |d| d.source_level),
             node_mesh: source.is_some_and(|d| d.node_mesh),
+            sub_level: source.map_or(0, |d| d.sub_level),
             edge: EDGE_NAMES[edge],
             skirt_depth_m: tile.skirt_depth,
             skirt_edges: tile.skirt_edges,

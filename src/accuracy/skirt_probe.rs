@@ -21,6 +21,9 @@ pub struct SkirtProbe {
     pub source_level: u8,
     /// Cut from its source node's mesh (else a regular grid of posts).
     pub node_mesh: bool,
+    /// Its sub-level (`tiles::errors`): tiles of one node mesh share their
+    /// edges only at the same one.
+    pub sub_level: u8,
     /// The tile edge: `south`, `east`, `north` or `west`.
     pub edge: &'static str,
     /// The tile's skirt depth, metres.
@@ -30,8 +33,10 @@ pub struct SkirtProbe {
     /// How far below the tile's surface the drawn point is, metres.
     pub below_surface_m: f64,
     /// The drawn tiles across the edge: level, column, row, source level,
-    /// node mesh (1) or grid (0).
-    pub across: Vec<[u32; 5]>,
+    /// node mesh (1) or grid (0), sub-level. One of the tile's level, source
+    /// and sub-level across an edge that hangs a skirt lies in another
+    /// node: the two node meshes chose their edge vertices apart.
+    pub across: Vec<[u32; 6]>,
     /// The point's distance to the data's last post east and north, metres
     /// (negative inside the data).
     pub past_last_post_m: [f64; 2],
@@ -64,11 +69,12 @@ pub const EDGE_NAMES: [&str; 4] = ["south", "east", "north", "west"];
 
 /// The tiles of `drawn` (sorted by key) across edge `edge` of `key`, as
 /// [`SkirtProbe::across`] lists them.
-pub fn tiles_across(key: TileKey, edge: usize, drawn: &[DrawnTile]) -> Vec<[u32; 5]> {
+pub fn tiles_across(key: TileKey, edge: usize, drawn: &[DrawnTile]) -> Vec<[u32; 6]> {
     let mut across = Vec::new();
     for_each_across(key, edge, drawn, |d| {
         let k = d.key;
-        across.push([k.level as u32, k.x, k.y, d.source_level as u32, d.node_mesh as u32]);
+        let (source, mesh, sub) = (d.source_level as u32, d.node_mesh as u32, d.sub_level as u32);
+        across.push([k.level as u32, k.x, k.y, source, mesh, sub]);
     });
     across
 }
