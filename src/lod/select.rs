@@ -18,7 +18,7 @@ use super::horizon::Horizon;
 use super::life::{LifeStats, ValidLife};
 use super::{LevelRings, LodConfig, TileKey};
 use crate::camera::{curvature_drop, Frustum};
-use crate::earth::{EarthFrame, EllipsoidHorizon};
+use crate::earth::{EarthFrame, EllipsoidHorizon, PlaceCache};
 use crate::node::{NodeId, NodeLayout};
 use glam::DVec3;
 
@@ -57,6 +57,8 @@ pub struct TileSelector {
     horizon_culled: usize,
     /// Valid lives of the split tests, when a travel per frame is declared.
     life: Option<ValidLife>,
+    /// A projected grid's tile samples on the ellipsoid, across frames.
+    places: PlaceCache,
 }
 
 /// A view to select tiles for: camera position, frustum and rings.
@@ -106,6 +108,7 @@ impl TileSelector {
             culled: 0,
             horizon_culled: 0,
             life: config.max_travel_m.map(|m| ValidLife::new(m, config.max_tiles + 4)),
+            places: PlaceCache::default(),
         }
     }
 
@@ -143,6 +146,7 @@ impl TileSelector {
         self.culled = 0;
         self.horizon_culled = 0;
         let root = (view.rings.levels() - 1) as u8;
+        self.places.next_frame(view.earth.as_ref().map(|e| &e.frame));
         if let Some(life) = &mut self.life {
             life.begin(view.eye, view.rings.levels(), |l| view.rings.split_distance(l));
         }
@@ -203,10 +207,16 @@ impl TileSelector {
     }
 
     /// Distance to the tile's box and its height bounds, or why it is not drawn.
-    fn visibility(&self, key: TileKey, view: &View<'_>, terrain: &dyn TileBounds) -> Visibility {
+    fn visibility(
+        &mut self,
+        key: TileKey,
+        view: &View<'_>,
+        terrain: &dyn TileBounds,
+    ) -> Visibility {
         let bounds = terrain.height_bounds(key, self.config.grid_size);
         if let Some(earth) = &view.earth {
-            return earth_visibility(key, self.config.grid_size, bounds, view.frustum, earth);
+            let grid_size = self.config.grid_size;
+            return earth_visibility(key, grid_size, bounds, view.frustum, earth, &mut self.places);
         }
         let (min, max) = box_of(key, self.config.grid_size, terrain.spacing_m(), bounds, view.eye);
         let distance = box_distance(min, max);
@@ -276,12 +286,13 @@ fn earth_visibility(
     bounds: (f32, f32),
     frustum: &Frustum,
     earth: &EarthView,
+    places: &mut PlaceCache,
 ) -> Visibility {
     let span = ((grid_size as u64) << key.level) as f64;
     let p0 = [key.x as f64 * span, key.y as f64 * span];
     let p1 = [p0[0] + span, p0[1] + span];
     let heights = (bounds.0 as f64, bounds.1 as f64);
-    let (min, max) = earth.frame.camera_box(p0, p1, heights);
+    let (min, max) = earth.frame.camera_box_with(p0, p1, heights, places);
     if !frustum.intersects_box(min.as_vec3(), max.as_vec3()) {
         return Visibility::Outside;
     }

@@ -10,7 +10,7 @@
 //! and every number stays small however far the camera is from the origin.
 
 use crate::camera::Camera;
-use crate::earth::{EarthFrame, NodePlace};
+use crate::earth::{EarthFrame, NodePlace, PlaceCache};
 use crate::lod::{LevelRings, TileKey};
 use crate::tiles::block::{BLOCK_ALIGNMENT, INDEX_BYTES};
 use crate::tiles::errors::MeshErrors;
@@ -338,6 +338,8 @@ pub struct DrawList {
     pub cluster_morph: ClusterMorph,
     /// In which order clusters are drawn.
     pub cluster_order: ClusterOrder,
+    /// A projected grid's node series, across frames.
+    pub places: PlaceCache,
 }
 
 /// What [`skirt_edges`] needs of a neighbour.
@@ -415,6 +417,7 @@ impl DrawList {
             members: Vec::with_capacity(tiles),
             cluster_morph: ClusterMorph::PerMember,
             cluster_order: ClusterOrder::ByBase,
+            places: PlaceCache::default(),
         }
     }
 
@@ -465,8 +468,9 @@ impl DrawList {
         self.members.clear();
         self.drawn.extend(draws.iter().map(DrawnTile::of));
         self.drawn.sort_unstable_by_key(|d| d.key);
+        self.places.next_frame(frame.earth.as_ref());
         for draw in draws {
-            let tile = tile_uniforms(draw, &frame, rings, &geometry, &self.drawn);
+            let tile = tile_uniforms(draw, &frame, rings, &geometry, &self.drawn, &mut self.places);
             self.tiles.push(tile);
         }
         self.sort_front_to_back(geometry.grid_size);
@@ -507,6 +511,7 @@ fn tile_uniforms(
     rings: &LevelRings,
     geometry: &TileGeometry<'_>,
     drawn: &[DrawnTile],
+    places: &mut PlaceCache,
 ) -> TileUniforms {
     let key = draw.key;
     let step = 1i64 << key.level;
@@ -538,7 +543,7 @@ fn tile_uniforms(
         index_count: draw.index_count,
         no_data: draw.coverage != TileCoverage::Full,
         place: frame.earth.map_or(NodePlace::default(), |earth| {
-            earth.place(node_centre(key, geometry.grid_size, geometry.node_size))
+            earth.place_with(node_centre(key, geometry.grid_size, geometry.node_size), places)
         }),
         ground: None,
     };
