@@ -90,8 +90,9 @@ pub struct EarthView {
 
 /// Why a tile is not drawn, or how far it is.
 enum Visibility {
-    /// Inside the frustum and above the horizon: distance and height bounds.
-    Visible(f64, (f32, f32)),
+    /// Inside the frustum and above the horizon: distance to the box and to
+    /// its farthest corner, and height bounds.
+    Visible(f64, f64, (f32, f32)),
     /// Outside the frustum.
     Outside,
     /// Inside the frustum but hidden below the horizon.
@@ -148,7 +149,13 @@ impl TileSelector {
         let root = (view.rings.levels() - 1) as u8;
         self.places.next_frame(view.earth.as_ref().map(|e| &e.frame));
         if let Some(life) = &mut self.life {
-            life.begin(view.eye, view.rings.levels(), |l| view.rings.split_distance(l));
+            // On the ellipsoid the eye's travel is the earth's (ECEF), and
+            // the boxes turn with the camera's axes.
+            let (eye, axes) = match &view.earth {
+                Some(earth) => (earth.frame.eye(), Some(earth.frame.axes())),
+                None => (view.eye, None),
+            };
+            life.begin(eye, axes, view.rings.levels(), |l| view.rings.split_distance(l));
         }
         let [nx, ny] = tiles_at(terrain.posts(), self.config.grid_size, root);
         for y in (0..ny).rev() {
@@ -157,8 +164,8 @@ impl TileSelector {
             }
         }
         while let Some(key) = self.stack.pop() {
-            let (distance, bounds) = match self.visibility(key, view, terrain) {
-                Visibility::Visible(distance, bounds) => (distance, bounds),
+            let (distance, far, bounds) = match self.visibility(key, view, terrain) {
+                Visibility::Visible(distance, far, bounds) => (distance, far, bounds),
                 Visibility::Outside => {
                     self.culled += 1;
                     continue;
@@ -170,7 +177,7 @@ impl TileSelector {
             };
             // Children replace this tile on the stack; keep room for the worst case.
             let room = self.selected.len() + self.stack.len() + 4 <= self.config.max_tiles;
-            let split = key.level > 0 && self.split_test(key, distance, bounds, view);
+            let split = key.level > 0 && self.split_test(key, (distance, far), bounds, view);
             if split && room && terrain.has_finer_data(key, self.config.grid_size) {
                 let [nx, ny] = tiles_at(terrain.posts(), self.config.grid_size, key.level - 1);
                 for child in key.children().into_iter().rev() {
@@ -185,12 +192,13 @@ impl TileSelector {
         &self.selected
     }
 
-    /// Whether a tile of level above 0, `distance` from the eye, is inside
-    /// its ring: kept from its valid life while that lasts.
+    /// Whether a tile of level above 0, `distance` from the eye (and `far`
+    /// from its box's farthest corner), is inside its ring: kept from its
+    /// valid life while that lasts.
     fn split_test(
         &mut self,
         key: TileKey,
-        distance: f64,
+        (distance, far): (f64, f64),
         bounds: (f32, f32),
         view: &View<'_>,
     ) -> bool {
@@ -198,7 +206,7 @@ impl TileSelector {
         match &mut self.life {
             None => distance < ring,
             Some(life) => {
-                let split = life.splits(key, bounds, ring, || distance);
+                let split = life.splits(key, bounds, ring, || (distance, far));
                 // The distance is at hand anyway: check the kept outcome.
                 debug_assert_eq!(split, distance < ring, "a stale split test kept for {key:?}");
                 split
@@ -238,7 +246,7 @@ impl TileSelector {
         if hidden {
             Visibility::BelowHorizon
         } else {
-            Visibility::Visible(distance, bounds)
+            Visibility::Visible(distance, far_corner(min, max), bounds)
         }
     }
 }
@@ -309,7 +317,7 @@ fn earth_visibility(
     if hidden {
         Visibility::BelowHorizon
     } else {
-        Visibility::Visible(box_distance(min, max), bounds)
+        Visibility::Visible(box_distance(min, max), far_corner(min, max), bounds)
     }
 }
 
@@ -324,6 +332,11 @@ fn box_of(
     let min = DVec3::new(key.x as f64 * span * sx, key.y as f64 * span * sy, lo_h as f64);
     let max = DVec3::new(min.x + span * sx, min.y + span * sy, hi_h as f64);
     (min - eye, max - eye)
+}
+
+/// Distance from the origin to the farthest corner of the box `[min, max]`.
+fn far_corner(min: DVec3, max: DVec3) -> f64 {
+    min.abs().max(max.abs()).length()
 }
 
 /// Distance from the origin to the box `[min, max]`.
