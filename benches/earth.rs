@@ -167,7 +167,8 @@ impl Flyer {
         let mut config = DisplayConfig::new(GlBackend::Egl, SIZE);
         config.fov_x_deg = FOV_X_DEG;
         config.memory_budget_bytes = Some(MEMORY_BYTES);
-        config.scene.lod.max_travel_m = Some(case.path.max_travel_per_frame(120).max(1.0));
+        let travel = case.path.max_travel_per_frame_over(120, earth.as_ref());
+        config.scene.lod.max_travel_m = Some(travel.max(1.0));
         config.scene.earth = earth;
         let mut pipeline = config.pipeline();
         pipeline.loader = LoaderMode::Inline;
