@@ -5,6 +5,7 @@
 //! outline), at the equator, at 60 N (where the chart overstates east-west
 //! distances twice), near the pole and across the grid's seam; the chart's
 //! wanted set, for comparison, misses the fine nodes east and west at 60 N.
+//! A Web Mercator grid at 60 N is measured on the earth too.
 //! Lookups under a viewer just west of the seam answer from the finest
 //! data.
 
