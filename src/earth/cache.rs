@@ -21,7 +21,6 @@ use glam::{DMat3, DVec3};
 
 use super::ellipsoid;
 use super::expansion::Expansion;
-use super::frame::EarthFrame;
 use super::placement::ProjectedLattice;
 
 /// A patch of a projected grid sampled on an `n` x `n` lattice of posts:
@@ -139,9 +138,9 @@ pub struct PlaceCache {
 }
 
 impl PlaceCache {
-    /// Starts a frame drawn with `frame` (`None`: in the chart).
-    pub fn next_frame(&mut self, frame: Option<&EarthFrame>) {
-        let lattice = frame.and_then(EarthFrame::projected_lattice);
+    /// Starts a frame of the projected grid `lattice` (`None`: a
+    /// geographic grid, or the chart; [`super::EarthFrame::projected_lattice`]).
+    pub fn next_frame(&mut self, lattice: Option<ProjectedLattice>) {
         if lattice != self.lattice {
             self.nodes.clear();
             self.patches.clear();
@@ -151,9 +150,9 @@ impl PlaceCache {
         self.patches.next_frame();
     }
 
-    /// Whether it was started ([`Self::next_frame`]) for `frame`'s grid.
-    pub fn serves(&self, frame: &EarthFrame) -> bool {
-        self.lattice == frame.projected_lattice()
+    /// Whether it was started ([`Self::next_frame`]) for `lattice`.
+    pub fn serves(&self, lattice: Option<ProjectedLattice>) -> bool {
+        self.lattice == lattice
     }
 
     /// The node centred on level-0 post `centre` (`None` but for a
@@ -174,62 +173,5 @@ impl PlaceCache {
     /// Entries held (both frames'), nodes and patches.
     pub fn len(&self) -> (usize, usize) {
         (self.nodes.len(), self.patches.len())
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::earth::GridPlacement;
-    use crate::geo::{Crs, GeoRef};
-    use glam::DVec3;
-
-    fn utm() -> GridPlacement {
-        let georef = GeoRef {
-            crs: Crs::Projected { epsg: Some(32637) },
-            origin: [250_000.0, 4_000_000.0],
-            spacing: [30.0; 2],
-        };
-        GridPlacement::new(&georef, [16_385, 16_385], [30.0; 2])
-    }
-
-    fn frame(placement: &GridPlacement, eye_post: [f64; 2]) -> EarthFrame {
-        let chart = placement.chart_of_post(eye_post);
-        let eye = DVec3::new(chart[0], chart[1], 3000.0);
-        EarthFrame::new(placement, eye, eye_post.map(|p| p as i64)).expect("placed")
-    }
-
-    /// Cached places and boxes are the uncached ones, bit for bit, frame
-    /// after frame as the eye moves; entries a frame and the next do not
-    /// use are dropped, and a geographic frame caches nothing.
-    #[test]
-    fn cached_places_and_boxes_are_the_frames_own() {
-        let placement = utm();
-        let mut cache = PlaceCache::default();
-        let (p0, p1) = ([7936.0, 8064.0], [8000.0, 8128.0]);
-        for k in 0..3 {
-            let frame = frame(&placement, [8000.0 + 40.0 * k as f64, 8000.0]);
-            cache.next_frame(Some(&frame));
-            let centre = [8032, 8096];
-            assert_eq!(frame.place_with(centre, &mut cache), frame.place(centre));
-            let heights = (-50.0, 2500.0);
-            assert_eq!(
-                frame.camera_box_with(p0, p1, heights, &mut cache),
-                frame.camera_box(p0, p1, heights)
-            );
-            assert_eq!(cache.len(), (1, 1), "frame {k}");
-        }
-        let frame = frame(&placement, [8000.0, 8000.0]);
-        cache.next_frame(Some(&frame));
-        assert_eq!(cache.len(), (1, 1), "last frame's entries kept one frame");
-        cache.next_frame(Some(&frame));
-        assert_eq!(cache.len(), (0, 0), "unused two frames: dropped");
-        let georef = GeoRef { crs: Crs::Geographic, origin: [0.0, -90.0], spacing: [0.25; 2] };
-        let global = GridPlacement::new(&georef, [1441, 721], georef.spacing_m([1441, 721]));
-        let geographic =
-            EarthFrame::new(&global, DVec3::new(1e5, 2e6, 3000.0), [10, 200]).expect("placed");
-        cache.next_frame(Some(&geographic));
-        assert_eq!(cache.node([20, 210]), None);
-        assert!(cache.patch([0.0, 0.0], [8.0, 8.0]).is_none());
     }
 }

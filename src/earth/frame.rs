@@ -154,7 +154,7 @@ impl EarthFrame {
             Lattice::Geographic { .. } => self.place(centre),
             Lattice::Projected(_) => {
                 debug_assert!(
-                    cache.serves(self),
+                    cache.serves(self.projected_lattice()),
                     "the cache was not started for this frame's grid"
                 );
                 match cache.node(centre) {
@@ -223,7 +223,10 @@ impl EarthFrame {
         heights: (f64, f64),
         cache: &mut PlaceCache,
     ) -> (DVec3, DVec3) {
-        debug_assert!(cache.serves(self), "the cache was not started for this frame's grid");
+        debug_assert!(
+            cache.serves(self.projected_lattice()),
+            "the cache was not started for this frame's grid"
+        );
         match cache.patch(p0, p1) {
             Some(samples) if matches!(self.lattice, Lattice::Projected(_)) => {
                 self.samples_box(samples, heights)
@@ -528,5 +531,44 @@ mod tests {
             let hav = 2.0 * (d / 2.0).sin().powi(2);
             assert!((h as f64 - hav).abs() <= 2e-7 * hav, "1 - cos {d}: {h} against {hav}");
         }
+    }
+
+    /// Cached places and boxes are the uncached ones, bit for bit, frame
+    /// after frame as the eye moves; entries a frame and the next do not
+    /// use are dropped, and a geographic frame caches nothing.
+    #[test]
+    fn cached_places_and_boxes_are_the_frames_own() {
+        let placement = utm();
+        let mut cache = PlaceCache::default();
+        let at = |placement: &GridPlacement, eye_post: [f64; 2]| {
+            let chart = placement.chart_of_post(eye_post);
+            let eye = DVec3::new(chart[0], chart[1], 3000.0);
+            EarthFrame::new(placement, eye, eye_post.map(|p| p as i64)).expect("placed")
+        };
+        let (p0, p1) = ([7936.0, 8064.0], [8000.0, 8128.0]);
+        for k in 0..3 {
+            let frame = at(&placement, [8000.0 + 40.0 * k as f64, 8000.0]);
+            cache.next_frame(frame.projected_lattice());
+            let centre = [8032, 8096];
+            assert_eq!(frame.place_with(centre, &mut cache), frame.place(centre));
+            let heights = (-50.0, 2500.0);
+            assert_eq!(
+                frame.camera_box_with(p0, p1, heights, &mut cache),
+                frame.camera_box(p0, p1, heights)
+            );
+            assert_eq!(cache.len(), (1, 1), "frame {k}");
+        }
+        let frame = at(&placement, [8000.0, 8000.0]);
+        cache.next_frame(frame.projected_lattice());
+        assert_eq!(cache.len(), (1, 1), "last frame's entries kept one frame");
+        cache.next_frame(frame.projected_lattice());
+        assert_eq!(cache.len(), (0, 0), "unused two frames: dropped");
+        let georef = GeoRef { crs: Crs::Geographic, origin: [0.0, -90.0], spacing: [0.25; 2] };
+        let global = GridPlacement::new(&georef, [1441, 721], georef.spacing_m([1441, 721]));
+        let geographic =
+            EarthFrame::new(&global, DVec3::new(1e5, 2e6, 3000.0), [10, 200]).expect("placed");
+        cache.next_frame(geographic.projected_lattice());
+        assert_eq!(cache.node([20, 210]), None);
+        assert!(cache.patch([0.0, 0.0], [8.0, 8.0]).is_none());
     }
 }

@@ -147,7 +147,7 @@ impl TileSelector {
         self.culled = 0;
         self.horizon_culled = 0;
         let root = (view.rings.levels() - 1) as u8;
-        self.places.next_frame(view.earth.as_ref().map(|e| &e.frame));
+        self.places.next_frame(view.earth.and_then(|e| e.frame.projected_lattice()));
         if let Some(life) = &mut self.life {
             // On the ellipsoid the eye's travel is the earth's (ECEF), and
             // the boxes turn with the camera's axes.

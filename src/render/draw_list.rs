@@ -468,7 +468,7 @@ impl DrawList {
         self.members.clear();
         self.drawn.extend(draws.iter().map(DrawnTile::of));
         self.drawn.sort_unstable_by_key(|d| d.key);
-        self.places.next_frame(frame.earth.as_ref());
+        self.places.next_frame(frame.earth.and_then(|e| e.projected_lattice()));
         for draw in draws {
             let tile = tile_uniforms(draw, &frame, rings, &geometry, &self.drawn, &mut self.places);
             self.tiles.push(tile);
