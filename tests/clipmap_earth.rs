@@ -5,6 +5,7 @@
 //! outline), at the equator, at 60 N (where the chart overstates east-west
 //! distances twice), near the pole and across the grid's seam; the chart's
 //! wanted set, for comparison, misses the fine nodes east and west at 60 N.
+//! A Web Mercator grid at 60 N is measured on the earth too.
 //! Lookups under a viewer just west of the seam answer from the finest
 //! data.
 
@@ -39,6 +40,31 @@ impl Globe {
             spacing_m,
         };
         Globe { layout, placement: GridPlacement::new(&georef, posts, spacing_m) }
+    }
+}
+
+impl Globe {
+    /// A Web Mercator (EPSG:3857) grid of 500 m posts, 1024 km of the
+    /// plane a side centred on 60 N 10 E, where the plane is twice the earth.
+    fn mercator() -> Globe {
+        let posts = [2049, 2049];
+        let (x, y) = (1_113_194.9, 8_399_737.9);
+        let georef = GeoRef {
+            crs: Crs::Projected { epsg: Some(3857) },
+            origin: [x - 512_000.0, y - 512_000.0],
+            spacing: [500.0; 2],
+        };
+        let spacing_m = georef.spacing_m(posts);
+        let layout = NodeLayout {
+            levels: NodeLayout::levels_for(posts, 64),
+            node_size: 64,
+            border: 1,
+            posts,
+            spacing_m,
+        };
+        let placement = GridPlacement::new(&georef, posts, spacing_m);
+        assert!(placement.projected_lattice().is_some(), "placed by its projection");
+        Globe { layout, placement }
     }
 }
 
@@ -191,6 +217,40 @@ fn wanted_nodes_are_those_within_reach_on_the_earth() {
     let seam = level0(&clipmap, &globe);
     let [nx, _] = globe.layout.nodes_at(0);
     assert!(seam.iter().any(|n| n[0] == 0) && seam.iter().any(|n| n[0] == nx - 1));
+}
+
+/// A projected grid's wanted set is measured on the earth too: over Web
+/// Mercator at 60 N (the plane twice the earth) the wanted level-0 nodes
+/// are those within reach on the earth, about three times the plane's
+/// (four times the area, less the nodes cut at the edge of reach).
+#[test]
+fn a_projected_grids_wanted_nodes_are_within_reach_on_the_earth() {
+    let globe = Arc::new(Globe::mercator());
+    let radius =
+        VIEW.load_distance * globe.layout.node_size_m(0)[0].min(globe.layout.node_size_m(0)[1]);
+    let (lat, lon) = (60.0f64, 10.0f64);
+    let eye = ellipsoid::to_ecef(lat.to_radians(), lon.to_radians(), 3000.0);
+    let (clipmap, _, _) = settled(&globe, lat, lon, true);
+    let wanted = level0(&clipmap, &globe);
+    let [nx, ny] = globe.layout.nodes_at(0);
+    for y in 0..ny {
+        for x in 0..nx {
+            let is = wanted.contains(&[x, y]);
+            if !is && !could_reach(&globe, eye, x, y, radius) {
+                continue;
+            }
+            let d = brute_distance(&globe, eye, lat, lon, x, y);
+            assert!(is || d > 0.997 * radius, "node {x},{y} at {d:.0} m not wanted");
+            assert!(!is || d < 1.003 * radius, "node {x},{y} at {d:.0} m wanted");
+        }
+    }
+    let (chart, _, _) = settled(&globe, lat, lon, false);
+    let in_chart = level0(&chart, &globe).len();
+    println!(
+        "Web Mercator at 60 N: {} level-0 nodes wanted, {in_chart} in the plane",
+        wanted.len()
+    );
+    assert!(2 * wanted.len() >= 5 * in_chart, "{} against {in_chart}", wanted.len());
 }
 
 #[test]

@@ -132,10 +132,12 @@ impl ViewArgs {
     }
 
     /// Applies tau, the field of view, the budget and the valid life's
-    /// declared travel (`--max-speed`, else `path`'s fastest leg, times
+    /// declared travel (`--max-speed`, else `path`'s fastest leg, on the
+    /// earth when the display draws there, times
     /// `frame_interval_s`) to `config`.
     fn configure(&self, config: &mut DisplayConfig, path: &FlightPath, frame_interval_s: f64) {
-        let speed = self.max_speed.unwrap_or_else(|| path.max_speed());
+        let speed =
+            self.max_speed.unwrap_or_else(|| path.max_speed_over(config.scene.earth.as_ref()));
         self.configure_at(config, speed, frame_interval_s);
     }
 

@@ -1,5 +1,5 @@
-//! The wanted set on the ellipsoid ([`EarthMetric`]): for a geographic grid
-//! drawn on the earth, a node is wanted when the distance from the viewer to
+//! The wanted set on the ellipsoid ([`EarthMetric`]): for a grid drawn on
+//! the earth (geographic, or projected by a known projection), a node is wanted when the distance from the viewer to
 //! the nearest point of its footprint, on the earth, is within its level's
 //! load radius, and that distance orders the memory budget. The chart
 //! (equirectangular at the grid's centre latitude) overstates east-west
@@ -7,23 +7,35 @@
 //! without bound near a pole), so chart distances load too few fine nodes
 //! east and west of the viewer, where the display's rings (measured on the
 //! ellipsoid) use them. A grid that wraps is searched a turn west and east
-//! too, so the nodes across its seam are wanted next to the viewer.
+//! too, so the nodes across its seam are wanted next to the viewer. A
+//! projected grid's footprint is a rectangle in its projection's plane: its
+//! nearest point is taken there (the projections placed are conformal and
+//! their scale changes by under 1e-3 across a load radius in a UTM zone),
+//! then placed on the ellipsoid, so its distance is the earth's, not the
+//! plane's (Web Mercator's plane is twice the earth at 60 N).
 
 use std::f64::consts::FRAC_PI_2;
 
 use glam::DVec3;
 
 use super::quadtree::ClippedQuadtree;
-use crate::earth::{ellipsoid, normalize_longitude, GridPlacement};
+use crate::earth::{ellipsoid, normalize_longitude, GridPlacement, ProjectedLattice};
 use crate::node::{NodeId, NodeLayout};
 
-/// Distances on the ellipsoid for one geographic grid.
+/// Distances on the ellipsoid for one grid.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct EarthMetric {
     placement: GridPlacement,
+    lattice: Lattice,
+}
+
+/// How the metric finds a footprint's nearest point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Lattice {
     /// Longitude and latitude of post (0, 0) and between posts, radians.
-    origin: [f64; 2],
-    step: [f64; 2],
+    Geographic { origin: [f64; 2], step: [f64; 2] },
+    /// A projected grid: nearest in the projection's plane.
+    Projected(ProjectedLattice),
 }
 
 /// The viewer of one frame on the earth.
@@ -38,11 +50,16 @@ struct Viewer {
 }
 
 impl EarthMetric {
-    /// The metric of a geographic grid; `None` for a projected one (drawn
-    /// in the chart, where chart distances are the display's).
+    /// The metric of a geographic grid or one of a known projection;
+    /// `None` for a grid placed by assumption (drawn in the chart, where
+    /// chart distances are the display's).
     pub(crate) fn new(placement: GridPlacement) -> Option<EarthMetric> {
-        let (origin, step) = placement.geographic_lattice()?;
-        Some(EarthMetric { placement, origin, step })
+        let lattice = match (placement.geographic_lattice(), placement.projected_lattice()) {
+            (Some((origin, step)), _) => Lattice::Geographic { origin, step },
+            (None, Some(projected)) => Lattice::Projected(projected),
+            (None, None) => return None,
+        };
+        Some(EarthMetric { placement, lattice })
     }
 
     /// Level-0 posts in one turn of longitude, when the grid wraps.
@@ -126,11 +143,19 @@ impl EarthMetric {
         let last = self.placement.posts().map(|p| p.saturating_sub(1) as f64);
         let (u0, u1) = (x as f64 * span, ((x + 1) as f64 * span).min(last[0]));
         let (v0, v1) = (y as f64 * span, ((y + 1) as f64 * span).min(last[1]));
-        let lat_of = |v: f64| (self.origin[1] + v * self.step[1]).clamp(-FRAC_PI_2, FRAC_PI_2);
+        let (origin, step) = match self.lattice {
+            Lattice::Geographic { origin, step } => (origin, step),
+            Lattice::Projected(_) => {
+                // Nearest in the plane, placed on the ellipsoid.
+                let (u, v) = (viewer.post[0].clamp(u0, u1), viewer.post[1].clamp(v0, v1));
+                return viewer.eye.distance(self.placement.ecef(u, v, viewer.ground_m));
+            }
+        };
+        let lat_of = |v: f64| (origin[1] + v * step[1]).clamp(-FRAC_PI_2, FRAC_PI_2);
         let (lat_a, lat_b) = (lat_of(v0), lat_of(v1));
         let (lat_lo, lat_hi) = (lat_a.min(lat_b), lat_a.max(lat_b));
-        let lon_centre = self.origin[0] + 0.5 * (u0 + u1) * self.step[0];
-        let half = 0.5 * (u1 - u0) * self.step[0].abs();
+        let lon_centre = origin[0] + 0.5 * (u0 + u1) * step[0];
+        let half = 0.5 * (u1 - u0) * step[0].abs();
         let off = normalize_longitude((viewer.lon - lon_centre).to_degrees()).to_radians();
         let (lat, lon) = if off.abs() <= half {
             (viewer.lat.clamp(lat_lo, lat_hi), viewer.lon)

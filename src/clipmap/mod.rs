@@ -227,8 +227,8 @@ pub struct Clipmap {
     /// Nodes given up after [`READ_ATTEMPTS`] reads failed with I/O errors.
     unreadable_nodes: u64,
     frame: u64,
-    /// Distances on the ellipsoid, for a geographic grid drawn on the
-    /// earth ([`Self::set_earth`]); `None`: chart distances.
+    /// Distances on the ellipsoid, for a grid drawn on the earth
+    /// ([`Self::set_earth`]); `None`: chart distances.
     earth: Option<EarthMetric>,
     /// Chart metres in one turn of longitude, when the grid wraps: nodes
     /// across its seam are wanted too, and views and lookups are brought
@@ -315,8 +315,8 @@ impl Clipmap {
     }
 
     /// Measures the wanted set on the ellipsoid where the grid `placement`
-    /// places is drawn on it (a geographic grid; `None` or a projected grid:
-    /// in the chart). A grid whose columns span 360 degrees wraps: the nodes
+    /// places is drawn on it (a geographic grid or one of a known
+    /// projection; `None` or a grid placed by assumption: in the chart). A grid whose columns span 360 degrees wraps: the nodes
     /// across its seam are wanted next to the viewer, and views and lookups
     /// are brought into its turn.
     pub fn set_earth(&mut self, placement: Option<GridPlacement>) {

@@ -25,14 +25,14 @@
 //!
 //! **A projected grid** (a known projection: UTM, Web Mercator) is placed
 //! the same way but for its latitude and longitude differences, which come
-//! from its node's [`Expansion`] (a third-order series in the post offset,
+//! from its node's [`Expansion`](super::Expansion) (a third-order series in the post offset,
 //! its coefficients from the exact inverse projection); grids of unknown
 //! projection stay in the chart.
 
 use glam::{DMat3, DQuat, DVec3, Vec3};
 
+use super::cache::{NodeSeries, PatchSamples, PlaceCache};
 use super::ellipsoid::{self, A, E2};
-use super::expansion::Expansion;
 use super::placement::{GridPlacement, ProjectedLattice};
 
 /// Where the camera and the grid are for one frame (f64, CPU only).
@@ -55,7 +55,7 @@ enum Lattice {
     /// between neighbouring posts, east and north, radians.
     Geographic { origin: [f64; 2], step: [f64; 2] },
     /// A projected grid of a known projection: by its inverse (exact), and
-    /// per node by its [`Expansion`] (the shader).
+    /// per node by its [`Expansion`](super::Expansion) (the shader).
     Projected(ProjectedLattice),
 }
 
@@ -70,7 +70,7 @@ pub struct NodePlace {
     /// The rotation from the centre's ENU axes to the camera's, as a unit
     /// quaternion (x, y, z, w).
     pub rotation: [f32; 4],
-    /// A projected grid's node: its [`Expansion::uniforms`] (zero for a
+    /// A projected grid's node: its [`Expansion::uniforms`](super::Expansion::uniforms) (zero for a
     /// geographic grid).
     pub expansion: [f32; 8],
 }
@@ -133,14 +133,50 @@ impl EarthFrame {
 
     /// The placement of a node whose centre is level-0 post `centre`.
     pub fn place(&self, centre: [i64; 2]) -> NodePlace {
-        let post = centre.map(|c| c as f64);
-        let (lat, lon) = self.geodetic(post);
-        let offset = self.to_camera * (ellipsoid::to_ecef(lat, lon, 0.0) - self.eye);
-        let rotation = DQuat::from_mat3(&(self.to_camera * ellipsoid::enu_to_ecef(lat, lon)));
-        let expansion = match &self.lattice {
-            Lattice::Geographic { .. } => [0.0; 8],
-            Lattice::Projected(projected) => Expansion::new(projected, post).uniforms(),
-        };
+        match &self.lattice {
+            Lattice::Geographic { .. } => {
+                let (lat, lon) = self.geodetic(centre.map(|c| c as f64));
+                let (surface, enu) =
+                    (ellipsoid::to_ecef(lat, lon, 0.0), ellipsoid::enu_to_ecef(lat, lon));
+                self.place_at(centre, surface, enu, [0.0; 8])
+            }
+            Lattice::Projected(projected) => {
+                let node = NodeSeries::new(projected, centre);
+                self.place_at(centre, node.surface, node.enu, node.uniforms)
+            }
+        }
+    }
+
+    /// [`Self::place`] with a projected grid's node centre and series from
+    /// `cache` (made once a node, not once a tile and frame).
+    pub fn place_with(&self, centre: [i64; 2], cache: &mut PlaceCache) -> NodePlace {
+        match &self.lattice {
+            Lattice::Geographic { .. } => self.place(centre),
+            Lattice::Projected(_) => {
+                debug_assert!(
+                    cache.serves(self.projected_lattice()),
+                    "the cache was not started for this frame's grid"
+                );
+                match cache.node(centre) {
+                    Some(node) => self.place_at(centre, node.surface, node.enu, node.uniforms),
+                    None => self.place(centre),
+                }
+            }
+        }
+    }
+
+    /// The placement of the node centred on `centre`, whose surface point
+    /// is `surface` (ECEF) with east-north-up axes `enu`, and whose series
+    /// uniforms (a projected grid's) are `expansion`.
+    fn place_at(
+        &self,
+        centre: [i64; 2],
+        surface: DVec3,
+        enu: DMat3,
+        expansion: [f32; 8],
+    ) -> NodePlace {
+        let offset = self.to_camera * (surface - self.eye);
+        let rotation = DQuat::from_mat3(&(self.to_camera * enu));
         NodePlace {
             centre: [0, 1].map(|k| (centre[k] - self.anchor[k]) as f32),
             offset: offset.as_vec3().to_array(),
@@ -163,19 +199,53 @@ impl EarthFrame {
     /// away from its chord between samples (a point inside a lattice cell
     /// is on an arc between two points on arcs between samples). What the
     /// selector culls, rings and orders tiles by on the ellipsoid.
-    pub fn camera_box(&self, p0: [f64; 2], p1: [f64; 2], (lo, hi): (f64, f64)) -> (DVec3, DVec3) {
-        let span = self.point(p0, 0.0).distance(self.point(p1, 0.0));
-        let n = ((span / 55_000.0).ceil() as usize).clamp(2, 32);
-        let (min, max) = match self.lattice {
+    pub fn camera_box(&self, p0: [f64; 2], p1: [f64; 2], heights: (f64, f64)) -> (DVec3, DVec3) {
+        match &self.lattice {
             // Latitude and longitude depend on both post numbers.
-            Lattice::Projected(_) => self.sampled_box(p0, p1, n, (lo, hi)),
-            Lattice::Geographic { .. } => self.lattice_box(p0, p1, n, (lo, hi)),
-        };
-        // The smallest radius of curvature (the meridian's at the equator)
-        // bends most; the highest surface is farthest out.
-        let step = span / n as f64 / SMALLEST_RADIUS_M;
-        let bow = 2.0 * (LARGEST_RADIUS_M + hi.max(0.0)) * (1.0 - (step / 2.0).cos());
-        (min - DVec3::splat(bow), max + DVec3::splat(bow))
+            Lattice::Projected(projected) => {
+                self.samples_box(&PatchSamples::new(projected, p0, p1), heights)
+            }
+            Lattice::Geographic { .. } => {
+                let span = self.point(p0, 0.0).distance(self.point(p1, 0.0));
+                let n = ((span / 55_000.0).ceil() as usize).clamp(2, 32);
+                let (min, max) = self.lattice_box(p0, p1, n, heights);
+                grown((min, max), span / n as f64, heights.1)
+            }
+        }
+    }
+
+    /// [`Self::camera_box`] with a projected grid's samples from `cache`
+    /// (made once a tile, not once a frame).
+    pub fn camera_box_with(
+        &self,
+        p0: [f64; 2],
+        p1: [f64; 2],
+        heights: (f64, f64),
+        cache: &mut PlaceCache,
+    ) -> (DVec3, DVec3) {
+        debug_assert!(
+            cache.serves(self.projected_lattice()),
+            "the cache was not started for this frame's grid"
+        );
+        match cache.patch(p0, p1) {
+            Some(samples) if matches!(self.lattice, Lattice::Projected(_)) => {
+                self.samples_box(samples, heights)
+            }
+            _ => self.camera_box(p0, p1, heights),
+        }
+    }
+
+    /// A projected grid's lattice, `None` for a geographic grid.
+    pub fn projected_lattice(&self) -> Option<ProjectedLattice> {
+        match self.lattice {
+            Lattice::Projected(projected) => Some(projected),
+            Lattice::Geographic { .. } => None,
+        }
+    }
+
+    /// The camera's axes: ECEF to east, north and up at the eye.
+    pub fn axes(&self) -> DMat3 {
+        self.to_camera
     }
 
     /// The box of a geographic grid's patch sampled on an `n` x `n`
@@ -212,30 +282,18 @@ impl EarthFrame {
         (min, max)
     }
 
-    /// The box of a projected grid's patch sampled on an `n` x `n` lattice
-    /// of posts at both heights (its latitude and longitude depend on both
-    /// post numbers).
-    fn sampled_box(
-        &self,
-        p0: [f64; 2],
-        p1: [f64; 2],
-        n: usize,
-        (lo, hi): (f64, f64),
-    ) -> (DVec3, DVec3) {
+    /// The box of a projected grid's patch from its samples at both
+    /// heights (its latitude and longitude depend on both post numbers).
+    fn samples_box(&self, samples: &PatchSamples, (lo, hi): (f64, f64)) -> (DVec3, DVec3) {
         let (mut min, mut max) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-        for i in 0..=n {
-            for j in 0..=n {
-                let (fu, fv) = (i as f64 / n as f64, j as f64 / n as f64);
-                let post = [p0[0] + (p1[0] - p0[0]) * fu, p0[1] + (p1[1] - p0[1]) * fv];
-                let (lat, lon) = self.geodetic(post);
-                for h in [lo, hi] {
-                    let p = self.camera_of(ellipsoid::to_ecef(lat, lon, h));
-                    min = min.min(p);
-                    max = max.max(p);
-                }
+        for &[surface, up] in samples.points.iter() {
+            for h in [lo, hi] {
+                let p = self.camera_of(surface + up * h);
+                min = min.min(p);
+                max = max.max(p);
             }
         }
-        (min, max)
+        grown((min, max), samples.span / samples.n as f64, hi)
     }
 
     /// The ECEF point of camera-relative point `d` (camera axes).
@@ -254,6 +312,18 @@ impl EarthFrame {
 const SMALLEST_RADIUS_M: f64 = 6_335_439.0;
 /// The polar radius of curvature, `a^2 / b`, metres: the largest.
 const LARGEST_RADIUS_M: f64 = 6_399_594.0;
+
+/// The box `[min, max]` of samples `step_m` apart grown on every side by
+/// twice the most a surface arc bows away from its chord between samples
+/// (a point inside a lattice cell is on an arc between two points on arcs
+/// between samples), at heights up to `hi`. The smallest radius of
+/// curvature (the meridian's at the equator) bends most; the highest
+/// surface is farthest out.
+fn grown((min, max): (DVec3, DVec3), step_m: f64, hi: f64) -> (DVec3, DVec3) {
+    let step = step_m / SMALLEST_RADIUS_M;
+    let bow = 2.0 * (LARGEST_RADIUS_M + hi.max(0.0)) * (1.0 - (step / 2.0).cos());
+    (min - DVec3::splat(bow), max + DVec3::splat(bow))
+}
 
 impl NodePlace {
     /// The member uniforms' two vec4 it fills: the offset and the centre's
@@ -307,7 +377,7 @@ impl NodePlace {
 
     /// A projected grid's vertex: its longitude and latitude differences
     /// from the node's centre by the node's series (`terrain.vert`'s
-    /// `projected_offsets`; [`Expansion::offsets`] in f32).
+    /// `projected_offsets`; [`Expansion::offsets`](super::Expansion::offsets) in f32).
     fn projected_offsets(&self, earth: &[f32; 8], post: [f32; 2]) -> [f32; 2] {
         let e = &self.expansion;
         let z = [0, 1].map(|k| (post[k] - self.centre[k]) * earth[k]);
@@ -461,5 +531,44 @@ mod tests {
             let hav = 2.0 * (d / 2.0).sin().powi(2);
             assert!((h as f64 - hav).abs() <= 2e-7 * hav, "1 - cos {d}: {h} against {hav}");
         }
+    }
+
+    /// Cached places and boxes are the uncached ones, bit for bit, frame
+    /// after frame as the eye moves; entries a frame and the next do not
+    /// use are dropped, and a geographic frame caches nothing.
+    #[test]
+    fn cached_places_and_boxes_are_the_frames_own() {
+        let placement = utm();
+        let mut cache = PlaceCache::default();
+        let at = |placement: &GridPlacement, eye_post: [f64; 2]| {
+            let chart = placement.chart_of_post(eye_post);
+            let eye = DVec3::new(chart[0], chart[1], 3000.0);
+            EarthFrame::new(placement, eye, eye_post.map(|p| p as i64)).expect("placed")
+        };
+        let (p0, p1) = ([7936.0, 8064.0], [8000.0, 8128.0]);
+        for k in 0..3 {
+            let frame = at(&placement, [8000.0 + 40.0 * k as f64, 8000.0]);
+            cache.next_frame(frame.projected_lattice());
+            let centre = [8032, 8096];
+            assert_eq!(frame.place_with(centre, &mut cache), frame.place(centre));
+            let heights = (-50.0, 2500.0);
+            assert_eq!(
+                frame.camera_box_with(p0, p1, heights, &mut cache),
+                frame.camera_box(p0, p1, heights)
+            );
+            assert_eq!(cache.len(), (1, 1), "frame {k}");
+        }
+        let frame = at(&placement, [8000.0, 8000.0]);
+        cache.next_frame(frame.projected_lattice());
+        assert_eq!(cache.len(), (1, 1), "last frame's entries kept one frame");
+        cache.next_frame(frame.projected_lattice());
+        assert_eq!(cache.len(), (0, 0), "unused two frames: dropped");
+        let georef = GeoRef { crs: Crs::Geographic, origin: [0.0, -90.0], spacing: [0.25; 2] };
+        let global = GridPlacement::new(&georef, [1441, 721], georef.spacing_m([1441, 721]));
+        let geographic =
+            EarthFrame::new(&global, DVec3::new(1e5, 2e6, 3000.0), [10, 200]).expect("placed");
+        cache.next_frame(geographic.projected_lattice());
+        assert_eq!(cache.node([20, 210]), None);
+        assert!(cache.patch([0.0, 0.0], [8.0, 8.0]).is_none());
     }
 }

@@ -6,6 +6,7 @@
 //! |---|---|
 //! | [`ellipsoid`] | geodetic latitude, longitude and height to ECEF and back (Vermeille), the geodetic normal, east-north-up frames, longitude normalisation |
 //! | [`projection`] | transverse Mercator by Krüger's series (UTM, ETRS89 / UTM) and Web Mercator, by EPSG code |
+//! | [`cache`] | [`PlaceCache`]: a projected grid's node series and tile samples, kept across frames |
 //! | [`bounds`] | oriented boxes of grid patches on the ellipsoid, the ellipsoid's horizon (for culling and distances on the earth) |
 //! | [`expansion`] | [`Expansion`]: a projected grid's posts about a node's centre as a short conformal series (what the shader places a projected grid's vertices with) |
 //! | [`frame`] | [`EarthFrame`]: a frame's eye and each node's placement in f64, the f32 uniforms and small-term formula the vertex shader places vertices with |
@@ -19,6 +20,7 @@
 //! to both.
 
 pub mod bounds;
+pub mod cache;
 pub mod ellipsoid;
 pub mod expansion;
 pub mod frame;
@@ -26,6 +28,7 @@ pub mod placement;
 pub mod projection;
 
 pub use bounds::{EarthBox, EllipsoidHorizon};
+pub use cache::{NodeSeries, PatchSamples, PlaceCache};
 pub use ellipsoid::{geodetic_of, normalize_longitude, Geodetic};
 pub use expansion::Expansion;
 pub use frame::{EarthFrame, NodePlace};

@@ -2,6 +2,8 @@
 
 use glam::DVec3;
 
+use crate::earth::GridPlacement;
+
 use super::columns::{Column, ValueProblem};
 use super::pose::{normalize_heading, Pose};
 
@@ -125,8 +127,31 @@ impl FlightPath {
     /// The fastest the camera moves, metres a second: positions are
     /// interpolated linearly, so the fastest leg's speed (0 for one waypoint).
     pub fn max_speed(&self) -> f64 {
+        self.max_speed_over(None)
+    }
+
+    /// [`Self::max_speed`] on the earth where `placement` places the chart
+    /// (`None`: in the chart). A leg straight in the chart is not straight
+    /// on the earth, nor at one speed: its speed is taken as the fastest of
+    /// 32 pieces' (ECEF chords over their time). The chart's scale differs
+    /// from the earth's by up to 2 to 1 (a global grid at 60 N), so a
+    /// display drawn on the ellipsoid declares its valid life's travel
+    /// from this.
+    pub fn max_speed_over(&self, placement: Option<&GridPlacement>) -> f64 {
+        const PIECES: usize = 32;
         let leg = |pair: &[Waypoint]| {
-            pair[0].pose.position.distance(pair[1].pose.position) / (pair[1].t - pair[0].t)
+            let (a, b) = (pair[0].pose.position, pair[1].pose.position);
+            let dt = pair[1].t - pair[0].t;
+            let Some(placement) = placement else { return a.distance(b) / dt };
+            let at = |s: f64| {
+                let p = a.lerp(b, s);
+                placement.ecef_of_chart([p.x, p.y], p.z)
+            };
+            (0..PIECES)
+                .map(|k| at(k as f64 / PIECES as f64).distance(at((k + 1) as f64 / PIECES as f64)))
+                .fold(0.0, f64::max)
+                * PIECES as f64
+                / dt
         };
         self.waypoints.windows(2).map(leg).fold(0.0, f64::max)
     }
@@ -135,8 +160,14 @@ impl FlightPath {
     /// ([`FlightPath::frame_times`]), metres, with a margin of one part in a
     /// thousand against rounding: the valid life's declared travel.
     pub fn max_travel_per_frame(&self, n: u32) -> f64 {
+        self.max_travel_per_frame_over(n, None)
+    }
+
+    /// [`Self::max_travel_per_frame`] on the earth where `placement` places
+    /// the chart ([`Self::max_speed_over`]).
+    pub fn max_travel_per_frame_over(&self, n: u32, placement: Option<&GridPlacement>) -> f64 {
         let interval = self.duration() / n.saturating_sub(1).max(1) as f64;
-        self.max_speed() * interval * 1.001
+        self.max_speed_over(placement) * interval * 1.001
     }
 
     /// The pose at time `t`, interpolated between the waypoints around it (see

@@ -18,7 +18,7 @@ use super::horizon::Horizon;
 use super::life::{LifeStats, ValidLife};
 use super::{LevelRings, LodConfig, TileKey};
 use crate::camera::{curvature_drop, Frustum};
-use crate::earth::{EarthFrame, EllipsoidHorizon};
+use crate::earth::{EarthFrame, EllipsoidHorizon, PlaceCache};
 use crate::node::{NodeId, NodeLayout};
 use glam::DVec3;
 
@@ -57,6 +57,8 @@ pub struct TileSelector {
     horizon_culled: usize,
     /// Valid lives of the split tests, when a travel per frame is declared.
     life: Option<ValidLife>,
+    /// A projected grid's tile samples on the ellipsoid, across frames.
+    places: PlaceCache,
 }
 
 /// A view to select tiles for: camera position, frustum and rings.
@@ -88,8 +90,9 @@ pub struct EarthView {
 
 /// Why a tile is not drawn, or how far it is.
 enum Visibility {
-    /// Inside the frustum and above the horizon: distance and height bounds.
-    Visible(f64, (f32, f32)),
+    /// Inside the frustum and above the horizon: distance to the box and to
+    /// its farthest corner, and height bounds.
+    Visible(f64, f64, (f32, f32)),
     /// Outside the frustum.
     Outside,
     /// Inside the frustum but hidden below the horizon.
@@ -106,6 +109,7 @@ impl TileSelector {
             culled: 0,
             horizon_culled: 0,
             life: config.max_travel_m.map(|m| ValidLife::new(m, config.max_tiles + 4)),
+            places: PlaceCache::default(),
         }
     }
 
@@ -143,8 +147,15 @@ impl TileSelector {
         self.culled = 0;
         self.horizon_culled = 0;
         let root = (view.rings.levels() - 1) as u8;
+        self.places.next_frame(view.earth.and_then(|e| e.frame.projected_lattice()));
         if let Some(life) = &mut self.life {
-            life.begin(view.eye, view.rings.levels(), |l| view.rings.split_distance(l));
+            // On the ellipsoid the eye's travel is the earth's (ECEF), and
+            // the boxes turn with the camera's axes.
+            let (eye, axes) = match &view.earth {
+                Some(earth) => (earth.frame.eye(), Some(earth.frame.axes())),
+                None => (view.eye, None),
+            };
+            life.begin(eye, axes, view.rings.levels(), |l| view.rings.split_distance(l));
         }
         let [nx, ny] = tiles_at(terrain.posts(), self.config.grid_size, root);
         for y in (0..ny).rev() {
@@ -153,8 +164,8 @@ impl TileSelector {
             }
         }
         while let Some(key) = self.stack.pop() {
-            let (distance, bounds) = match self.visibility(key, view, terrain) {
-                Visibility::Visible(distance, bounds) => (distance, bounds),
+            let (distance, far, bounds) = match self.visibility(key, view, terrain) {
+                Visibility::Visible(distance, far, bounds) => (distance, far, bounds),
                 Visibility::Outside => {
                     self.culled += 1;
                     continue;
@@ -166,7 +177,7 @@ impl TileSelector {
             };
             // Children replace this tile on the stack; keep room for the worst case.
             let room = self.selected.len() + self.stack.len() + 4 <= self.config.max_tiles;
-            let split = key.level > 0 && self.split_test(key, distance, bounds, view);
+            let split = key.level > 0 && self.split_test(key, (distance, far), bounds, view);
             if split && room && terrain.has_finer_data(key, self.config.grid_size) {
                 let [nx, ny] = tiles_at(terrain.posts(), self.config.grid_size, key.level - 1);
                 for child in key.children().into_iter().rev() {
@@ -181,12 +192,13 @@ impl TileSelector {
         &self.selected
     }
 
-    /// Whether a tile of level above 0, `distance` from the eye, is inside
-    /// its ring: kept from its valid life while that lasts.
+    /// Whether a tile of level above 0, `distance` from the eye (and `far`
+    /// from its box's farthest corner), is inside its ring: kept from its
+    /// valid life while that lasts.
     fn split_test(
         &mut self,
         key: TileKey,
-        distance: f64,
+        (distance, far): (f64, f64),
         bounds: (f32, f32),
         view: &View<'_>,
     ) -> bool {
@@ -194,7 +206,7 @@ impl TileSelector {
         match &mut self.life {
             None => distance < ring,
             Some(life) => {
-                let split = life.splits(key, bounds, ring, || distance);
+                let split = life.splits(key, bounds, ring, || (distance, far));
                 // The distance is at hand anyway: check the kept outcome.
                 debug_assert_eq!(split, distance < ring, "a stale split test kept for {key:?}");
                 split
@@ -203,10 +215,16 @@ impl TileSelector {
     }
 
     /// Distance to the tile's box and its height bounds, or why it is not drawn.
-    fn visibility(&self, key: TileKey, view: &View<'_>, terrain: &dyn TileBounds) -> Visibility {
+    fn visibility(
+        &mut self,
+        key: TileKey,
+        view: &View<'_>,
+        terrain: &dyn TileBounds,
+    ) -> Visibility {
         let bounds = terrain.height_bounds(key, self.config.grid_size);
         if let Some(earth) = &view.earth {
-            return earth_visibility(key, self.config.grid_size, bounds, view.frustum, earth);
+            let grid_size = self.config.grid_size;
+            return earth_visibility(key, grid_size, bounds, view.frustum, earth, &mut self.places);
         }
         let (min, max) = box_of(key, self.config.grid_size, terrain.spacing_m(), bounds, view.eye);
         let distance = box_distance(min, max);
@@ -228,7 +246,7 @@ impl TileSelector {
         if hidden {
             Visibility::BelowHorizon
         } else {
-            Visibility::Visible(distance, bounds)
+            Visibility::Visible(distance, far_corner(min, max), bounds)
         }
     }
 }
@@ -276,12 +294,13 @@ fn earth_visibility(
     bounds: (f32, f32),
     frustum: &Frustum,
     earth: &EarthView,
+    places: &mut PlaceCache,
 ) -> Visibility {
     let span = ((grid_size as u64) << key.level) as f64;
     let p0 = [key.x as f64 * span, key.y as f64 * span];
     let p1 = [p0[0] + span, p0[1] + span];
     let heights = (bounds.0 as f64, bounds.1 as f64);
-    let (min, max) = earth.frame.camera_box(p0, p1, heights);
+    let (min, max) = earth.frame.camera_box_with(p0, p1, heights, places);
     if !frustum.intersects_box(min.as_vec3(), max.as_vec3()) {
         return Visibility::Outside;
     }
@@ -298,7 +317,7 @@ fn earth_visibility(
     if hidden {
         Visibility::BelowHorizon
     } else {
-        Visibility::Visible(box_distance(min, max), bounds)
+        Visibility::Visible(box_distance(min, max), far_corner(min, max), bounds)
     }
 }
 
@@ -313,6 +332,11 @@ fn box_of(
     let min = DVec3::new(key.x as f64 * span * sx, key.y as f64 * span * sy, lo_h as f64);
     let max = DVec3::new(min.x + span * sx, min.y + span * sy, hi_h as f64);
     (min - eye, max - eye)
+}
+
+/// Distance from the origin to the farthest corner of the box `[min, max]`.
+fn far_corner(min: DVec3, max: DVec3) -> f64 {
+    min.abs().max(max.abs()).length()
 }
 
 /// Distance from the origin to the box `[min, max]`.

@@ -10,7 +10,7 @@
 //! and every number stays small however far the camera is from the origin.
 
 use crate::camera::Camera;
-use crate::earth::{EarthFrame, NodePlace};
+use crate::earth::{EarthFrame, NodePlace, PlaceCache};
 use crate::lod::{LevelRings, TileKey};
 use crate::tiles::block::{BLOCK_ALIGNMENT, INDEX_BYTES};
 use crate::tiles::errors::MeshErrors;
@@ -340,6 +340,8 @@ pub struct DrawList {
     /// Which morph range a cluster's members take (tests break it).
     #[cfg(feature = "test-support")]
     pub cluster_morph: ClusterMorph,
+    /// A projected grid's node series, across frames.
+    pub places: PlaceCache,
 }
 
 /// Where a frame's cluster draws go: the draw list's own vectors, lent to
@@ -426,6 +428,7 @@ impl DrawList {
             members: Vec::with_capacity(tiles),
             #[cfg(feature = "test-support")]
             cluster_morph: ClusterMorph::PerMember,
+            places: PlaceCache::default(),
         }
     }
 
@@ -497,8 +500,9 @@ impl DrawList {
         self.members.clear();
         self.drawn.extend(draws.iter().map(DrawnTile::of));
         self.drawn.sort_unstable_by_key(|d| d.key);
+        self.places.next_frame(frame.earth.and_then(|e| e.projected_lattice()));
         for draw in draws {
-            let tile = tile_uniforms(draw, &frame, rings, &geometry, &self.drawn);
+            let tile = tile_uniforms(draw, &frame, rings, &geometry, &self.drawn, &mut self.places);
             self.tiles.push(tile);
         }
         self.sort_front_to_back(geometry.grid_size);
@@ -539,6 +543,7 @@ fn tile_uniforms(
     rings: &LevelRings,
     geometry: &TileGeometry<'_>,
     drawn: &[DrawnTile],
+    places: &mut PlaceCache,
 ) -> TileUniforms {
     let key = draw.key;
     let step = 1i64 << key.level;
@@ -570,7 +575,7 @@ fn tile_uniforms(
         index_count: draw.index_count,
         no_data: draw.coverage != TileCoverage::Full,
         place: frame.earth.map_or(NodePlace::default(), |earth| {
-            earth.place(node_centre(key, geometry.grid_size, geometry.node_size))
+            earth.place_with(node_centre(key, geometry.grid_size, geometry.node_size), places)
         }),
         ground: None,
     };
