@@ -14,7 +14,7 @@
 //! | `offscreen` | [`OffscreenTarget`] and pixel read-back |
 //! | `calls` | `Calls`: every call of the display's passes, counted by kind as it is made |
 //! | `check` | [`gl_check!`](crate::gl_check) |
-//! | `smoke` | [`SmokePass`]: clear and one triangle, proving a context draws |
+//! | `smoke` | `SmokePass`: clear and one triangle, proving a context draws (the context tests'; feature `test-support`) |
 //! | `terrain_pass`, `sky_pass` | the terrain tiles (heights as attributes, transforms as uniforms) and the sky |
 //! | `symbol_pass` | the reference symbols and the failure flag, one draw of a [`SymbolMesh`](crate::symbology::SymbolMesh) |
 //! | `chunked_baseline` | `ChunkedBaseline`: plain Chunked LOD, a vertex buffer and an upload per tile (the bench's baseline; feature `test-support`) |
@@ -38,6 +38,7 @@ mod osmesa;
 pub mod probe;
 mod renderer;
 mod sky_pass;
+#[cfg(feature = "test-support")]
 mod smoke;
 mod symbol_pass;
 mod terrain_pass;
@@ -55,6 +56,7 @@ pub use objects::{
 };
 pub use offscreen::OffscreenTarget;
 pub use renderer::GlRenderer;
+#[cfg(feature = "test-support")]
 pub use smoke::{SmokePass, SMOKE_TRIANGLE};
 pub use terrain_pass::TerrainOutput;
 pub use truth_pass::{

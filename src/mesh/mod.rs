@@ -16,7 +16,7 @@
 //! | [`rtin`] | the per-post error map, computed once, and `extract(max_error)` |
 //! | [`restrict`] | one block's own error codes, and every aligned square's error map read from them |
 //! | [`delta`] | the exact maximum vertical distance from a mesh to the level-0 posts under it; `height_on_mesh` |
-//! | [`mod@view_refine`] | RTIN refinement for a camera: split while error > tau D / K |
+//! | `view_refine` | RTIN refinement for a camera: split while error > tau D / K (the lod bench's floor; feature `test-support`) |
 //! | [`error`] | [`MeshError`]: why a grid or a mesh is refused |
 
 pub mod code;
@@ -25,12 +25,14 @@ pub mod error;
 pub mod restrict;
 pub mod rtin;
 mod scan;
+#[cfg(feature = "test-support")]
 pub mod view_refine;
 
 pub use delta::{max_post_distance, max_surface_distance, MeshSampler};
 pub use error::MeshError;
 pub use restrict::OwnCodes;
 pub use rtin::{Diagonal, Metric, Rtin, RtinOptions};
+#[cfg(feature = "test-support")]
 pub use view_refine::{view_refine, ViewParams};
 
 /// Largest vertex count a mesh may have: indices are 16-bit.

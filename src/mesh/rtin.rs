@@ -216,7 +216,7 @@ pub struct RtinOptions {
     /// into every mesh, so neighbours built with the same step share at least
     /// those edge vertices. `None`: the boundary is refined by error only.
     pub edge_step: Option<u32>,
-    /// Also keep each split's nested bounding box, for [`super::view_refine()`].
+    /// Also keep each split's nested bounding box, for `view_refine` (the lod bench's floor).
     pub bounds: bool,
     /// What the error map measures.
     pub metric: Metric,
