@@ -4,6 +4,7 @@
 //! | module | holds |
 //! |---|---|
 //! | [`alloc`] | a global allocator that counts allocations (the no-allocation tests) |
+//! | [`cli`] | the `ridgeline` binary run, its exit checked, its stderr shown on failure |
 //! | [`dem`] | writers of every elevation format the importers read, scratch folders |
 //! | [`pyramid`] | random grids, pyramids built and written |
 //! | [`clipmap`] | a small-node procedural earth and checks of the clipmap's state |
@@ -17,6 +18,7 @@
 //! [`builtin_terrain`]) and shared by every binary.
 
 pub mod alloc;
+pub mod cli;
 pub mod clipmap;
 pub mod compare;
 pub mod coverage;
