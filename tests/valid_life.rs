@@ -22,7 +22,8 @@ use ridgeline::scene::{
     clip_planes, ring_inputs, PreloadedTerrain, SceneConfig, TerrainData, TerrainSummary,
 };
 use ridgeline::tiles::ResidentNodes;
-use testkit::scene::{camera, null_backend, terrain};
+use testkit::scene::{null_backend, terrain, VIEWPORT};
+use testkit::{camera, over_tile};
 
 /// One move of the walk: a step (as a share of the declared travel, and a
 /// direction), a turn, and a change of tau.
@@ -108,7 +109,7 @@ proptest! {
             y += horizontal * m.bearing.to_radians().cos();
             z = (z + vertical).max(100.0);
             tau = (tau * m.tau_factor).clamp(1.0, 16.0);
-            let cam = camera(x, y, z + 2500.0, m.heading, m.pitch);
+            let cam = camera(VIEWPORT, over_tile(x, y, z + 2500.0), m.heading, m.pitch);
             let expected = select(&mut full, terrain, &cam, tau);
             let got = select(&mut life, terrain, &cam, tau);
             prop_assert_eq!(&got, &expected, "frame {} at {:?}", frame, cam.position);
