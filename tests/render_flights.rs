@@ -29,6 +29,7 @@ use ridgeline::scene::{ClipmapTerrain, Scene, TerrainSummary};
 use std::collections::BTreeSet;
 use testkit::compare::{difference_image, save_evidence, Difference};
 use testkit::coverage::terrain_guaranteed;
+use testkit::flight::{fly, Frame, Settle};
 use testkit::gl::take_turn;
 use testkit::render::{
     config, drawn_tiles, ground, lod_changed, open, redraw, render, terrain_bounds, SENTINEL,
@@ -104,12 +105,12 @@ fn fly_counting_holes(
     let mut frames = Vec::new();
     let mut levels = BTreeSet::new();
     let mut evidence = None;
-    for (k, camera) in low_flight().iter().enumerate() {
-        let (mut image, stats) = render(display, camera);
+    fly(display, low_flight(), Settle::Every(1000), |Frame { k, camera, stats, flyer }| {
+        let mut image = flyer.context.read_pixels().expect("read back");
         if let Some(alter) = alter {
-            image = redraw(display, alter);
+            image = redraw(flyer, alter);
         }
-        levels.extend(drawn_tiles(display).iter().map(|key| key.level));
+        levels.extend(drawn_tiles(flyer).iter().map(|key| key.level));
         let must_be_terrain = terrain_guaranteed(camera, &bounds);
         let mut marked = image.clone();
         let mut holes = 0;
@@ -127,7 +128,7 @@ fn fly_counting_holes(
         let covered =
             must_be_terrain.iter().filter(|&&t| t).count() as f64 / must_be_terrain.len() as f64;
         frames.push(Holes { holes, covered, generated: stats.scene.tiles_generated });
-    }
+    });
     (frames, levels, evidence)
 }
 

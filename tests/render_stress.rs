@@ -38,6 +38,7 @@ use std::sync::Arc;
 use std::time::Instant;
 use testkit::camera;
 use testkit::compare::{difference_image, save_evidence};
+use testkit::flight::{self, Frame, Settle};
 use testkit::gl::{child_test, run_child, take_turn};
 use testkit::render::{redraw, render};
 
@@ -494,12 +495,12 @@ fn fly_the_circuit(display: &mut DisplayParts, earth: &ProceduralEarth) -> Vec<L
     let mut laps = Vec::with_capacity(LAPS);
     for _ in 0..LAPS {
         let (started, mut lap) = (Instant::now(), Lap::default());
-        for frame in 0..LAP {
-            let stats = display.frame(&circuit(earth, frame)).expect("frame");
+        let cameras = (0..LAP).map(|frame| circuit(earth, frame));
+        flight::fly(display, cameras, Settle::Never, |Frame { stats, .. }| {
             lap.nodes_loaded += stats.nodes_loaded as u64;
             lap.bytes_uploaded += stats.scene.bytes_uploaded;
             lap.workspace_sum += stats.scene.allocator_workspace_bytes as f64;
-        }
+        });
         lap.end(display, &circuit(earth, 0), started);
         laps.push(lap);
     }

@@ -22,6 +22,7 @@ use ridgeline::scene::{
     clip_planes, ring_inputs, PreloadedTerrain, SceneConfig, TerrainData, TerrainSummary,
 };
 use ridgeline::tiles::ResidentNodes;
+use testkit::flight::{along, fly, OnBackend, Settle};
 use testkit::scene::{null_backend, terrain, VIEWPORT};
 use testkit::{camera, over_tile};
 
@@ -148,14 +149,11 @@ fn fly_default(max_travel_m: Option<f64>, meshes: bool) -> Vec<(Vec<TileKey>, Li
     };
     let mut pipeline = FramePipeline::new(&config, source, summary).expect("pipeline");
     let mut backend = null_backend(&pipeline);
-    let mut frames = Vec::new();
-    for t in path.frame_times(FLY_FRAMES) {
-        let camera = path.sample(t).camera(60.0, FLY_SIZE);
-        let stats = pipeline.frame(&camera, &mut backend).expect("frame");
-        let keys = pipeline.draw_list().tiles.iter().map(|t| t.key).collect();
-        frames.push((keys, stats.scene.split_tests));
-    }
-    frames
+    let mut flyer = OnBackend { pipeline: &mut pipeline, backend: &mut backend };
+    fly(&mut flyer, along(&path, FLY_FRAMES, 60.0, FLY_SIZE), Settle::Never, |frame| {
+        let keys = frame.flyer.pipeline.draw_list().tiles.iter().map(|t| t.key).collect();
+        (keys, frame.stats.scene.split_tests)
+    })
 }
 
 #[test]

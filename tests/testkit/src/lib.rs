@@ -6,6 +6,7 @@
 //! | [`alloc`] | a global allocator that counts allocations (the no-allocation tests) |
 //! | [`cli`] | the `ridgeline` binary run, its exit checked, its stderr shown on failure |
 //! | [`dem`] | writers of every elevation format the importers read, scratch folders |
+//! | [`flight`] | the one flight loop: cameras flown on a pipeline or a display, a callback per frame |
 //! | [`pyramid`] | random grids, pyramids built and written |
 //! | [`clipmap`] | a small-node procedural earth and checks of the clipmap's state |
 //! | [`scene`] | the frame pipeline over the built-in terrain on the null backend, shared-edge checks |
@@ -23,6 +24,7 @@ pub mod clipmap;
 pub mod compare;
 pub mod coverage;
 pub mod dem;
+pub mod flight;
 pub mod gl;
 pub mod live;
 pub mod pyramid;
