@@ -13,6 +13,7 @@ use ridgeline::node::NodeSource;
 use ridgeline::pipeline::{FramePipeline, FrameStats, PipelineConfig};
 use ridgeline::procedural::{EarthParams, ProceduralEarth};
 use ridgeline::scene::{SceneConfig, TerrainSummary};
+use testkit::flight::{self, along, OnBackend, Settle};
 use testkit::scene::null_backend;
 
 const SIZE: [u32; 2] = [1280, 720];
@@ -72,9 +73,8 @@ fn fly_over(
     };
     let mut pipeline = FramePipeline::new(&config, source, summary).expect("pipeline");
     let mut backend = null_backend(&pipeline);
-    path.frame_times(FRAMES)
-        .map(|t| pipeline.frame(&path.sample(t).camera(60.0, SIZE), &mut backend).expect("frame"))
-        .collect()
+    let mut flyer = OnBackend { pipeline: &mut pipeline, backend: &mut backend };
+    flight::fly(&mut flyer, along(path, FRAMES, 60.0, SIZE), Settle::Never, |frame| frame.stats)
 }
 
 #[test]

@@ -6,19 +6,17 @@
 
 use std::collections::BTreeSet;
 use std::path::Path;
-use std::process::{Command, Output};
 
 use ridgeline::pipeline::FrameStats;
 use serde_json::Value;
+use testkit::cli::{Ridgeline, Run};
 use testkit::fresh_dir;
 
-fn fly(out: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_ridgeline"))
+/// Headless `ridgeline fly` writing into `out`, one snapshot.
+fn fly(out: &Path) -> Run {
+    Ridgeline::new(env!("CARGO_BIN_EXE_ridgeline"))
         .args(["fly", "--backend", "egl", "--snapshots", "1", "--out"])
         .arg(out)
-        .args(args)
-        .output()
-        .expect("run ridgeline")
 }
 
 fn stats(out: &Path) -> serde_json::Value {
@@ -26,17 +24,12 @@ fn stats(out: &Path) -> serde_json::Value {
     serde_json::from_str(&text).expect("stats.json is JSON")
 }
 
-fn stderr(run: &Output) -> String {
-    String::from_utf8_lossy(&run.stderr).into_owned()
-}
-
 #[test]
 fn cruise_over_the_procedural_earth_reports_its_flight_memory_and_bound() {
     let out = fresh_dir("cli-fly-cruise");
     let args =
         ["--dataset", "procedural", "--flight", "cruise", "--frames", "4", "--size", "160x90"];
-    let run = fly(&out, &args);
-    assert!(run.status.success(), "{}", stderr(&run));
+    fly(&out).args(args).ok();
     let json = stats(&out);
     assert_eq!(json["flight"], "cruise");
     let memory = &json["memory"];
@@ -85,8 +78,7 @@ fn keys(value: &Value) -> BTreeSet<String> {
 #[test]
 fn without_a_budget_stats_json_says_so() {
     let out = fresh_dir("cli-fly-no-budget");
-    let run = fly(&out, &["--frames", "2", "--memory-mb", "0", "--size", "160x90"]);
-    assert!(run.status.success(), "{}", stderr(&run));
+    fly(&out).args(["--frames", "2", "--memory-mb", "0", "--size", "160x90"]).ok();
     let memory = &stats(&out)["memory"];
     assert!(memory["budget_bytes"].is_null() && memory["atlas_budget_bytes"].is_null(), "{memory}");
 }
@@ -100,9 +92,7 @@ fn budgets_the_display_cannot_work_in_are_refused_by_name() {
         (&["--frame-ms", "0"][..], "--frame-ms 0 must be"),
         (&["--flight", "sideways"][..], "sideways"),
     ] {
-        let run = fly(&out, args);
-        assert!(!run.status.success(), "{args:?} was accepted");
-        assert!(stderr(&run).contains(says), "{args:?}: {}", stderr(&run));
+        fly(&out).args(args).refused(&[says]);
     }
 }
 
@@ -111,9 +101,8 @@ fn budgets_the_display_cannot_work_in_are_refused_by_name() {
 #[test]
 fn a_refused_budget_names_one_that_flies() {
     let out = fresh_dir("cli-fly-least");
-    let run = fly(&out, &["--frames", "2", "--memory-mb", "8", "--size", "160x90"]);
-    assert!(!run.status.success(), "8 MB was accepted");
-    let text = stderr(&run);
+    let run = fly(&out).args(["--frames", "2", "--memory-mb", "8", "--size", "160x90"]);
+    let text = run.refused(&[]).stderr();
     let least: u64 = text
         .split("need at least ")
         .nth(1)
@@ -123,15 +112,13 @@ fn a_refused_budget_names_one_that_flies() {
     // Headless snapshots at 160x90 take 8 bytes a pixel on top.
     let mb = (least + 8 * 160 * 90).div_ceil(1 << 20);
     let mb = mb.to_string();
-    let run = fly(&out, &["--frames", "2", "--memory-mb", &mb, "--size", "160x90"]);
-    assert!(run.status.success(), "--memory-mb {mb}: {}", stderr(&run));
+    fly(&out).args(["--frames", "2", "--memory-mb", &mb, "--size", "160x90"]).ok();
 }
 
 #[test]
 fn a_frame_time_target_is_recorded_and_every_frame_says_its_tau() {
     let out = fresh_dir("cli-fly-frame-ms");
-    let run = fly(&out, &["--frames", "6", "--frame-ms", "1", "--size", "160x90"]);
-    assert!(run.status.success(), "{}", stderr(&run));
+    let run = fly(&out).args(["--frames", "6", "--frame-ms", "1", "--size", "160x90"]).ok();
     let json = stats(&out);
     assert_eq!(json["frame_ms_target"], 1.0);
     let frames = json["frames"].as_array().unwrap();
@@ -140,6 +127,6 @@ fn a_frame_time_target_is_recorded_and_every_frame_says_its_tau() {
     assert!(last["tau_px"].as_f64().unwrap() > 1.0, "tau never rose: {last}");
     assert!(last["bound_px"].as_f64() > last["tau_requested_px"].as_f64(), "{last}");
     assert!(json["tau_loosened_frames"].as_u64() > Some(0), "{json}");
-    let summary = String::from_utf8_lossy(&run.stdout);
+    let summary = run.stdout();
     assert!(summary.contains("LOOSENED"), "{summary}");
 }

@@ -59,10 +59,6 @@ impl TileBounds for Bounds<'_> {
     }
 }
 
-fn camera(x: f64, y: f64, altitude: f64, heading: f64, pitch: f64) -> Camera {
-    testkit::camera([640, 360], x, y, altitude, heading, pitch)
-}
-
 /// Tiles selected for `camera` without and with horizon culling, and the
 /// horizon culled count.
 fn select(
@@ -135,7 +131,7 @@ proptest! {
         let earth = earth();
         let side = (earth.layout().posts[0] - 1) as f64 * 38.4;
         let ground = earth.exact_height(east * side, north * side).unwrap() as f64;
-        let camera = camera(east * side, north * side, ground.max(0.0) + altitude, heading, pitch);
+        let camera = testkit::camera([640, 360], DVec3::new(east * side, north * side, ground.max(0.0) + altitude), heading, pitch);
         let (all, kept, culled, horizon) = select(&earth, &camera);
         let dropped: Vec<TileKey> = all.iter().filter(|k| !kept.contains(k)).copied().collect();
         prop_assert!(kept.iter().all(|k| all.contains(k)), "the horizon only drops tiles");
@@ -153,7 +149,8 @@ proptest! {
 fn a_cruise_at_ten_km_culls_a_share_of_tiles_below_the_horizon() {
     let earth = earth();
     let side = (earth.layout().posts[0] - 1) as f64 * 38.4;
-    let camera = camera(side / 2.0, side / 2.0, 10_000.0, 45.0, -4.0);
+    let camera =
+        testkit::camera([640, 360], DVec3::new(side / 2.0, side / 2.0, 10_000.0), 45.0, -4.0);
     let (all, kept, culled, _) = select(&earth, &camera);
     println!("{} tiles without horizon culling, {} with; {culled} culled", all.len(), kept.len());
     assert!(culled > 0 && kept.len() < all.len());

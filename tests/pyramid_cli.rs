@@ -1,36 +1,28 @@
 //! `ridgeline import` and `ridgeline info` as a user runs them.
 
 use std::path::Path;
-use std::process::{Command, Output};
 
 use ridgeline::pyramid::FILE_NAME;
+use testkit::cli::Ridgeline;
 use testkit::fresh_dir;
 
-fn ridgeline(args: &[&str], cache: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_ridgeline"))
-        .args(args)
-        .arg(cache)
-        .output()
-        .expect("run ridgeline")
-}
+const RIDGELINE: Ridgeline = Ridgeline::new(env!("CARGO_BIN_EXE_ridgeline"));
 
 #[test]
 fn info_json_describes_an_imported_cache() {
     let cache = fresh_dir("cli-info");
-    let imported = ridgeline(
-        &["import", "--synthetic", "257", "--node-size", "32", "--border", "1", "--out"],
-        &cache,
-    );
-    let said = String::from_utf8_lossy(&imported.stderr);
-    assert!(imported.status.success(), "{said}");
+    let imported = RIDGELINE
+        .args(["import", "--synthetic", "257", "--node-size", "32", "--border", "1", "--out"])
+        .arg(&cache)
+        .ok();
+    let said = imported.stderr();
     // Not a terminal: each phase's time on a line of the log.
     for phase in ["level 0: done in", "meshes: done in"] {
         assert!(said.contains(phase), "{said:?} lacks {phase:?}");
     }
-    let info = ridgeline(&["info", "--json"], &cache);
-    assert!(info.status.success(), "{}", String::from_utf8_lossy(&info.stderr));
+    let info = RIDGELINE.args(["info", "--json"]).arg(&cache).ok();
     let json: serde_json::Value =
-        serde_json::from_slice(&info.stdout).expect("info --json prints JSON");
+        serde_json::from_slice(&info.output.stdout).expect("info --json prints JSON");
     assert_eq!(json["levels"], 4, "256 cells need 32 << 3");
     assert_eq!(json["node_size"], 32);
     assert_eq!(json["posts"], serde_json::json!([257, 257]));
@@ -45,12 +37,8 @@ fn info_json_describes_an_imported_cache() {
     assert!(lo < hi);
     assert_eq!(json["voids_filled"], 0);
 
-    let table = ridgeline(&["info"], &cache);
-    let text = String::from_utf8_lossy(&table.stdout);
-    assert!(
-        table.status.success() && text.contains("257 x 257") && text.contains("4 levels"),
-        "{text}"
-    );
+    let text = RIDGELINE.args(["info"]).arg(&cache).ok().stdout();
+    assert!(text.contains("257 x 257") && text.contains("4 levels"), "{text}");
     // One word per concept (DESIGN.md glossary): the grid's points are posts.
     assert!(text.contains("posts     257 x 257") && !text.contains("sample"), "{text}");
 }
@@ -58,25 +46,21 @@ fn info_json_describes_an_imported_cache() {
 #[test]
 fn info_refuses_a_damaged_cache_naming_the_file() {
     let cache = fresh_dir("cli-damaged");
-    assert!(ridgeline(&["import", "--synthetic", "100", "--out"], &cache).status.success());
+    RIDGELINE.args(["import", "--synthetic", "100", "--out"]).arg(&cache).ok();
     let path = cache.join(FILE_NAME);
     let mut bytes = std::fs::read(&path).expect("read");
     let middle = bytes.len() / 2;
     bytes[middle] ^= 0x10;
     std::fs::write(&path, bytes).expect("damage");
-    let info = ridgeline(&["info"], &cache);
-    let stderr = String::from_utf8_lossy(&info.stderr);
-    assert!(!info.status.success());
-    assert!(stderr.contains(&path.display().to_string()) && stderr.contains("damaged"), "{stderr}");
+    RIDGELINE.args(["info"]).arg(&cache).refused(&[&path.display().to_string(), "damaged"]);
 }
 
 #[test]
 fn import_refuses_absurd_sizes_before_allocating() {
     let cache = fresh_dir("cli-absurd");
-    let out = ridgeline(&["import", "--synthetic", "4000000000", "--out"], &cache);
-    assert!(!out.status.success());
-    let out = ridgeline(&["import", "--synthetic", "100", "--node-size", "0", "--out"], &cache);
-    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("node size"));
+    RIDGELINE.args(["import", "--synthetic", "4000000000", "--out"]).arg(&cache).refused(&[]);
+    let import = ["import", "--synthetic", "100", "--node-size", "0", "--out"];
+    RIDGELINE.args(import).arg(&cache).refused(&["node size"]);
 }
 
 /// `--memory-mb` below the least an import needs is refused by name; an
@@ -84,15 +68,14 @@ fn import_refuses_absurd_sizes_before_allocating() {
 #[test]
 fn import_bounds_its_memory_and_cleans_its_scratch() {
     let cache = fresh_dir("cli-memory");
-    let out = ridgeline(&["import", "--synthetic", "100", "--memory-mb", "0", "--out"], &cache);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success() && stderr.contains("--memory-mb 0"), "{stderr}");
+    let import = ["import", "--synthetic", "100", "--memory-mb", "0", "--out"];
+    RIDGELINE.args(import).arg(&cache).refused(&["--memory-mb 0"]);
     // No process has this id (Linux pids stop at 2^22).
     let stale = cache.join(".import-4999999");
     std::fs::create_dir_all(&stale).expect("a stale scratch directory");
     std::fs::write(stale.join("0000-layer"), b"left by a killed import").expect("stale spill");
-    let out = ridgeline(&["import", "--synthetic", "100", "--memory-mb", "64", "--out"], &cache);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let import = ["import", "--synthetic", "100", "--memory-mb", "64", "--out"];
+    RIDGELINE.args(import).arg(&cache).ok();
     let left: Vec<_> = std::fs::read_dir(&cache)
         .expect("the cache")
         .flatten()
@@ -106,11 +89,10 @@ fn import_bounds_its_memory_and_cleans_its_scratch() {
 fn importing_the_shipped_srtm_tile_records_where_it_is() {
     let cache = fresh_dir("cli-srtm");
     let tile = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/dem/srtm3_n39e040_1000.tif");
-    let imported = ridgeline(&["import", tile, "--out"], &cache);
-    assert!(imported.status.success(), "{}", String::from_utf8_lossy(&imported.stderr));
-    let info = ridgeline(&["info", "--json"], &cache);
+    RIDGELINE.args(["import", tile, "--out"]).arg(&cache).ok();
+    let info = RIDGELINE.args(["info", "--json"]).arg(&cache).ok();
     let json: serde_json::Value =
-        serde_json::from_slice(&info.stdout).expect("info --json prints JSON");
+        serde_json::from_slice(&info.output.stdout).expect("info --json prints JSON");
     assert_eq!(json["posts"], serde_json::json!([1000, 1000]));
     assert_eq!(json["levels"], 5, "999 cells need 64 << 4");
     let degrees = |key: &str| json["georef"][key].as_f64().expect("geographic bounds");
@@ -133,14 +115,14 @@ fn importing_the_shipped_srtm_tile_records_where_it_is() {
 #[test]
 fn importing_a_missing_file_names_it() {
     let cache = fresh_dir("cli-missing");
-    let out = ridgeline(&["import", "no/such/tile.hgt", "--out"], &cache);
-    assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("no/such/tile.hgt"));
+    RIDGELINE
+        .args(["import", "no/such/tile.hgt", "--out"])
+        .arg(&cache)
+        .refused(&["no/such/tile.hgt"]);
     assert!(!cache.join(FILE_NAME).exists());
     // A first import that fails leaves no empty cache directory behind.
     let first = cache.join("first");
-    let out = ridgeline(&["import", "no/such/tile.hgt", "--out"], &first);
-    assert!(!out.status.success());
+    RIDGELINE.args(["import", "no/such/tile.hgt", "--out"]).arg(&first).refused(&[]);
     assert!(!first.exists(), "{} was left behind", first.display());
 }
 
@@ -172,11 +154,9 @@ fn layered_import_counts_void_posts_by_what_became_of_them() {
     let cache = dir.join("cache");
     let hgt_arg = hgt.to_str().expect("a UTF-8 path");
     let base_arg = base.to_str().expect("a UTF-8 path");
-    let imported = ridgeline(&["import", hgt_arg, base_arg, "--out"], &cache);
-    assert!(imported.status.success(), "{}", String::from_utf8_lossy(&imported.stderr));
-    let info = ridgeline(&["info", "--json"], &cache);
-    assert!(info.status.success(), "{}", String::from_utf8_lossy(&info.stderr));
-    let json: serde_json::Value = serde_json::from_slice(&info.stdout).expect("JSON");
+    RIDGELINE.args(["import", hgt_arg, base_arg, "--out"]).arg(&cache).ok();
+    let info = RIDGELINE.args(["info", "--json"]).arg(&cache).ok();
+    let json: serde_json::Value = serde_json::from_slice(&info.output.stdout).expect("JSON");
     assert_eq!(json["format_version"], ridgeline::pyramid::format::VERSION);
     assert_eq!(json["layers"], 2);
     assert_eq!(json["posts_interpolated"], 4, "the 2 x 2 void");
@@ -186,10 +166,9 @@ fn layered_import_counts_void_posts_by_what_became_of_them() {
     assert!(present < json["node_count"].as_u64().expect("a count"), "level 0 is sparse");
     // Alone, the tile's large voids are no data.
     let alone = dir.join("alone");
-    let imported = ridgeline(&["import", hgt_arg, "--out"], &alone);
-    assert!(imported.status.success(), "{}", String::from_utf8_lossy(&imported.stderr));
-    let info = ridgeline(&["info", "--json"], &alone);
-    let json: serde_json::Value = serde_json::from_slice(&info.stdout).expect("JSON");
+    RIDGELINE.args(["import", hgt_arg, "--out"]).arg(&alone).ok();
+    let info = RIDGELINE.args(["info", "--json"]).arg(&alone).ok();
+    let json: serde_json::Value = serde_json::from_slice(&info.output.stdout).expect("JSON");
     assert_eq!(json["posts_no_data"], voids - 4);
     assert_eq!(json["posts_from_layer"], 0);
     // A base in metres (no .prj: a local grid) cannot go under degrees.
@@ -198,10 +177,10 @@ fn layered_import_counts_void_posts_by_what_became_of_them() {
     let rows: Vec<Vec<String>> = (0..3).map(|_| vec!["10".to_string(); 3]).collect();
     testkit::dem::write_ascii(&metres, header, &rows);
     let metres_arg = metres.to_str().expect("a UTF-8 path");
-    let refused = ridgeline(&["import", hgt_arg, metres_arg, "--out"], &dir.join("refused"));
-    assert!(!refused.status.success());
-    let stderr = String::from_utf8_lossy(&refused.stderr);
-    assert!(stderr.contains("metres.asc") && stderr.contains("coordinate system"), "{stderr}");
+    RIDGELINE
+        .args(["import", hgt_arg, metres_arg, "--out"])
+        .arg(dir.join("refused"))
+        .refused(&["metres.asc", "coordinate system"]);
 }
 
 /// `--sea-surface` raises a grid's sea floor to sea level and keeps its land
@@ -236,11 +215,10 @@ fn sea_surface_raises_the_sea_floor_and_keeps_land_and_no_data() {
         let mut all = vec!["import", source.to_str().expect("utf-8 path")];
         all.extend_from_slice(args);
         all.extend_from_slice(&["--node-size", "16", "--out"]);
-        let imported = ridgeline(&all, &cache);
-        assert!(imported.status.success(), "{}", String::from_utf8_lossy(&imported.stderr));
-        let info = ridgeline(&["info", "--json"], &cache);
-        let json: serde_json::Value = serde_json::from_slice(&info.stdout).expect("JSON");
-        let said = String::from_utf8_lossy(&imported.stderr).into_owned();
+        let imported = RIDGELINE.args(all).arg(&cache).ok();
+        let info = RIDGELINE.args(["info", "--json"]).arg(&cache).ok();
+        let json: serde_json::Value = serde_json::from_slice(&info.output.stdout).expect("JSON");
+        let said = imported.stderr();
         let range =
             [&json["height_min"], &json["height_max"]].map(|v| v.as_f64().expect("a height"));
         (range[0], range[1], said, no_data_posts(&cache))

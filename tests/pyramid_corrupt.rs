@@ -191,9 +191,7 @@ fn the_pipeline_flies_over_a_damaged_node_on_its_ancestor() {
         let x = centre.x - 3_000.0 + 1_000.0 * k as f64;
         let camera = testkit::camera(
             testkit::scene::VIEWPORT,
-            x,
-            centre.y - 2_000.0,
-            height + 400.0,
+            glam::DVec3::new(x, centre.y - 2_000.0, height + 400.0),
             20.0,
             -25.0,
         );

@@ -3,17 +3,16 @@
 //! must still open, verify and hold exactly its old bytes.
 
 use std::path::Path;
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 use std::time::{Duration, Instant};
 
 use ridgeline::pyramid::{Pyramid, FILE_NAME};
+use testkit::cli::{Ridgeline, Run};
 use testkit::fresh_dir;
 
-fn import(size: u32, out: &Path) -> Command {
-    let mut command = Command::new(env!("CARGO_BIN_EXE_ridgeline"));
-    command.args(["import", "--synthetic", &size.to_string(), "--out"]).arg(out);
-    command.stdout(Stdio::null()).stderr(Stdio::null());
-    command
+fn import(size: u32, out: &Path) -> Run {
+    let ridgeline = Ridgeline::new(env!("CARGO_BIN_EXE_ridgeline"));
+    ridgeline.args(["import", "--synthetic", &size.to_string(), "--out"]).arg(out)
 }
 
 /// The temporary files an import has left beside the pyramid.
@@ -40,13 +39,13 @@ impl Drop for KillOnDrop {
 #[test]
 fn killing_an_import_midway_keeps_the_previous_cache() {
     let cache = fresh_dir("kill-import");
-    assert!(import(300, &cache).status().expect("run import").success());
+    import(300, &cache).ok();
     let old_bytes = std::fs::read(cache.join(FILE_NAME)).expect("old cache");
     let old_info = Pyramid::open(&cache).expect("old cache opens").info().clone();
 
     // 4096^2 samples make a 104 MB pyramid: seconds of building, then a write
     // and flush far longer than the few milliseconds between polls.
-    let mut child = KillOnDrop(import(4096, &cache).spawn().expect("start the big import"));
+    let mut child = KillOnDrop(import(4096, &cache).spawn(Stdio::null(), Stdio::null()).child);
     let child = &mut child.0;
     let started = Instant::now();
     while temporaries(&cache).is_empty() {
@@ -67,7 +66,7 @@ fn killing_an_import_midway_keeps_the_previous_cache() {
     assert_eq!(reopened.info(), &old_info);
 
     // The next import clears the dead import's temporary file.
-    assert!(import(200, &cache).status().expect("rerun import").success());
+    import(200, &cache).ok();
     assert!(temporaries(&cache).is_empty(), "stale temporary left behind");
     assert_eq!(Pyramid::open(&cache).expect("new cache").info().layout.posts, [200, 200]);
 }

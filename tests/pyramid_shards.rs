@@ -8,11 +8,12 @@
 //! dataset as it was.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::Stdio;
 use std::time::{Duration, Instant};
 
 use ridgeline::meshes::MAP_FILE_NAME;
 use ridgeline::pyramid::FILE_NAME;
+use testkit::cli::{Ridgeline, Run};
 use testkit::dem::write_ascii;
 use testkit::fresh_dir;
 
@@ -82,30 +83,10 @@ fn write_sources(dir: &Path, bump: f64) -> Vec<PathBuf> {
     vec![coarse, west, east]
 }
 
-fn command(args: &[&str], sources: &[PathBuf], out: &Path) -> Command {
-    let mut command = Command::new(env!("CARGO_BIN_EXE_ridgeline"));
-    command.arg("import").args(NODE).args(args).args(sources).arg("--out").arg(out);
-    command
-}
-
-fn run(args: &[&str], sources: &[PathBuf], out: &Path) -> Output {
-    command(args, sources, out).output().expect("run ridgeline")
-}
-
-fn ok(output: Output) -> Output {
-    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
-    output
-}
-
-/// Runs `ridgeline` expecting a failure whose message says each of `says`.
-fn refused(args: &[&str], sources: &[PathBuf], out: &Path, says: &[&str]) {
-    let output = run(args, sources, out);
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(!output.status.success(), "{args:?} succeeded");
-    for text in says {
-        assert!(stderr.contains(text), "{args:?}: {stderr:?} does not say {text:?}");
-    }
-    assert!(!stderr.contains("panicked"), "{stderr}");
+/// `ridgeline import` of `sources` into `out` with `args`.
+fn import(args: &[&str], sources: &[PathBuf], out: &Path) -> Run {
+    let ridgeline = Ridgeline::new(env!("CARGO_BIN_EXE_ridgeline"));
+    ridgeline.args(["import"]).args(NODE).args(args).args(sources).arg("--out").arg(out)
 }
 
 fn read(path: &Path) -> Vec<u8> {
@@ -121,20 +102,19 @@ fn shard_and_merge(sources: &[PathBuf], out: &Path) {
     let children: Vec<_> = (0..4)
         .map(|k| {
             let shard = format!("{k}/4");
-            let mut child = command(&["--shard", &shard], sources, out);
-            child.stdout(Stdio::null()).stderr(Stdio::piped()).spawn().expect("spawn a shard")
+            import(&["--shard", &shard], sources, out).spawn(Stdio::null(), Stdio::piped())
         })
         .collect();
     for child in children {
-        ok(child.wait_with_output().expect("a shard ends"));
+        child.finish().ok();
     }
-    ok(run(&["--merge-shards", "4"], sources, out));
+    import(&["--merge-shards", "4"], sources, out).ok();
 }
 
 /// The dataset one process writes.
 fn one_process(sources: &[PathBuf], dir: &Path) -> (Vec<u8>, Vec<u8>) {
     let out = dir.join("one");
-    ok(run(&[], sources, &out));
+    import(&[], sources, &out).ok();
     (read(&out.join(FILE_NAME)), read(&out.join(MAP_FILE_NAME)))
 }
 
@@ -161,14 +141,14 @@ fn four_shards_merge_into_the_bytes_of_one_process() {
     assert!(leftovers(&out).is_empty(), "{:?}", leftovers(&out));
     // Every shard did part of the work: each part holds nodes.
     for k in 0..4 {
-        let shard = ok(run(&["--shard", &format!("{k}/4")], &sources, &out));
-        let said = String::from_utf8_lossy(&shard.stdout);
+        let shard = import(&["--shard", &format!("{k}/4")], &sources, &out).ok();
+        let said = shard.stdout();
         assert!(!said.contains("(0 nodes"), "shard {k}: {said}");
     }
     // One shard is the plain import split at its coarsest levels.
     let one = dir.join("one-shard");
-    ok(run(&["--shard", "0/1"], &sources, &one));
-    ok(run(&["--merge-shards", "1"], &sources, &one));
+    import(&["--shard", "0/1"], &sources, &one).ok();
+    import(&["--merge-shards", "1"], &sources, &one).ok();
     assert_same(&one, &expected, "one shard");
 }
 
@@ -185,11 +165,8 @@ fn a_killed_or_damaged_shard_reruns_to_the_same_bytes() {
     // Killed while it writes: its previous parts stay whole (they are
     // renamed into place), and what it left (a temporary, its scratch) a
     // rerun clears.
-    let mut child = command(&["--shard", "2/4"], &sources, &out)
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("spawn");
+    let mut child =
+        import(&["--shard", "2/4"], &sources, &out).spawn(Stdio::null(), Stdio::null()).child;
     let started = Instant::now();
     let temporary = |dir: &Path| {
         let names = std::fs::read_dir(dir).expect("list").flatten();
@@ -201,7 +178,7 @@ fn a_killed_or_damaged_shard_reruns_to_the_same_bytes() {
     child.kill().expect("kill the shard");
     child.wait().expect("reap");
     assert_eq!(read(&part(&out, 2, 4, "rlp")), parts[0], "the part is the old one or the new");
-    ok(run(&["--shard", "2/4"], &sources, &out));
+    import(&["--shard", "2/4"], &sources, &out).ok();
     assert_eq!(read(&part(&out, 2, 4, "rlp")), parts[0], "the rerun writes the same bytes");
     assert_eq!(read(&part(&out, 2, 4, "rlm")), parts[1], "the rerun writes the same bytes");
     assert!(leftovers(&out).is_empty(), "{:?}", leftovers(&out));
@@ -212,10 +189,11 @@ fn a_killed_or_damaged_shard_reruns_to_the_same_bytes() {
     std::fs::write(&rlm, &parts[1][..parts[1].len() / 3]).expect("truncate");
     let stale = dir.join("four").join("shard-2-of-4.rlp.tmp-4000000");
     std::fs::write(&stale, b"half a part of a dead process").expect("stale temporary");
-    refused(&["--merge-shards", "4"], &sources, &out, &[&rlm.display().to_string(), "--shard 2/4"]);
-    ok(run(&["--shard", "2/4"], &sources, &out));
+    import(&["--merge-shards", "4"], &sources, &out)
+        .refused(&[&rlm.display().to_string(), "--shard 2/4"]);
+    import(&["--shard", "2/4"], &sources, &out).ok();
     assert!(!stale.exists(), "a dead shard's temporary is removed");
-    ok(run(&["--merge-shards", "4"], &sources, &out));
+    import(&["--merge-shards", "4"], &sources, &out).ok();
     assert_same(&out, &merged, "after the reruns");
 }
 
@@ -224,12 +202,12 @@ fn bad_counts_and_parts_are_refused_naming_the_file() {
     let dir = fresh_dir("shards-bad");
     let sources = write_sources(&dir, 0.0);
     let out = dir.join("four");
-    refused(&["--shard", "4/4"], &sources, &out, &["4/4", "K must be below N"]);
-    refused(&["--shard", "0/0"], &sources, &out, &["0/0", "N must be at least 1"]);
-    refused(&["--shard", "two"], &sources, &out, &["is not K/N"]);
-    refused(&["--merge-shards", "0"], &sources, &out, &["N must be at least 1"]);
+    import(&["--shard", "4/4"], &sources, &out).refused(&["4/4", "K must be below N"]);
+    import(&["--shard", "0/0"], &sources, &out).refused(&["0/0", "N must be at least 1"]);
+    import(&["--shard", "two"], &sources, &out).refused(&["is not K/N"]);
+    import(&["--merge-shards", "0"], &sources, &out).refused(&["N must be at least 1"]);
     let first = part(&out, 0, 4, "rlp").display().to_string();
-    refused(&["--merge-shards", "4"], &sources, &out, &[&first, "missing", "--shard 0/4"]);
+    import(&["--merge-shards", "4"], &sources, &out).refused(&[&first, "missing", "--shard 0/4"]);
     assert!(!out.exists(), "a refused first merge leaves no directory");
 
     shard_and_merge(&sources, &out);
@@ -241,19 +219,15 @@ fn bad_counts_and_parts_are_refused_naming_the_file() {
 
     // Another shard count: the parts of 4 are not those of 2 or 3.
     let third = part(&out, 0, 3, "rlp").display().to_string();
-    refused(&["--merge-shards", "3"], &sources, &out, &[&third, "missing"]);
+    import(&["--merge-shards", "3"], &sources, &out).refused(&[&third, "missing"]);
     for k in 0..2 {
         for ext in ["rlp", "rlm"] {
             std::fs::copy(part(&out, k, 4, ext), part(&out, k, 2, ext)).expect("copy");
         }
     }
     let of_two = part(&out, 0, 2, "rlm").display().to_string();
-    refused(
-        &["--merge-shards", "2"],
-        &sources,
-        &out,
-        &[&of_two, "other sources, options or shard count"],
-    );
+    import(&["--merge-shards", "2"], &sources, &out)
+        .refused(&[&of_two, "other sources, options or shard count"]);
     untouched("another count");
 
     // Other sources: one post differs.
@@ -261,23 +235,23 @@ fn bad_counts_and_parts_are_refused_naming_the_file() {
     std::fs::create_dir_all(&other).expect("dir");
     let bumped = write_sources(&other, 5.0);
     let map0 = part(&out, 0, 4, "rlm").display().to_string();
-    refused(&["--merge-shards", "4"], &bumped, &out, &[&map0, "other sources", "--shard 0/4"]);
+    import(&["--merge-shards", "4"], &bumped, &out).refused(&[
+        &map0,
+        "other sources",
+        "--shard 0/4",
+    ]);
     // Other options: another border.
     let layout = part(&out, 0, 4, "rlp").display().to_string();
     let other_border = ["--border", "1", "--merge-shards", "4"];
-    refused(&other_border, &sources, &out, &[&layout, "another layout", "--shard 0/4"]);
+    import(&other_border, &sources, &out).refused(&[&layout, "another layout", "--shard 0/4"]);
     untouched("other sources and options");
 
     // A part swapped for another shard's.
     let (one, three) = (part(&out, 1, 4, "rlm"), part(&out, 3, 4, "rlm"));
     let kept = read(&one);
     std::fs::copy(&three, &one).expect("swap");
-    refused(
-        &["--merge-shards", "4"],
-        &sources,
-        &out,
-        &[&one.display().to_string(), "another shard"],
-    );
+    import(&["--merge-shards", "4"], &sources, &out)
+        .refused(&[&one.display().to_string(), "another shard"]);
     std::fs::write(&one, kept).expect("restore");
 
     // A damaged record in a pyramid part: found while merging, by file and node.
@@ -286,11 +260,12 @@ fn bad_counts_and_parts_are_refused_naming_the_file() {
     let at = bytes.len() - 100;
     bytes[at] ^= 0x40;
     std::fs::write(&rlp, &bytes).expect("damage");
-    refused(&["--merge-shards", "4"], &sources, &out, &[&rlp.display().to_string(), "node"]);
+    import(&["--merge-shards", "4"], &sources, &out).refused(&[&rlp.display().to_string(), "node"]);
     // A damaged header.
     bytes[at] ^= 0x40;
     bytes[40] ^= 0x01;
     std::fs::write(&rlp, &bytes).expect("damage");
-    refused(&["--merge-shards", "4"], &sources, &out, &[&rlp.display().to_string(), "--shard 3/4"]);
+    import(&["--merge-shards", "4"], &sources, &out)
+        .refused(&[&rlp.display().to_string(), "--shard 3/4"]);
     untouched("damaged parts");
 }

@@ -18,6 +18,7 @@ use ridgeline::pyramid::{BuildOptions, Pyramid};
 use ridgeline::render::{CallStats, NullBackend};
 use ridgeline::scene::TerrainSummary;
 use testkit::builtin_pyramid;
+use testkit::flight::{along, fly, Frame, Settle};
 use testkit::render::{config, SENTINEL, SIZE};
 
 const FRAMES: u32 = 24;
@@ -36,13 +37,13 @@ fn fly_both_over(config: &DisplayConfig, pyramid: Arc<Pyramid>) -> (CallStats, u
         FramePipeline::new(&config.pipeline(), pyramid.clone(), summary).expect("pipeline");
     let mut null = NullBackend::new(&null_pipeline.buffer_plan(), gl.renderer.cost_model());
     let path = default_flight(&pyramid);
+    let times: Vec<f64> = path.frame_times(FRAMES).collect();
     let (mut total, mut sliced) = (CallStats::default(), 0);
-    for (k, t) in path.frame_times(FRAMES).enumerate() {
-        let camera = path.sample(t).camera(60.0, [SIZE.x, SIZE.y]);
-        gl.pipeline.settle(&camera, 1000).expect("settle");
-        let drawn = gl.frame(&camera).expect("GL frame").calls;
-        null_pipeline.settle(&camera, 1000).expect("settle");
-        let counted = null_pipeline.frame(&camera, &mut null).expect("null frame").calls;
+    let cameras = along(&path, FRAMES, 60.0, SIZE.into());
+    fly(&mut gl, cameras, Settle::Every(1000), |Frame { k, camera, stats, flyer: gl }| {
+        let (drawn, t) = (stats.calls, times[k]);
+        null_pipeline.settle(camera, 1000).expect("settle");
+        let counted = null_pipeline.frame(camera, &mut null).expect("null frame").calls;
         assert_eq!(
             gl.pipeline.draw_list().tiles,
             null_pipeline.draw_list().tiles,
@@ -51,7 +52,7 @@ fn fly_both_over(config: &DisplayConfig, pyramid: Arc<Pyramid>) -> (CallStats, u
         assert_eq!(drawn, counted, "frame {k} at t = {t:.1} s: GL issued what the model counts");
         sliced += u32::from(gl.pipeline.draw_list().uniforms.and_then(|f| f.slices.far).is_some());
         total.add(&drawn);
-    }
+    });
     (total, sliced)
 }
 

@@ -19,6 +19,7 @@ use ridgeline::flight::default_flight;
 use ridgeline::gl::{GlBackend, GlesVersion};
 use testkit::builtin_pyramid;
 use testkit::compare::assert_similar;
+use testkit::flight::{along, fly, Settle};
 use testkit::gl::{skip_for_missing_osmesa, take_turn};
 use testkit::render::{config, open, open_grid, render, SIZE, TOLERANCE};
 
@@ -58,10 +59,11 @@ fn fly_both_ways(base: DisplayConfig, open: Open, tau: f64, frames: u32) -> Opti
     let mut clusters_display = open(&clustered).expect("the same backend opens twice");
     let path = default_flight(&builtin_pyramid());
     let mut flown = Flown { tiles: 0, draws: 0, pointers: 0, per_frame: Vec::new() };
-    for (k, t) in path.frame_times(frames).enumerate() {
-        let camera = path.sample(t).camera(60.0, [SIZE.x, SIZE.y]);
-        let (expected, one_by_one) = render(&mut tiles_display, &camera);
-        let (actual, batched) = render(&mut clusters_display, &camera);
+    let cameras = along(&path, frames, 60.0, SIZE.into());
+    fly(&mut tiles_display, cameras, Settle::Every(1000), |frame| {
+        let (k, camera, one_by_one) = (frame.k, frame.camera, frame.stats);
+        let expected = frame.flyer.context.read_pixels().expect("read back");
+        let (actual, batched) = render(&mut clusters_display, camera);
         let name = format!("clusters-{:?}-{:?}-tau{tau}-{k}", backend, version);
         assert_eq!(
             batched.calls.triangles, one_by_one.calls.triangles,
@@ -84,7 +86,7 @@ fn fly_both_ways(base: DisplayConfig, open: Open, tau: f64, frames: u32) -> Opti
         flown
             .per_frame
             .push((per_draw(calls.attribute_pointer_changes), per_draw(calls.vertex_array_binds)));
-    }
+    });
     Some(flown)
 }
 

@@ -19,7 +19,7 @@ use ridgeline::pyramid::Pyramid;
 use testkit::compare::save_evidence;
 use testkit::gl::take_turn;
 use testkit::render::{measure_accuracy, SIZE};
-use testkit::{builtin_pyramid, srtm_tile_pyramid};
+use testkit::{builtin_pyramid, camera, srtm_tile_pyramid};
 
 /// Views at the edges of the tile whose south-west post is at `origin`
 /// (local metres): looking out from inside, looking back in from outside,
@@ -27,16 +27,15 @@ use testkit::{builtin_pyramid, srtm_tile_pyramid};
 fn edge_views(origin: [f64; 2], extent: [f64; 2]) -> Vec<(f64, Camera)> {
     let [east, north] = extent;
     let mid = north / 2.0;
-    let camera = |x: f64, y: f64, altitude: f64, heading: f64, pitch: f64| {
-        testkit::camera([SIZE.x, SIZE.y], origin[0] + x, origin[1] + y, altitude, heading, pitch)
-    };
+    let at =
+        |x: f64, y: f64, altitude: f64| glam::DVec3::new(origin[0] + x, origin[1] + y, altitude);
     [
-        camera(east - 3_000.0, mid, 4_000.0, 90.0, -30.0),
-        camera(east + 8_000.0, mid, 4_500.0, 270.0, -10.0),
-        camera(east - 2_000.0, north - 30_000.0, 4_000.0, 0.0, -6.0),
-        camera(east - 8_000.0, north - 8_000.0, 4_500.0, 45.0, -25.0),
-        camera(20_000.0, north - 4_000.0, 3_800.0, 0.0, -25.0),
-        camera(-6_000.0, 10_000.0, 5_500.0, 60.0, -9.0),
+        camera(SIZE.into(), at(east - 3_000.0, mid, 4_000.0), 90.0, -30.0),
+        camera(SIZE.into(), at(east + 8_000.0, mid, 4_500.0), 270.0, -10.0),
+        camera(SIZE.into(), at(east - 2_000.0, north - 30_000.0, 4_000.0), 0.0, -6.0),
+        camera(SIZE.into(), at(east - 8_000.0, north - 8_000.0, 4_500.0), 45.0, -25.0),
+        camera(SIZE.into(), at(20_000.0, north - 4_000.0, 3_800.0), 0.0, -25.0),
+        camera(SIZE.into(), at(-6_000.0, 10_000.0, 5_500.0), 60.0, -9.0),
     ]
     .into_iter()
     .enumerate()

@@ -29,11 +29,13 @@ use ridgeline::scene::{ClipmapTerrain, Scene, TerrainSummary};
 use std::collections::BTreeSet;
 use testkit::compare::{difference_image, save_evidence, Difference};
 use testkit::coverage::terrain_guaranteed;
+use testkit::flight::{fly, Frame, Settle};
 use testkit::gl::take_turn;
 use testkit::render::{
-    camera, config, drawn_tiles, ground, lod_changed, open, redraw, render, terrain_bounds,
-    SENTINEL, SENTINEL_RGBA, TOLERANCE,
+    config, drawn_tiles, ground, lod_changed, open, redraw, render, terrain_bounds, SENTINEL,
+    SENTINEL_RGBA, SIZE, TOLERANCE,
 };
+use testkit::{camera, over_tile};
 
 fn flying() -> DisplayConfig {
     config(GlBackend::Egl, GlesVersion::Es3)
@@ -78,7 +80,7 @@ fn low_flight() -> Vec<Camera> {
             let s = k as f64 / (CRACK_FRAMES - 1) as f64;
             let (x, y) = (15_000.0 + 9_000.0 * s, 20_000.0 + 12_000.0 * s);
             let above_ground = 400.0 + 200.0 * (6.0 * s).sin();
-            camera(x, y, ground(x, y) + above_ground, 37.0, -20.0)
+            camera(SIZE.into(), over_tile(x, y, ground(x, y) + above_ground), 37.0, -20.0)
         })
         .collect()
 }
@@ -103,12 +105,12 @@ fn fly_counting_holes(
     let mut frames = Vec::new();
     let mut levels = BTreeSet::new();
     let mut evidence = None;
-    for (k, camera) in low_flight().iter().enumerate() {
-        let (mut image, stats) = render(display, camera);
+    fly(display, low_flight(), Settle::Every(1000), |Frame { k, camera, stats, flyer }| {
+        let mut image = flyer.context.read_pixels().expect("read back");
         if let Some(alter) = alter {
-            image = redraw(display, alter);
+            image = redraw(flyer, alter);
         }
-        levels.extend(drawn_tiles(display).iter().map(|key| key.level));
+        levels.extend(drawn_tiles(flyer).iter().map(|key| key.level));
         let must_be_terrain = terrain_guaranteed(camera, &bounds);
         let mut marked = image.clone();
         let mut holes = 0;
@@ -126,7 +128,7 @@ fn fly_counting_holes(
         let covered =
             must_be_terrain.iter().filter(|&&t| t).count() as f64 / must_be_terrain.len() as f64;
         frames.push(Holes { holes, covered, generated: stats.scene.tiles_generated });
-    }
+    });
     (frames, levels, evidence)
 }
 
@@ -232,7 +234,7 @@ fn slow_flight(s: f64) -> Camera {
     let (heading, start) = (37.0f64, glam::DVec2::new(22_000.0, 30_000.0));
     let along = glam::DVec2::new(heading.to_radians().sin(), heading.to_radians().cos());
     let p = start + along * s;
-    camera(p.x, p.y, 5_000.0, heading, -20.0)
+    camera(SIZE.into(), over_tile(p.x, p.y, 5_000.0), heading, -20.0)
 }
 
 /// Metres between the two cameras that pin a switch.

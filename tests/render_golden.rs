@@ -238,8 +238,12 @@ fn the_no_data_hatching_at_the_coverage_edge_matches_its_golden() {
     let pyramid = testkit::srtm_tile_pyramid();
     let [east, north] = ridgeline::node::NodeSource::layout(&*pyramid).extent_m();
     let size = testkit::render::SIZE;
-    let camera =
-        testkit::camera([size.x, size.y], east + 8_000.0, north / 2.0, 4_500.0, 270.0, -10.0);
+    let camera = testkit::camera(
+        [size.x, size.y],
+        glam::DVec3::new(east + 8_000.0, north / 2.0, 4_500.0),
+        270.0,
+        -10.0,
+    );
     let config = config(GlBackend::Egl, GlesVersion::Es3);
     let mut display = testkit::render::open_over(&config, pyramid).expect("EGL display");
     let (image, _) = render(&mut display, &camera);

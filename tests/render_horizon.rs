@@ -21,6 +21,7 @@ use ridgeline::gl::{GlBackend, GlesVersion};
 use ridgeline::scene::TerrainSummary;
 use testkit::builtin_pyramid;
 use testkit::compare::save_evidence;
+use testkit::flight::{along, fly, Frame, Settle};
 use testkit::gl::take_turn;
 use testkit::render::{SENTINEL, SENTINEL_RGBA};
 
@@ -113,18 +114,15 @@ fn a_16_mb_budget_flies_the_default_flight_within_it_and_without_holes() {
 /// start) and fails on a frame with sky below the geometric horizon;
 /// returns how many frames said their bound was loosened.
 fn fly_showing_no_sky_below_the_horizon(display: &mut DisplayParts, path: &FlightPath) -> usize {
-    let first = path.sample(path.start_time()).camera(FOV_X_DEG, VIEWPORT);
-    display.pipeline.settle(&first, 10_000).expect("settle");
     let mut worst = (0, 0usize, 0usize);
     let mut evidence = None;
     let mut least_checked = usize::MAX;
     let mut loosened = 0;
-    for (k, t) in path.frame_times(FRAMES).enumerate() {
-        let camera = path.sample(t).camera(FOV_X_DEG, VIEWPORT);
-        let stats = display.frame(&camera).expect("frame");
+    let cameras = along(path, FRAMES, FOV_X_DEG, VIEWPORT);
+    fly(display, cameras, Settle::First(10_000), |Frame { k, camera, stats, flyer }| {
         loosened += stats.tau_loosened() as usize;
-        let mut image = display.context.read_pixels().expect("read back");
-        let must = below_horizon(&camera, 2.0);
+        let mut image = flyer.context.read_pixels().expect("read back");
+        let must = below_horizon(camera, 2.0);
         let checked = must.iter().filter(|&&m| m).count();
         least_checked = least_checked.min(checked);
         let mut sky = 0;
@@ -139,7 +137,7 @@ fn fly_showing_no_sky_below_the_horizon(display: &mut DisplayParts, path: &Fligh
             evidence = Some(save_evidence(&image, &format!("horizon-frame-{k}-sky-green")));
         }
         assert!(checked > 0, "frame {k}: the check saw no pixel below the horizon");
-    }
+    });
     println!(
         "{FRAMES} frames: worst frame {} with {} of {} pixels below the horizon showing no terrain; \
          at least {least_checked} of {} pixels checked on every frame",

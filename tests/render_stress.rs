@@ -36,7 +36,9 @@ use ridgeline::tiles::TileVertex;
 use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;
 use std::time::Instant;
+use testkit::camera;
 use testkit::compare::{difference_image, save_evidence};
+use testkit::flight::{self, Frame, Settle};
 use testkit::gl::{child_test, run_child, take_turn};
 use testkit::render::{redraw, render};
 
@@ -111,24 +113,20 @@ struct EarthView {
 ///   picture where a metre is about a pixel.
 fn near_views(earth: &ProceduralEarth) -> [EarthView; 2] {
     let ground = |x: f64, y: f64| earth.exact_height(x, y).expect("inside the earth") as f64;
-    let camera = |x: f64, y: f64, altitude: f64, pitch_deg: f64| Camera {
-        position: DVec3::new(x, y, altitude),
-        heading_deg: 45.0,
-        pitch_deg,
-        roll_deg: 0.0,
-        fov_x_deg: 60.0,
-        viewport: [EARTH_SIZE.x, EARTH_SIZE.y],
-    };
     let (x, y) = (30_000.0, 30_000.0);
     let ahead = 250.0 * std::f64::consts::FRAC_1_SQRT_2;
     let band_edge = ground(x + ahead, y + ahead) + palette::DEFAULT_CAUTION_BELOW_M as f64;
     [
         EarthView {
             name: "horizon",
-            camera: camera(x, y, ground(x, y) + 900.0, -8.0),
+            camera: camera(EARTH_SIZE.into(), DVec3::new(x, y, ground(x, y) + 900.0), 45.0, -8.0),
             sharp: false,
         },
-        EarthView { name: "band", camera: camera(x, y, band_edge, -20.0), sharp: true },
+        EarthView {
+            name: "band",
+            camera: camera(EARTH_SIZE.into(), DVec3::new(x, y, band_edge), 45.0, -20.0),
+            sharp: true,
+        },
     ]
 }
 
@@ -453,14 +451,8 @@ fn circuit(earth: &ProceduralEarth, frame: u32) -> Camera {
     let a = std::f64::consts::TAU * (frame % LAP) as f64 / LAP as f64;
     let (x, y) = (1_000_000.0 + 300_000.0 * a.cos(), 1_000_000.0 + 300_000.0 * a.sin());
     let ground = earth.exact_height(x, y).expect("inside the earth") as f64;
-    Camera {
-        position: DVec3::new(x, y, ground + 3000.0),
-        heading_deg: (270.0 - a.to_degrees()).rem_euclid(360.0),
-        pitch_deg: -30.0,
-        roll_deg: 0.0,
-        fov_x_deg: 60.0,
-        viewport: [SOAK_SIZE.x, SOAK_SIZE.y],
-    }
+    let heading = (270.0 - a.to_degrees()).rem_euclid(360.0);
+    camera(SOAK_SIZE.into(), DVec3::new(x, y, ground + 3000.0), heading, -30.0)
 }
 
 /// One lap: sums over its frames, then its end, drawn settled at the pose
@@ -503,12 +495,12 @@ fn fly_the_circuit(display: &mut DisplayParts, earth: &ProceduralEarth) -> Vec<L
     let mut laps = Vec::with_capacity(LAPS);
     for _ in 0..LAPS {
         let (started, mut lap) = (Instant::now(), Lap::default());
-        for frame in 0..LAP {
-            let stats = display.frame(&circuit(earth, frame)).expect("frame");
+        let cameras = (0..LAP).map(|frame| circuit(earth, frame));
+        flight::fly(display, cameras, Settle::Never, |Frame { stats, .. }| {
             lap.nodes_loaded += stats.nodes_loaded as u64;
             lap.bytes_uploaded += stats.scene.bytes_uploaded;
             lap.workspace_sum += stats.scene.allocator_workspace_bytes as f64;
-        }
+        });
         lap.end(display, &circuit(earth, 0), started);
         laps.push(lap);
     }

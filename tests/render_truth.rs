@@ -58,14 +58,8 @@ fn lod_and_truth(tau_px: f64, camera: &Camera) -> (RgbaImage, RgbaImage, Vec<u8>
 fn camera_over(earth: &ProceduralEarth) -> Camera {
     let posts = (0..64).flat_map(|j| (0..64).map(move |i| (i * 8, j * 8)));
     let highest = posts.map(|(i, j)| earth.sample(i, j)).fold(f32::MIN, f32::max);
-    Camera {
-        position: DVec3::new(2000.0, 1500.0, highest as f64 + 300.0),
-        heading_deg: 40.0,
-        pitch_deg: -20.0,
-        roll_deg: 5.0,
-        fov_x_deg: 60.0,
-        viewport: [192, 108],
-    }
+    let position = DVec3::new(2000.0, 1500.0, highest as f64 + 300.0);
+    Camera { roll_deg: 5.0, ..testkit::camera([192, 108], position, 40.0, -20.0) }
 }
 
 /// Where the LOD display draws only level-0 tiles it is the truth, to

@@ -8,7 +8,8 @@ use ridgeline::earth::GridPlacement;
 use ridgeline::geo::{Crs, GeoRef};
 use ridgeline::scene::{Scene, SceneConfig, TriangleBand};
 use ridgeline::tiles::ResidentNodes;
-use testkit::scene::{camera, terrain};
+use testkit::scene::{terrain, VIEWPORT};
+use testkit::{camera, over_tile};
 
 #[test]
 fn steady_state_frames_allocate_nothing() {
@@ -38,7 +39,12 @@ fn frames_allocate_nothing(config: SceneConfig, budget: bool) {
         scene.set_tau(1.5).unwrap();
     }
     let path = |k: u32| {
-        camera(20_000.0 + 40.0 * k as f64, 30_000.0 + 25.0 * k as f64, 3_000.0, 55.0, -7.0)
+        camera(
+            VIEWPORT,
+            over_tile(20_000.0 + 40.0 * k as f64, 30_000.0 + 25.0 * k as f64, 3_000.0),
+            55.0,
+            -7.0,
+        )
     };
     // Warm-up: the hash map and tables reach their working size.
     for k in 0..40 {

@@ -5,7 +5,8 @@
 //! `clusters::cache` and coarsen through the same path in `Scene::frame`.
 
 use ridgeline::scene::SceneConfig;
-use testkit::scene::{camera, fly, null_backend, pipeline};
+use testkit::scene::{fly, null_backend, pipeline, VIEWPORT};
+use testkit::{camera, over_tile};
 
 #[test]
 fn a_cluster_buffer_too_small_coarsens_the_tiles_instead_of_failing() {
@@ -17,7 +18,8 @@ fn a_cluster_buffer_too_small_coarsens_the_tiles_instead_of_failing() {
     let mut backend = null_backend(&pipeline);
     let mut coarsened = 0;
     for k in 0..6 {
-        let at = camera(20_000.0 + 400.0 * k as f64, 30_000.0, 1_500.0, 55.0, -8.0);
+        let at =
+            camera(VIEWPORT, over_tile(20_000.0 + 400.0 * k as f64, 30_000.0, 1_500.0), 55.0, -8.0);
         let stats = fly(&mut pipeline, &mut backend, &at).expect("a coarser frame, not an error");
         assert!(stats.scene.triangles > 0 && stats.scene.clusters > 0, "frame {k}: {stats:?}");
         assert_eq!(stats.tau_loosened(), stats.scene.coarsened > 0, "frame {k}");

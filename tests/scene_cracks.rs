@@ -11,7 +11,8 @@
 use ridgeline::clusters::mirror::drawn_tiles;
 use ridgeline::render::ClusterMorph;
 use ridgeline::scene::{Scene, SceneConfig};
-use testkit::scene::{camera, edge_heights, terrain};
+use testkit::scene::{edge_heights, terrain, VIEWPORT};
+use testkit::{camera, over_tile};
 
 #[test]
 fn shared_edges_agree_along_a_low_flight() {
@@ -58,9 +59,8 @@ fn low_flight_edges(
     for k in 0..30 {
         let t = k as f64 / 29.0;
         let cam = camera(
-            8_000.0 + 50_000.0 * t,
-            10_000.0 + 60_000.0 * t,
-            3_600.0 - 1_000.0 * t,
+            VIEWPORT,
+            over_tile(8_000.0 + 50_000.0 * t, 10_000.0 + 60_000.0 * t, 3_600.0 - 1_000.0 * t),
             40.0,
             -8.0,
         );

@@ -66,9 +66,11 @@ fn extreme_terrain_draws_without_cracks() {
             let t = k as f64 / 11.0;
             let cam = testkit::camera(
                 VIEWPORT,
-                0.1 * extent + 0.7 * extent * t,
-                0.2 * extent + 0.5 * extent * t,
-                top as f64 + 300.0,
+                glam::DVec3::new(
+                    0.1 * extent + 0.7 * extent * t,
+                    0.2 * extent + 0.5 * extent * t,
+                    top as f64 + 300.0,
+                ),
                 45.0,
                 -12.0,
             );

@@ -9,7 +9,8 @@ use ridgeline::render::{
 use ridgeline::scene::{Scene, SceneConfig};
 use ridgeline::tiles::grid::tile_bytes;
 use ridgeline::tiles::TileGrid;
-use testkit::scene::{camera, fly, null_backend, pipeline, terrain};
+use testkit::scene::{fly, null_backend, pipeline, terrain, VIEWPORT};
+use testkit::{camera, over_tile};
 
 /// A scripted flight through the whole pipeline (clipmap paging included)
 /// on the null backend.
@@ -20,7 +21,12 @@ fn scripted_flight_counts_and_a_still_camera_uploads_nothing() {
     let mut backend = null_backend(&pipeline);
     let mut uploaded = 0;
     for k in 0..20 {
-        let cam = camera(10_000.0 + 1_500.0 * k as f64, 20_000.0, 3_500.0, 60.0, -6.0);
+        let cam = camera(
+            VIEWPORT,
+            over_tile(10_000.0 + 1_500.0 * k as f64, 20_000.0, 3_500.0),
+            60.0,
+            -6.0,
+        );
         let stats = fly(&mut pipeline, &mut backend, &cam).unwrap();
         let (calls, scene) = (stats.calls, stats.scene);
         let slices =
@@ -37,7 +43,7 @@ fn scripted_flight_counts_and_a_still_camera_uploads_nothing() {
         uploaded += calls.bytes_uploaded;
     }
     assert!(uploaded > 0, "moving uploads new tiles");
-    let still = camera(40_000.0, 20_000.0, 3_500.0, 60.0, -6.0);
+    let still = camera(VIEWPORT, over_tile(40_000.0, 20_000.0, 3_500.0), 60.0, -6.0);
     fly(&mut pipeline, &mut backend, &still).unwrap();
     for _ in 0..5 {
         let stats = fly(&mut pipeline, &mut backend, &still).unwrap();
@@ -121,7 +127,12 @@ fn the_default_transfer_cap_bounds_every_upload() {
     let mut scene = Scene::new(config, terrain()).unwrap();
     let mut pieces = 0;
     for k in 0..10 {
-        let cam = camera(10_000.0 + 3_000.0 * k as f64, 25_000.0, 3_200.0, 70.0, -6.0);
+        let cam = camera(
+            VIEWPORT,
+            over_tile(10_000.0 + 3_000.0 * k as f64, 25_000.0, 3_200.0),
+            70.0,
+            -6.0,
+        );
         scene.frame(&cam, terrain()).unwrap();
         let (_, ranges) = scene.uploads();
         pieces += ranges.len();
@@ -139,7 +150,7 @@ fn a_small_buffer_coarsens_instead_of_failing() {
     let roomy = SceneConfig::default();
     // The view wants about 8 MB of tiles; coarsened twice, 3 MB.
     let tight = SceneConfig { buffer_bytes: 1 << 22, ..roomy };
-    let cam = camera(30_000.0, 30_000.0, 2_600.0, 10.0, -10.0);
+    let cam = camera(VIEWPORT, over_tile(30_000.0, 30_000.0, 2_600.0), 10.0, -10.0);
     let mut full = Scene::new(roomy, terrain()).unwrap();
     let wanted = full.frame(&cam, terrain()).unwrap();
     let mut scene = Scene::new(tight, terrain()).unwrap();
@@ -176,10 +187,10 @@ fn the_near_plane_follows_the_nearest_tile() {
     let (x, y) = lattice.min_by(|a, b| height(a).total_cmp(&height(b))).expect("points");
     let ground = height(&(x, y));
     let summit = pyramid.info().stats.height_max as f64;
-    let high = camera(x, y, ground + 1000.0, 0.0, -5.0);
+    let high = camera(VIEWPORT, over_tile(x, y, ground + 1000.0), 0.0, -5.0);
     assert!(high.position.z < summit, "the view is below the highest summit ({summit} m)");
     let high_near = near(&mut scene, &high);
-    let low = camera(x, y, ground + 20.0, 0.0, -5.0);
+    let low = camera(VIEWPORT, over_tile(x, y, ground + 20.0), 0.0, -5.0);
     let low_near = near(&mut scene, &low);
     println!(
         "near plane {high_near:.1} m at {:.0} m above the ground, {low_near:.2} m at 20 m",
@@ -204,7 +215,7 @@ fn tiles_stop_where_finer_data_stop() {
     let mut pipeline = pipeline(config);
     let mut backend = null_backend(&pipeline);
     // 5 km inside the tile's west edge, looking west over the base.
-    let cam = camera(5_000.0, 45_000.0, 4_000.0, 270.0, -4.0);
+    let cam = camera(VIEWPORT, over_tile(5_000.0, 45_000.0, 4_000.0), 270.0, -4.0);
     let stats = fly(&mut pipeline, &mut backend, &cam).unwrap();
     let drawn = &pipeline.draw_list().drawn;
     let resampled: Vec<_> = drawn.iter().filter(|d| d.source_level != d.key.level).collect();
@@ -229,7 +240,7 @@ fn every_tile_carries_its_mesh_in_its_block() {
     let config = SceneConfig::default();
     let terrain = testkit::scene::terrain_meshed();
     let mut scene = Scene::new(config, terrain).unwrap();
-    let cam = camera(30_000.0, 30_000.0, 2_600.0, 10.0, -10.0);
+    let cam = camera(VIEWPORT, over_tile(30_000.0, 30_000.0, 2_600.0), 10.0, -10.0);
     let report = scene.frame(&cam, terrain).unwrap();
     let (staging, _) = scene.uploads();
     let list = scene.draw_list();

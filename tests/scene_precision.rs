@@ -10,7 +10,6 @@
 //! point, and no place is worse than the equator's by more than a millimetre.
 
 use glam::DVec3;
-use ridgeline::camera::Camera;
 use ridgeline::clipmap::{Clipmap, ClipmapConfig, LoaderMode, ViewConfig};
 use ridgeline::earth::{EarthFrame, GridPlacement};
 use ridgeline::geo::{Crs, GeoRef};
@@ -41,14 +40,7 @@ fn corner_error(earth: &Arc<ProceduralEarth>, at: (f64, f64), radius: f64) -> (f
     let terrain = ClipmapTerrain { clipmap: &clipmap, summary: &summary };
     let lod = LodConfig { tau_px: 4.0, ..LodConfig::default() };
     let mut scene = Scene::new(SceneConfig { lod, ..SceneConfig::default() }, &terrain).unwrap();
-    let camera = Camera {
-        position: eye,
-        heading_deg: 30.0,
-        pitch_deg: -10.0,
-        roll_deg: 0.0,
-        fov_x_deg: 60.0,
-        viewport: [640, 360],
-    };
+    let camera = testkit::camera([640, 360], eye, 30.0, -10.0);
     scene.frame(&camera, &terrain).unwrap();
     let grid = lod.grid_size as f64;
     let (mut worst, mut tiles) = (0.0f64, 0);
@@ -174,14 +166,7 @@ fn earth_corner_error(globe: &Arc<Globe>, (lat, lon): (f64, f64), radius: f64) -
     let lod = LodConfig { tau_px: 4.0, ..LodConfig::default() };
     let scene_config = SceneConfig { lod, earth: Some(globe.placement), ..SceneConfig::default() };
     let mut scene = Scene::new(scene_config, &terrain).unwrap();
-    let camera = Camera {
-        position: eye,
-        heading_deg: 30.0,
-        pitch_deg: -10.0,
-        roll_deg: 0.0,
-        fov_x_deg: 60.0,
-        viewport: [640, 360],
-    };
+    let camera = testkit::camera([640, 360], eye, 30.0, -10.0);
     scene.frame(&camera, &terrain).unwrap();
     let frame = scene.draw_list().uniforms.expect("a drawn frame");
     let earth: EarthFrame = frame.earth.expect("drawn on the ellipsoid");

@@ -7,7 +7,8 @@
 //! allocation counter sees the whole process.
 
 use ridgeline::scene::SceneConfig;
-use testkit::scene::{camera, null_backend, pipeline};
+use testkit::scene::{null_backend, pipeline, VIEWPORT};
+use testkit::{camera, over_tile};
 
 const LAP: u32 = 400;
 const LAPS: u32 = 25;
@@ -22,7 +23,7 @@ fn ten_thousand_frames_keep_memory_and_free_space_flat() {
     let at = |frame: u32| {
         let a = std::f64::consts::TAU * (frame % LAP) as f64 / LAP as f64;
         let (x, y) = (36_000.0 + 12_000.0 * a.cos(), 46_000.0 + 12_000.0 * a.sin());
-        camera(x, y, 3_800.0, (270.0 - a.to_degrees()).rem_euclid(360.0), -6.0)
+        camera(VIEWPORT, over_tile(x, y, 3_800.0), (270.0 - a.to_degrees()).rem_euclid(360.0), -6.0)
     };
     let mut lap_ends = Vec::new();
     let mut allocations_after_first_lap = 0;

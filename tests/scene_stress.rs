@@ -8,7 +8,8 @@ use ridgeline::camera::CameraError;
 use ridgeline::pipeline::{FrameError, FramePipeline, PipelineError};
 use ridgeline::render::{NullBackend, RenderError};
 use ridgeline::scene::{SceneConfig, SceneError};
-use testkit::scene::{camera, fly, null_backend, pipeline};
+use testkit::scene::{fly, null_backend, pipeline, VIEWPORT};
+use testkit::{camera, over_tile};
 
 /// Runs one frame of the whole pipeline, clipmap included.
 fn check_frame(
@@ -44,21 +45,30 @@ fn extreme_attitudes_and_positions_draw_or_refuse_cleanly() {
     let mut scene = display_pipeline();
     let centre = (35_000.0, 45_000.0);
     let cases = [
-        ("looking straight down", camera(centre.0, centre.1, 5_000.0, 0.0, -90.0)),
-        ("looking straight up", camera(centre.0, centre.1, 5_000.0, 0.0, 90.0)),
+        (
+            "looking straight down",
+            camera(VIEWPORT, over_tile(centre.0, centre.1, 5_000.0), 0.0, -90.0),
+        ),
+        (
+            "looking straight up",
+            camera(VIEWPORT, over_tile(centre.0, centre.1, 5_000.0), 0.0, 90.0),
+        ),
         ("inverted", {
-            let mut c = camera(centre.0, centre.1, 4_000.0, 30.0, -5.0);
+            let mut c = camera(VIEWPORT, over_tile(centre.0, centre.1, 4_000.0), 30.0, -5.0);
             c.roll_deg = 180.0;
             c
         }),
-        ("below the terrain", camera(centre.0, centre.1, 500.0, 10.0, 5.0)),
-        ("at 100 km", camera(centre.0, centre.1, 100_000.0, 0.0, -60.0)),
+        ("below the terrain", camera(VIEWPORT, over_tile(centre.0, centre.1, 500.0), 10.0, 5.0)),
+        ("at 100 km", camera(VIEWPORT, over_tile(centre.0, centre.1, 100_000.0), 0.0, -60.0)),
         ("near-zero field of view", {
-            let mut c = camera(centre.0, centre.1, 3_500.0, 0.0, -5.0);
+            let mut c = camera(VIEWPORT, over_tile(centre.0, centre.1, 3_500.0), 0.0, -5.0);
             c.fov_x_deg = 1e-3;
             c
         }),
-        ("far outside the data", camera(-500_000.0, 2_000_000.0, 3_000.0, 135.0, -3.0)),
+        (
+            "far outside the data",
+            camera(VIEWPORT, over_tile(-500_000.0, 2_000_000.0, 3_000.0), 135.0, -3.0),
+        ),
     ];
     for (name, cam) in cases {
         let tiles = check_frame(&mut scene, &cam);
@@ -79,7 +89,7 @@ fn numbers_that_are_not_numbers_are_refused() {
         ("heading", f64::NEG_INFINITY),
         ("pitch", f64::NAN),
     ] {
-        let mut cam = camera(30_000.0, 30_000.0, 3_000.0, 0.0, 0.0);
+        let mut cam = camera(VIEWPORT, over_tile(30_000.0, 30_000.0, 3_000.0), 0.0, 0.0);
         match field {
             "x" => cam.position.x = value,
             "altitude" => cam.position.z = value,
@@ -93,7 +103,7 @@ fn numbers_that_are_not_numbers_are_refused() {
             other => panic!("{field} = {value}: expected a refusal, got {other:?}"),
         }
     }
-    let mut cam = camera(30_000.0, 30_000.0, 3_000.0, 0.0, 0.0);
+    let mut cam = camera(VIEWPORT, over_tile(30_000.0, 30_000.0, 3_000.0), 0.0, 0.0);
     cam.fov_x_deg = 0.0;
     assert!(matches!(
         frame(&mut scene, &cam),

@@ -8,7 +8,8 @@ use ridgeline::clipmap::LoaderMode;
 use ridgeline::lod::budget::{BudgetConfig, BudgetTarget};
 use ridgeline::pipeline::{FramePipeline, PipelineConfig};
 use ridgeline::scene::{clip_planes_computed, SceneConfig};
-use testkit::scene::{camera, null_backend, VIEWPORT};
+use testkit::scene::{null_backend, VIEWPORT};
+use testkit::{camera, over_tile};
 
 #[test]
 fn every_frame_computes_its_view_geometry_once() {
@@ -27,7 +28,12 @@ fn every_frame_computes_its_view_geometry_once() {
     let mut backend = null_backend(&pipeline);
     let (mut reselected, mut clusters) = (0, 0);
     for k in 0..24 {
-        let cam = camera(12_000.0 + 1_200.0 * k as f64, 20_000.0, 2_500.0, 60.0, -8.0);
+        let cam = camera(
+            VIEWPORT,
+            over_tile(12_000.0 + 1_200.0 * k as f64, 20_000.0, 2_500.0),
+            60.0,
+            -8.0,
+        );
         pipeline.settle(&cam, 1000).expect("paging");
         let before = clip_planes_computed();
         let stats = pipeline.frame(&cam, &mut backend).expect("a frame");

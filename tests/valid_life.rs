@@ -22,7 +22,9 @@ use ridgeline::scene::{
     clip_planes, ring_inputs, PreloadedTerrain, SceneConfig, TerrainData, TerrainSummary,
 };
 use ridgeline::tiles::ResidentNodes;
-use testkit::scene::{camera, null_backend, terrain};
+use testkit::flight::{along, fly, OnBackend, Settle};
+use testkit::scene::{null_backend, terrain, VIEWPORT};
+use testkit::{camera, over_tile};
 
 /// One move of the walk: a step (as a share of the declared travel, and a
 /// direction), a turn, and a change of tau.
@@ -108,7 +110,7 @@ proptest! {
             y += horizontal * m.bearing.to_radians().cos();
             z = (z + vertical).max(100.0);
             tau = (tau * m.tau_factor).clamp(1.0, 16.0);
-            let cam = camera(x, y, z + 2500.0, m.heading, m.pitch);
+            let cam = camera(VIEWPORT, over_tile(x, y, z + 2500.0), m.heading, m.pitch);
             let expected = select(&mut full, terrain, &cam, tau);
             let got = select(&mut life, terrain, &cam, tau);
             prop_assert_eq!(&got, &expected, "frame {} at {:?}", frame, cam.position);
@@ -147,14 +149,11 @@ fn fly_default(max_travel_m: Option<f64>, meshes: bool) -> Vec<(Vec<TileKey>, Li
     };
     let mut pipeline = FramePipeline::new(&config, source, summary).expect("pipeline");
     let mut backend = null_backend(&pipeline);
-    let mut frames = Vec::new();
-    for t in path.frame_times(FLY_FRAMES) {
-        let camera = path.sample(t).camera(60.0, FLY_SIZE);
-        let stats = pipeline.frame(&camera, &mut backend).expect("frame");
-        let keys = pipeline.draw_list().tiles.iter().map(|t| t.key).collect();
-        frames.push((keys, stats.scene.split_tests));
-    }
-    frames
+    let mut flyer = OnBackend { pipeline: &mut pipeline, backend: &mut backend };
+    fly(&mut flyer, along(&path, FLY_FRAMES, 60.0, FLY_SIZE), Settle::Never, |frame| {
+        let keys = frame.flyer.pipeline.draw_list().tiles.iter().map(|t| t.key).collect();
+        (keys, frame.stats.scene.split_tests)
+    })
 }
 
 #[test]

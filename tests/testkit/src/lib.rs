@@ -4,7 +4,9 @@
 //! | module | holds |
 //! |---|---|
 //! | [`alloc`] | a global allocator that counts allocations (the no-allocation tests) |
+//! | [`cli`] | the `ridgeline` binary run, its exit checked, its stderr shown on failure |
 //! | [`dem`] | writers of every elevation format the importers read, scratch folders |
+//! | [`flight`] | the one flight loop: cameras flown on a pipeline or a display, a callback per frame |
 //! | [`pyramid`] | random grids, pyramids built and written |
 //! | [`clipmap`] | a small-node procedural earth and checks of the clipmap's state |
 //! | [`scene`] | the frame pipeline over the built-in terrain on the null backend, shared-edge checks |
@@ -17,10 +19,12 @@
 //! [`builtin_terrain`]) and shared by every binary.
 
 pub mod alloc;
+pub mod cli;
 pub mod clipmap;
 pub mod compare;
 pub mod coverage;
 pub mod dem;
+pub mod flight;
 pub mod gl;
 pub mod live;
 pub mod pyramid;
@@ -118,26 +122,27 @@ pub fn asset_pyramid(name: &str, file: &str) -> Arc<Pyramid> {
 
 /// The built-in terrain's SRTM tile's south-west post in the pyramid's local
 /// frame, metres: the built-in terrain is the tile over a larger ETOPO5
-/// base, and the scene and render helpers ([`scene::camera`],
-/// [`render::camera`], [`render::ground`]) take positions relative to the
-/// tile, as they were before the base was added.
+/// base, and the tests place their views relative to the tile
+/// ([`over_tile`], [`render::ground`], [`render::VIEWS`]), as they were
+/// before the base was added.
 pub fn builtin_origin() -> glam::DVec2 {
     static ORIGIN: OnceLock<glam::DVec2> = OnceLock::new();
     *ORIGIN.get_or_init(|| glam::DVec2::from(builtin_pyramid().finest_area_m().0))
 }
 
-/// A camera at `(x, y, altitude)` metres, heading and pitch in degrees, no
-/// roll, a 60 degree field of view, over `viewport` pixels.
-pub fn camera(
-    viewport: [u32; 2],
-    x: f64,
-    y: f64,
-    altitude: f64,
-    heading: f64,
-    pitch: f64,
-) -> Camera {
+/// The point `(x, y)` metres from the built-in SRTM tile's south-west post
+/// ([`builtin_origin`]), `altitude` metres up, in the pyramid's local frame.
+pub fn over_tile(x: f64, y: f64, altitude: f64) -> DVec3 {
+    let origin = builtin_origin();
+    DVec3::new(origin.x + x, origin.y + y, altitude)
+}
+
+/// The tests' one camera: at `position` (local metres), heading and pitch
+/// in degrees, no roll, a 60 degree field of view, over `viewport` pixels.
+/// A test that needs a roll or another field of view sets it on the result.
+pub fn camera(viewport: [u32; 2], position: DVec3, heading: f64, pitch: f64) -> Camera {
     Camera {
-        position: DVec3::new(x, y, altitude),
+        position,
         heading_deg: heading,
         pitch_deg: pitch,
         roll_deg: 0.0,

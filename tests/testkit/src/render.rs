@@ -85,13 +85,6 @@ pub fn open_over(
     DisplayParts::open(config, pyramid, summary)
 }
 
-/// A camera over the render tests' viewport ([`SIZE`]) at `(x, y)` metres
-/// from the built-in SRTM tile's south-west post ([`crate::builtin_origin`]).
-pub fn camera(x: f64, y: f64, altitude: f64, heading_deg: f64, pitch_deg: f64) -> Camera {
-    let origin = crate::builtin_origin();
-    crate::camera([SIZE.x, SIZE.y], origin.x + x, origin.y + y, altitude, heading_deg, pitch_deg)
-}
-
 /// A named fixed view over the built-in terrain (local metres, degrees).
 #[derive(Clone, Copy, Debug)]
 pub struct View {
@@ -105,7 +98,8 @@ pub struct View {
 
 impl View {
     pub fn camera(&self) -> Camera {
-        camera(self.x, self.y, self.altitude, self.heading, self.pitch)
+        let position = crate::over_tile(self.x, self.y, self.altitude);
+        crate::camera(SIZE.into(), position, self.heading, self.pitch)
     }
 }
 

@@ -1,5 +1,5 @@
 //! The built-in terrain, built once into a cache under the target folder,
-//! and cameras over it.
+//! the frame pipeline over it on the null backend, shared-edge checks.
 
 use ridgeline::camera::Camera;
 use ridgeline::clipmap::LoaderMode;
@@ -79,14 +79,6 @@ pub fn terrain_meshed() -> &'static PreloadedTerrain {
     TERRAIN.get_or_init(|| {
         PreloadedTerrain::load(crate::builtin_terrain().as_ref()).expect("all nodes read")
     })
-}
-
-/// A camera over the scene tests' viewport ([`VIEWPORT`]) at `(x, y)`
-/// metres from the built-in SRTM tile's south-west post
-/// ([`crate::builtin_origin`]).
-pub fn camera(x: f64, y: f64, altitude: f64, heading: f64, pitch: f64) -> Camera {
-    let origin = crate::builtin_origin();
-    crate::camera(VIEWPORT, origin.x + x, origin.y + y, altitude, heading, pitch)
 }
 
 /// One tile's drawn height at an edge point, and how far the skirt hung
