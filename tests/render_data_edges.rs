@@ -11,11 +11,17 @@
 //!   within 2 tau on every view, and the views above tau counted and printed;
 //! - skirt pixels at most 0.05 % of the terrain pixels: held within 1 %;
 //!   none erring by more than 2 tau: held within 2.5 tau;
-//! - the coverage mismatch at most 0.01 % of the pixels: held within
-//!   0.05 % (one Rhine view shows 0.03 % where no tile is drawn over ground
-//!   the truth shows);
-//! - no hole pixel (see `limits` for what the extracted tiles of issue 22
-//!   hold at coarse tau).
+//! - the coverage mismatch at most 0.01 % of the pixels: held along the
+//!   Rhine's outline (0.0027 % in its worst view), within 0.05 % past the
+//!   rectangle's edges;
+//! - no hole pixel: held along the outline; past the edges see `limits`
+//!   for what the extracted tiles of issue 22 hold at coarse tau.
+//!
+//! The outline's mismatch (0.0298 %) and holes (up to 10 a view, 20 under
+//! a budget) were the horizon's: it culled tiles behind a hill the
+//! drawn surface does not hold where the data have no-data posts. The
+//! horizon culls now only over data without a no-data post
+//! (`TerrainData::gapless`).
 //!
 //! What is left above the strict targets is skirts seen from beneath the
 //! data's cut face, from beyond an edge: between two tiles of one level
@@ -110,9 +116,9 @@ fn limits(tau_px: f64) -> Limits {
 
 /// Every limit of the module doc, per view; every broken one listed. The
 /// views above the strict targets are counted and printed.
-fn check(name: &str, tau_px: f64, run: &AccuracyRun) -> Vec<String> {
+fn check(name: &str, tau_px: f64, run: &AccuracyRun, coverage: Coverage) -> Vec<String> {
     let mut broken = Vec::new();
-    let (mut skirt, mut terrain, mut above_tau) = (0, 0, 0);
+    let (mut skirt, mut terrain, mut above_tau, mut triangles) = (0, 0, 0, 0);
     for (k, view) in run.views.iter().enumerate() {
         let e = &view.errors;
         let tau = view.tau_px;
@@ -120,14 +126,15 @@ fn check(name: &str, tau_px: f64, run: &AccuracyRun) -> Vec<String> {
         let worst_skirt = view.worst_skirt.as_ref().map_or(0.0, |p| p.error_px as f64);
         println!(
             "  {name} tau {tau_px} view {k}: bound {tau:.2}, p99.9 {:.3} max {:.2} px, skirt pixels {} \
-             (worst {worst_skirt:.2} px), mismatch {:.4} %, holes {}, mirror {:.4} m, tiles {:?}",
+             (worst {worst_skirt:.2} px), mismatch {:.4} %, holes {}, mirror {:.4} m, tiles {:?}, triangles {}",
             e.p999_px,
             e.max_px,
             view.skirt_pixels,
             100.0 * view.coverage_mismatch,
             view.holes,
             view.mirror_p99_m,
-            view.tiles_per_level
+            view.tiles_per_level,
+            view.triangles_lod
         );
         if e.p999_px > tau {
             above_tau += 1;
@@ -144,18 +151,20 @@ fn check(name: &str, tau_px: f64, run: &AccuracyRun) -> Vec<String> {
         if worst_skirt > limit.skirt_taus * tau {
             fail(format!("a skirt pixel errs by {worst_skirt:.2} px: {:?}", view.worst_skirt));
         }
-        if view.coverage_mismatch > 5e-4 {
+        if view.coverage_mismatch > coverage.mismatch {
             let share = 100.0 * view.coverage_mismatch;
             fail(format!("coverage mismatch {share:.4} %: {:?}", view.truth_only_probe));
         }
-        if view.holes > limit.holes {
+        if view.holes > limit.holes.min(coverage.holes) {
             fail(format!("{} hole pixels", view.holes));
         }
         skirt += view.skirt_pixels;
         terrain += e.pixels;
+        triangles += view.triangles_lod;
     }
     println!(
-        "{name} tau {tau_px}: {above_tau} views above tau, skirt pixels {:.4} % of {terrain} terrain pixels",
+        "{name} tau {tau_px}: {above_tau} views above tau, skirt pixels {:.4} % of {terrain} terrain pixels, \
+         {triangles} triangles over the views",
         100.0 * skirt as f64 / terrain.max(1) as f64
     );
     if skirt as f64 > limits(tau_px).skirt_share * terrain as f64 {
@@ -171,6 +180,20 @@ fn check(name: &str, tau_px: f64, run: &AccuracyRun) -> Vec<String> {
     broken
 }
 
+/// What a flight holds of its coverage, per view: the share of pixels with
+/// terrain in one render only, and hole pixels.
+#[derive(Clone, Copy)]
+struct Coverage {
+    mismatch: f64,
+    holes: usize,
+}
+
+/// Past the rectangle's edges: the limits of issue 25's first pass.
+const EDGE_COVERAGE: Coverage = Coverage { mismatch: 5e-4, holes: usize::MAX };
+
+/// Along a ragged outline: issue 25's limit, and no hole.
+const OUTLINE_COVERAGE: Coverage = Coverage { mismatch: 1e-4, holes: 0 };
+
 #[test]
 fn real_dems_flown_past_their_edges_hold_tau_with_skirts_counted() {
     let mut broken = Vec::new();
@@ -178,7 +201,8 @@ fn real_dems_flown_past_their_edges_hold_tau_with_skirts_counted() {
         let pyramid = asset_pyramid(name, file);
         let views = edge_views(&pyramid);
         for tau_px in TAUS {
-            broken.extend(check(name, tau_px, &measure(&pyramid, &views, tau_px, None)));
+            let run = measure(&pyramid, &views, tau_px, None);
+            broken.extend(check(name, tau_px, &run, EDGE_COVERAGE));
         }
     }
     assert!(broken.is_empty(), "{} broken promises:\n{}", broken.len(), broken.join("\n"));
@@ -190,7 +214,8 @@ fn a_ragged_no_data_outline_is_drawn_to_the_last_post_with_data() {
     let views = outline_views(&pyramid);
     let mut broken = Vec::new();
     for tau_px in TAUS {
-        broken.extend(check("rhine", tau_px, &measure(&pyramid, &views, tau_px, None)));
+        let run = measure(&pyramid, &views, tau_px, None);
+        broken.extend(check("rhine", tau_px, &run, OUTLINE_COVERAGE));
     }
     assert!(broken.is_empty(), "{} broken promises:\n{}", broken.len(), broken.join("\n"));
 }
@@ -218,7 +243,8 @@ fn a_triangle_budget_that_raises_tau_keeps_the_promises_at_the_edges() {
             run.tau_achieved_max_px
         );
         assert!(run.tau_loosened_views > 0, "{name}: the budget raised tau on no view");
-        broken.extend(check(&format!("{name}-budget"), 1.0, &run));
+        let coverage = if outline { OUTLINE_COVERAGE } else { EDGE_COVERAGE };
+        broken.extend(check(&format!("{name}-budget"), 1.0, &run, coverage));
     }
     assert!(broken.is_empty(), "{} broken promises:\n{}", broken.len(), broken.join("\n"));
 }

@@ -116,6 +116,7 @@ impl Globe {
             delta_per_level: deltas,
             height_range: (0.0, 400.0),
             map_errors: Default::default(),
+            gapless: true,
         }
     }
 }

@@ -45,6 +45,7 @@
 //! | `ray_truth` | [`trace_truth`]: the full-resolution image by each pixel's ray on the CPU, where the mesh is too large to draw |
 //! | `skirt_probe` | [`SkirtProbe`]: the tile and edge whose skirt a pixel shows, and what decided it |
 //! | `summary` | [`ErrorSummary`]: percentiles over all views |
+//! | `verdict` | [`Verdict`]: the bound and the coverage per view the accuracy tool confirms or not |
 //! | `heat_map` | the error image of a view as colours |
 //! | `earth_ground` | [`EarthGround`]: the best data on the ellipsoid, with the bounds rays skip by |
 //! | `earth_rays` | [`TrueCamera`] and [`trace_earth`]: the geodetic truth's image, each pixel's ray in ECEF |
@@ -61,6 +62,7 @@ mod ray_truth;
 mod skirt_probe;
 mod summary;
 mod tile_triangles;
+mod verdict;
 
 pub use earth_error::{measure_earth, DisplayFrame, EarthErrors, EarthView};
 pub use earth_ground::EarthGround;
@@ -72,3 +74,4 @@ pub use positions::PositionImage;
 pub use ray_truth::{trace_truth, RayGround, HIT_TOLERANCE_M};
 pub use skirt_probe::{CoverageProbe, SkirtProbe};
 pub use summary::{percentile, ErrorSummary};
+pub use verdict::{MismatchedView, Verdict, VerdictError, MISMATCH_PER_VIEW};

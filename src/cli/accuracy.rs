@@ -13,7 +13,7 @@ use std::sync::Arc;
 
 use anyhow::{bail, Context, Result};
 use ridgeline::accuracy::RayGround;
-use ridgeline::accuracy::{EarthGround, TrueCamera};
+use ridgeline::accuracy::{EarthGround, TrueCamera, Verdict, MISMATCH_PER_VIEW};
 use ridgeline::camera::Camera;
 use ridgeline::display::measure::{measure_flight_on_earth, AccuracyRun, EarthTruth, Truth};
 use ridgeline::display::{DisplayConfig, DisplayParts};
@@ -69,21 +69,7 @@ pub fn run(args: &AccuracyArgs) -> Result<()> {
     } else {
         print_tables(&run)?;
     }
-    if run.summary.p999_px > run.tau_achieved_max_px {
-        bail!(
-            "measured p99.9 error {:.3} px exceeds tau {} px",
-            run.summary.p999_px,
-            run.tau_achieved_max_px
-        );
-    }
-    if let Some((t, share)) = worst_mismatch(&run) {
-        bail!(
-            "the view at t = {t:.1} s shows terrain in one render only over {:.4} % of its \
-             pixels, above {:.2} %",
-            100.0 * share,
-            100.0 * MISMATCH_PER_VIEW
-        );
-    }
+    verdict(&run).check()?;
     Ok(())
 }
 
@@ -246,19 +232,11 @@ fn earth_ground(
     Ok(Some((ground, reach_m)))
 }
 
-/// The coverage mismatch a view may show, a share of its pixels: where the
-/// data end the display draws what they hold and nothing beyond, at the
-/// truth's line within rounding.
-const MISMATCH_PER_VIEW: f64 = 1e-4;
-
-/// The view (its time and share) with the largest coverage mismatch, if
-/// above [`MISMATCH_PER_VIEW`].
-fn worst_mismatch(run: &AccuracyRun) -> Option<(f64, f64)> {
-    run.views
-        .iter()
-        .map(|v| (v.t, v.coverage_mismatch))
-        .filter(|&(_, share)| share > MISMATCH_PER_VIEW)
-        .max_by(|a, b| a.1.total_cmp(&b.1))
+/// The run's verdict: p99.9 within the largest tau a view achieved, and
+/// every view's coverage mismatch within [`MISMATCH_PER_VIEW`].
+fn verdict(run: &AccuracyRun) -> Verdict {
+    let mismatch = run.views.iter().map(|v| (v.t, v.coverage_mismatch));
+    Verdict::of(&run.summary, run.tau_achieved_max_px, mismatch)
 }
 
 fn check_args(args: &AccuracyArgs) -> Result<()> {
@@ -304,24 +282,27 @@ fn print_tables(run: &AccuracyRun) -> Result<()> {
     writeln!(out)?;
     error_lines(&mut out, run)?;
     cost_lines(&mut out, run)?;
-    let s = &run.summary;
+    let verdict = verdict(run);
+    let said = |held: bool| if held { "confirmed" } else { "NOT confirmed" };
     // Two decimals at most: a budget's tau is any number.
     let bound = (run.tau_achieved_max_px * 100.0).round() / 100.0;
-    let verdict = if s.p999_px <= run.tau_achieved_max_px { "confirmed" } else { "NOT confirmed" };
-    writeln!(out, "  bound             p99.9 {:.3} px <= tau {bound} px: {verdict}", s.p999_px)?;
+    let held = said(verdict.bound_held());
+    writeln!(out, "  bound             p99.9 {:.3} px <= tau {bound} px: {held}", verdict.p999_px)?;
     if let Some(earth) = &run.earth {
         let p999 = earth.errors.p999_px;
-        let verdict = if p999 <= run.tau_achieved_max_px { "confirmed" } else { "NOT confirmed" };
-        writeln!(out, "  bound on earth    p99.9 {p999:.3} px <= tau {bound} px: {verdict}")?;
+        let held = said(p999 <= run.tau_achieved_max_px);
+        writeln!(out, "  bound on earth    p99.9 {p999:.3} px <= tau {bound} px: {held}")?;
     }
-
-    let worst = run.views.iter().map(|v| v.coverage_mismatch).fold(0.0, f64::max);
-    let verdict = if worst <= MISMATCH_PER_VIEW { "confirmed" } else { "NOT confirmed" };
+    let worst = match verdict.mismatched {
+        Some(view) => format!(" (view {} at t = {:.1} s)", view.index, view.t),
+        None => String::new(),
+    };
     writeln!(
         out,
-        "  coverage          worst view {:.4} % <= {:.2} % of its pixels: {verdict}",
-        100.0 * worst,
-        100.0 * MISMATCH_PER_VIEW
+        "  coverage          worst view {:.4} %{worst} <= {:.2} % of its pixels: {}",
+        100.0 * verdict.worst_mismatch,
+        100.0 * MISMATCH_PER_VIEW,
+        said(verdict.coverage_held())
     )?;
     super::print(&out)
 }

@@ -27,6 +27,10 @@ pub struct TerrainSummary {
     pub height_range: (f32, f32),
     /// What each level's error maps can do (empty without maps).
     pub map_errors: MapErrors,
+    /// Every post inside the data's rectangle has data (no void left, no
+    /// no-data outline): only then may the horizon cull tiles, since the
+    /// occluder is the drawn surface (see [`crate::lod::horizon`]).
+    pub gapless: bool,
 }
 
 impl TerrainSummary {
@@ -38,6 +42,7 @@ impl TerrainSummary {
             delta_per_level: deltas,
             height_range: (info.stats.height_min, info.stats.height_max),
             map_errors: MapErrors::default(),
+            gapless: info.stats.posts_no_data == 0,
         }
     }
 
@@ -63,6 +68,7 @@ impl TerrainSummary {
             delta_per_level: deltas,
             height_range: (low as f32, high as f32),
             map_errors: MapErrors::default(),
+            gapless: true,
         }
     }
 }
@@ -124,5 +130,9 @@ impl TerrainData for ClipmapTerrain<'_> {
 
     fn map_errors(&self) -> MapErrors {
         self.summary.map_errors.clone()
+    }
+
+    fn gapless(&self) -> bool {
+        self.summary.gapless
     }
 }

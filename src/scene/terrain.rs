@@ -23,6 +23,10 @@ pub trait TerrainData: ResidentNodes + TileBounds {
     fn height_range(&self) -> (f32, f32);
     /// What each level's error maps can do (empty without maps).
     fn map_errors(&self) -> MapErrors;
+    /// Whether every post inside the data's rectangle has data: the horizon
+    /// culls only then (its occluder is the drawn surface, and a no-data
+    /// outline or void draws none).
+    fn gapless(&self) -> bool;
 }
 
 /// Height bounds of a tile from the finest resident node that covers it:
@@ -49,6 +53,8 @@ pub struct PreloadedTerrain {
     grid_deltas: Vec<f64>,
     range: (f32, f32),
     maps: MapErrors,
+    /// No node holds a post without data.
+    gapless: bool,
 }
 
 impl PreloadedTerrain {
@@ -90,7 +96,10 @@ impl PreloadedTerrain {
         // A source without maps draws grids: its summary says so.
         let any_map = nodes.values().any(|d| !d.map.is_empty());
         let maps = if any_map { maps } else { MapErrors::default() };
-        Ok(PreloadedTerrain { layout, nodes, deltas, grid_deltas, range, maps })
+        // Past the data's edge a node repeats the edge post: NaN is a post
+        // without data (a void left, or a no-data outline).
+        let gapless = nodes.values().all(|d| d.heights.iter().all(|h| !h.is_nan()));
+        Ok(PreloadedTerrain { layout, nodes, deltas, grid_deltas, range, maps, gapless })
     }
 }
 
@@ -141,5 +150,9 @@ impl TerrainData for PreloadedTerrain {
 
     fn map_errors(&self) -> MapErrors {
         self.maps.clone()
+    }
+
+    fn gapless(&self) -> bool {
+        self.gapless
     }
 }

@@ -60,8 +60,9 @@ impl View {
     /// The view of `camera` over `terrain` for a scene configured by
     /// `config`; refused when the camera is not valid. Tiles are culled
     /// below the chart's horizon (over the data's lowest height) when the
-    /// curvature is drawn, horizon culling is on and the camera is over the
-    /// data's rectangle (see [`crate::lod::horizon`]); on the ellipsoid,
+    /// curvature is drawn, horizon culling is on, every post of the data has
+    /// data and the camera is over the data's rectangle (see
+    /// [`crate::lod::horizon`]); on the ellipsoid,
     /// under the same conditions, below its horizon.
     pub fn new(
         camera: &Camera,
@@ -74,7 +75,10 @@ impl View {
         let (near_m, far_m) = clip_planes(camera, terrain);
         let frustum =
             Frustum::from_view_projection(camera.projection(near_m, far_m) * camera.view());
-        let culling = config.horizon_culling && config.curvature && over_data(camera, layout);
+        let culling = config.horizon_culling
+            && config.curvature
+            && terrain.gapless()
+            && over_data(camera, layout);
         let horizon = culling.then(|| Horizon::new(camera.position.z, lo as f64)).flatten();
         let earth = config.earth.and_then(|placement| {
             let frame = EarthFrame::new(&placement, camera.position, [0, 0])?;
