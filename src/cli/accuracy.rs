@@ -81,7 +81,6 @@ fn open_display(
     path: &FlightPath,
 ) -> Result<(DisplayParts, DisplayConfig)> {
     let mut config = DisplayConfig::new(headless(args.backend), args.view.size);
-    config.scene.horizon_culling = terrain.gapless;
     args.view.configure_earth(&mut config, terrain);
     config.scene.lod.tau_px = args.view.tau;
     config.fov_x_deg = args.view.fov;

@@ -120,7 +120,6 @@ fn display_config(
     path: Option<&FlightPath>,
 ) -> Result<DisplayConfig> {
     let mut config = DisplayConfig::new(args.backend, args.view.size);
-    config.scene.horizon_culling = terrain.gapless;
     config.memory_budget_bytes = args.memory().map(|mb| display_budget(args, mb)).transpose()?;
     config.version = if args.es2 { GlesVersion::Es2 } else { GlesVersion::Es3 };
     config.scene.warning_above_m = args.warning_above;

@@ -53,8 +53,6 @@ pub struct Terrain {
     pub source: Arc<dyn NodeSource>,
     pub summary: TerrainSummary,
     pub name: String,
-    /// Every post has data, so the horizon may hide what is behind it.
-    pub gapless: bool,
 }
 
 impl Terrain {
@@ -67,7 +65,6 @@ impl Terrain {
         let pyramid = Arc::new(ridgeline::dataset::open(view.dataset.as_deref(), cache, progress)?);
         let mut summary = TerrainSummary::from_pyramid(pyramid.info());
         let name = pyramid.path().display().to_string();
-        let gapless = pyramid.info().stats.posts_no_data == 0;
         let source: Arc<dyn NodeSource> = if view.regular_grid {
             pyramid.clone()
         } else {
@@ -76,7 +73,7 @@ impl Terrain {
             summary = TerrainSummary::of_maps(pyramid.info(), meshed.info());
             Arc::new(meshed)
         };
-        Ok(Terrain { ground: Ground::Pyramid(pyramid), source, summary, name, gapless })
+        Ok(Terrain { ground: Ground::Pyramid(pyramid), source, summary, name })
     }
 
     /// The georeference of the terrain's posts (the procedural earth has
@@ -150,5 +147,5 @@ fn open_procedural() -> Result<Terrain> {
     let summary = TerrainSummary::from_procedural(&earth);
     let source: Arc<dyn NodeSource> = earth.clone();
     let name = PROCEDURAL.to_string();
-    Ok(Terrain { ground: Ground::Procedural(earth), source, summary, name, gapless: true })
+    Ok(Terrain { ground: Ground::Procedural(earth), source, summary, name })
 }
