@@ -176,6 +176,30 @@ fn level0(clipmap: &Clipmap, globe: &Globe) -> Vec<[u32; 2]> {
     out
 }
 
+/// Every level-0 node within `radius` of the eye 3000 m above `(lat, lon)`
+/// on the earth is in `wanted`, and no node beyond it: 0.3 % either way,
+/// since the nearest point is found on a sphere.
+fn assert_wanted_within_reach(
+    globe: &Globe,
+    wanted: &[[u32; 2]],
+    (lat, lon): (f64, f64),
+    radius: f64,
+) {
+    let eye = ellipsoid::to_ecef(lat.to_radians(), lon.to_radians(), 3000.0);
+    let [nx, ny] = globe.layout.nodes_at(0);
+    for y in 0..ny {
+        for x in 0..nx {
+            let is = wanted.contains(&[x, y]);
+            if !is && !could_reach(globe, eye, x, y, radius) {
+                continue;
+            }
+            let d = brute_distance(globe, eye, lat, lon, x, y);
+            assert!(is || d > 0.997 * radius, "{lat},{lon}: node {x},{y} at {d:.0} m not wanted");
+            assert!(!is || d < 1.003 * radius, "{lat},{lon}: node {x},{y} at {d:.0} m wanted");
+        }
+    }
+}
+
 #[test]
 fn wanted_nodes_are_those_within_reach_on_the_earth() {
     let globe = Arc::new(Globe::new());
@@ -184,24 +208,8 @@ fn wanted_nodes_are_those_within_reach_on_the_earth() {
     let mut spans = HashMap::new();
     for (lat, lon) in [(0.0, 10.0), (60.0, 10.0), (89.9, 10.0), (51.5, -0.1), (-65.0, 179.9)] {
         let (clipmap, _, _) = settled(&globe, lat, lon, true);
-        let eye = ellipsoid::to_ecef(lat.to_radians(), lon.to_radians(), 3000.0);
         let wanted = level0(&clipmap, &globe);
-        let [nx, ny] = globe.layout.nodes_at(0);
-        for y in 0..ny {
-            for x in 0..nx {
-                let is = wanted.contains(&[x, y]);
-                if !is && !could_reach(&globe, eye, x, y, radius) {
-                    continue;
-                }
-                let d = brute_distance(&globe, eye, lat, lon, x, y);
-                // 0.3 % either way: the nearest point is found on a sphere.
-                assert!(
-                    is || d > 0.997 * radius,
-                    "{lat},{lon}: node {x},{y} at {d:.0} m not wanted"
-                );
-                assert!(!is || d < 1.003 * radius, "{lat},{lon}: node {x},{y} at {d:.0} m wanted");
-            }
-        }
+        assert_wanted_within_reach(&globe, &wanted, (lat, lon), radius);
         let columns = wanted.iter().map(|n| n[0]).collect::<std::collections::BTreeSet<_>>().len();
         let rows = wanted.iter().map(|n| n[1]).collect::<std::collections::BTreeSet<_>>().len();
         println!(
@@ -229,21 +237,9 @@ fn a_projected_grids_wanted_nodes_are_within_reach_on_the_earth() {
     let radius =
         VIEW.load_distance * globe.layout.node_size_m(0)[0].min(globe.layout.node_size_m(0)[1]);
     let (lat, lon) = (60.0f64, 10.0f64);
-    let eye = ellipsoid::to_ecef(lat.to_radians(), lon.to_radians(), 3000.0);
     let (clipmap, _, _) = settled(&globe, lat, lon, true);
     let wanted = level0(&clipmap, &globe);
-    let [nx, ny] = globe.layout.nodes_at(0);
-    for y in 0..ny {
-        for x in 0..nx {
-            let is = wanted.contains(&[x, y]);
-            if !is && !could_reach(&globe, eye, x, y, radius) {
-                continue;
-            }
-            let d = brute_distance(&globe, eye, lat, lon, x, y);
-            assert!(is || d > 0.997 * radius, "node {x},{y} at {d:.0} m not wanted");
-            assert!(!is || d < 1.003 * radius, "node {x},{y} at {d:.0} m wanted");
-        }
-    }
+    assert_wanted_within_reach(&globe, &wanted, (lat, lon), radius);
     let (chart, _, _) = settled(&globe, lat, lon, false);
     let in_chart = level0(&chart, &globe).len();
     println!(
