@@ -10,10 +10,10 @@ use testkit::{camera, over_tile};
 
 #[test]
 fn a_cluster_buffer_too_small_coarsens_the_tiles_instead_of_failing() {
-    // 1 MB: under a window of cluster vertices, and a tile buffer the view
-    // at tau 1 overfills (the meshes extracted for this 320-pixel view fit
-    // 2 MB: they carry what its K needs, no more).
-    let config = SceneConfig { clusters: true, buffer_bytes: 1 << 20, ..SceneConfig::default() };
+    // 512 kB: under a window of cluster vertices, and a tile buffer the
+    // view at tau 1 overfills (the meshes extracted for this 320-pixel view
+    // fit 1 MB: they carry what its K needs, no more).
+    let config = SceneConfig { clusters: true, buffer_bytes: 1 << 19, ..SceneConfig::default() };
     let mut pipeline = pipeline(config);
     let mut backend = null_backend(&pipeline);
     let mut coarsened = 0;

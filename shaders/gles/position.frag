@@ -10,6 +10,7 @@ precision mediump float;
 #endif
 
 varying vec3 v_position;
+varying float v_curtain;  // above 0 on a curtain: no terrain, but it hides what lies behind
 
 #ifdef NO_DATA
 // Drawn for tiles with posts without data: a triangle touching one is
@@ -25,5 +26,5 @@ void main() {
         discard;
     }
 #endif
-    gl_FragColor = vec4(v_position, 1.0);
+    gl_FragColor = v_curtain > 0.0 ? vec4(0.0) : vec4(v_position, 1.0);
 }

@@ -10,11 +10,13 @@ precision mediump float;
 uniform vec3 u_sun;        // unit vector toward the sun
 uniform vec4 u_awareness;  // warning above (m), caution below (m), haze distance (m), unused
 uniform vec3 u_haze;       // horizon colour
+uniform vec3 u_no_data;    // the "no data" hatching's dark colour, as the sky pass's
 
 varying vec3 v_normal;
 varying float v_relative_height;
 varying float v_height;
 varying float v_distance;
+varying float v_curtain;
 
 // Hypsometric tint in absolute metres, the bands charts use: lowland green,
 // yellow-green hills, tan and brown mountains, grey rock, snow.
@@ -41,6 +43,12 @@ void main() {
         discard;
     }
 #endif
+    if (v_curtain > 0.0) {
+        // The data's cut face: missing data, drawn as the sky pass draws it.
+        float stripe = step(mod(gl_FragCoord.x + gl_FragCoord.y, 16.0), 6.0);
+        gl_FragColor = vec4(u_no_data * (1.0 + stripe), 1.0);
+        return;
+    }
     vec3 n = normalize(v_normal);
     // Lambert from the sun plus a sky fill, so slopes facing away stay readable.
     float light = 0.30 + 0.75 * max(dot(n, u_sun), 0.0);

@@ -20,7 +20,7 @@
 // u_morph.x to 1 at u_morph.y with the vertex's distance to the camera,
 // measured with its unmorphed height.
 
-attribute vec4 a_grid;    // post i, post j (in the tile's posts), skirt edge 1..4 or 0, member slot
+attribute vec4 a_grid;    // post i, post j (in the tile's posts), skirt edge 1..4, curtain foot 5 or 0, member slot
 attribute vec2 a_height;  // this level's height, the parent level's height
 attribute vec4 a_normal;  // normal xy at this level, at the parent level
 
@@ -54,6 +54,7 @@ varying float v_distance;
 varying vec3 v_position;     // camera-relative, for the accuracy tool's position output
 varying float v_no_data;     // 1 at a post without data, 0 elsewhere (see NO_DATA in the fragment shaders)
 varying vec2 v_beyond;       // posts past the data's last post, east and north (clipped where above 0)
+varying float v_curtain;     // above 0 on a curtain (the data's cut face, src/tiles/curtain.rs), 0 elsewhere
 
 // sin d and 1 - cos d: by their series below half a radian, so a small
 // angle keeps its digits whatever the GPU's sin does with it.
@@ -142,7 +143,10 @@ void main() {
     v_no_data = no_data ? 1.0 : 0.0;
     // Edge k hangs its skirt its share of the depth: 4-bit field k-1 of
     // tile.w (an integer below 2^16, exact in a highp float), fifteenths.
-    float share = a_grid.z > 0.5 ? mod(floor(tile.w / exp2(4.0 * (a_grid.z - 1.0))), 16.0) : 0.0;
+    // A curtain's foot (5) carries its own depth in its heights.
+    bool skirt = a_grid.z > 0.5 && a_grid.z < 4.5;
+    float share = skirt ? mod(floor(tile.w / exp2(4.0 * (a_grid.z - 1.0))), 16.0) : 0.0;
+    v_curtain = a_grid.z > 4.5 ? 1.0 : 0.0;
     vec2 n;
     vec3 p;
     float morph;

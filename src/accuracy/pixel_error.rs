@@ -189,9 +189,9 @@ pub struct ViewErrors {
     /// A pixel where the truth shows terrain the LOD does not draw (the
     /// last in row order: the nearest, low in the view), to probe ([`crate::accuracy::CoverageProbe`]).
     pub truth_only_pixel: Option<usize>,
-    /// Per LOD terrain pixel, |drawn height - the CPU mirror's height| in
-    /// metres (NaN elsewhere): near 0 except on skirts, a check that the
-    /// mirror measures what the GPU drew.
+    /// Per LOD terrain pixel off skirts, |drawn height - the CPU mirror's
+    /// height| in metres (NaN elsewhere): near 0, a check that the mirror
+    /// measures what the GPU drew.
     pub mirror_m: Vec<f32>,
 }
 
@@ -374,7 +374,12 @@ impl Pixel<'_> {
         };
         let truth = (self.exact)(ground.x, ground.y).map(|h| self.geometry.drawn_truth(ground, h));
         let error_px = truth.map_or(0.0, |h| self.geometry.projected_vertical(p, h - shown));
-        let mirror_m = mirror.map_or(f64::NAN, |m| (m - drawn).abs()) as f32;
+        // Skirts hang below the mirror by design (counted apart): the mirror
+        // check is of the surface.
+        let mirror_m = match mirror {
+            Some(m) if !skirt => (m - drawn).abs() as f32,
+            _ => f32::NAN,
+        };
         LodSide { error_px, mirror_m, skirt, over_data: truth.is_some() }
     }
 

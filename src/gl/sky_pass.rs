@@ -15,9 +15,6 @@ const FRAGMENT_SOURCE: &str = include_str!("../../shaders/gles/sky.frag");
 const CORNER: u32 = 0;
 /// Covers the screen with one triangle.
 const TRIANGLE: [[f32; 2]; 3] = [[-1.0, -1.0], [3.0, -1.0], [-1.0, 3.0]];
-/// The "no data" hatching's dark colour (its stripes are twice as bright):
-/// drawn below the horizon wherever no terrain covers the sky.
-const NO_DATA: [f32; 3] = [0.22, 0.22, 0.24];
 
 pub struct SkyPass {
     gl: Rc<Gl>,
@@ -73,7 +70,7 @@ impl SkyPass {
             calls.uniform_4(self.horizon.as_ref(), [dip as f32, 0.0, 0.0, 0.0]);
             calls.uniform_3(self.zenith.as_ref(), palette::SKY_ZENITH);
             calls.uniform_3(self.haze.as_ref(), palette::SKY_HORIZON);
-            calls.uniform_3(self.no_data.as_ref(), NO_DATA);
+            calls.uniform_3(self.no_data.as_ref(), palette::NO_DATA_HATCH);
             if let Some(vertex_array) = &self.vertex_array {
                 calls.bind_vertex_array(Some(vertex_array));
             }

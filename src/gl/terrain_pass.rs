@@ -49,6 +49,7 @@ struct Locations {
     sun: Option<glow::UniformLocation>,
     awareness: Option<glow::UniformLocation>,
     haze: Option<glow::UniformLocation>,
+    no_data: Option<glow::UniformLocation>,
 }
 
 /// What the terrain pass writes per pixel.
@@ -93,6 +94,7 @@ impl TerrainProgram {
             sun: program.uniform_location("u_sun"),
             awareness: program.uniform_location("u_awareness"),
             haze: program.uniform_location("u_haze"),
+            no_data: program.uniform_location("u_no_data"),
         };
         Ok(TerrainProgram { program, at })
     }
@@ -555,6 +557,8 @@ fn set_frame_uniforms(calls: Calls<'_>, at: &Locations, frame: &FrameUniforms) {
         calls.uniform_3(at.sun.as_ref(), sun.to_array());
         calls.uniform_4(at.awareness.as_ref(), awareness);
         calls.uniform_3(at.haze.as_ref(), palette::SKY_HORIZON);
+        // Curtains are drawn as the sky pass draws missing data.
+        calls.uniform_3(at.no_data.as_ref(), palette::NO_DATA_HATCH);
     }
 }
 

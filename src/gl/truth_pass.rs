@@ -27,7 +27,7 @@ use crate::earth::NodePlace;
 use crate::lod::TileKey;
 use crate::render::{DrawList, FrameUniforms, TileUniforms};
 use crate::tiles::block::write_block;
-use crate::tiles::{grid, TileGrid};
+use crate::tiles::{MeshCounts, TileGrid};
 
 /// `u_morph` that never morphs: the factor is 0 at every distance a frame can have.
 const NO_MORPH: [f32; 2] = [1e30, 2e30];
@@ -51,6 +51,8 @@ struct ChunkDraw {
     byte_offset: u32,
     /// Where its indices start there.
     index_byte_offset: u32,
+    /// Its indices: the grid's, skirts included, then its curtains'.
+    index_count: u32,
     /// Some posts have no data.
     no_data: bool,
 }
@@ -59,8 +61,6 @@ struct ChunkDraw {
 pub struct TruthPass {
     terrain: TerrainPass,
     chunks: Vec<ChunkDraw>,
-    /// Indices per chunk, skirts included.
-    index_count: u32,
     triangles: u64,
 }
 
@@ -68,18 +68,27 @@ impl TruthPass {
     /// Uploads `mesh` into the tile buffer of a terrain pass, a block per
     /// chunk laid out as a regular tile of [`CHUNK_CELLS`] cells.
     pub fn new(gl: &Rc<Gl>, mesh: &TruthMesh) -> Result<TruthPass, GlError> {
-        let counts = grid::counts(CHUNK_CELLS);
-        let block_bytes = counts.block_bytes();
-        let bytes = block_bytes as u64 * mesh.chunks.len() as u64;
+        let grid = TileGrid::new(CHUNK_CELLS);
+        // A chunk's block: the grid's, then its curtains' feet and triangles.
+        let counts_of = |chunk: &TruthChunk| MeshCounts {
+            vertices: chunk.vertices.len() as u32,
+            indices: (grid.indices.len() + chunk.curtains.len()) as u32,
+            skirt_indices: 0,
+        };
+        let bytes: u64 = mesh.chunks.iter().map(|c| counts_of(c).block_bytes() as u64).sum();
         let too_large =
             || GlError::InvalidRequest(format!("truth mesh of {bytes} bytes exceeds 2^32-1"));
         let terrain = TerrainPass::new(gl, u32::try_from(bytes).map_err(|_| too_large())?)?;
-        let indices = TileGrid::new(CHUNK_CELLS).indices;
-        let mut block = vec![0; block_bytes as usize];
+        let (mut block, mut indices) = (Vec::new(), Vec::new());
         let mut chunks = Vec::with_capacity(mesh.chunks.len());
-        for (k, chunk) in mesh.chunks.iter().enumerate() {
-            debug_assert_eq!(chunk.vertices.len(), counts.vertices as usize);
-            let byte_offset = k as u32 * block_bytes;
+        let mut byte_offset = 0u32;
+        for chunk in &mesh.chunks {
+            let counts = counts_of(chunk);
+            debug_assert!(counts.vertices <= 1 << 16);
+            block.resize(counts.block_bytes() as usize, 0);
+            indices.clear();
+            indices.extend_from_slice(&grid.indices);
+            indices.extend_from_slice(&chunk.curtains);
             write_block(&mut block, &chunk.vertices, &indices);
             terrain.upload_at(byte_offset, &block)?;
             chunks.push(ChunkDraw {
@@ -91,10 +100,12 @@ impl TruthPass {
                 first_post: mesh.chunk_first_post(chunk),
                 byte_offset,
                 index_byte_offset: byte_offset + counts.vertex_bytes(),
+                index_count: counts.indices,
                 no_data: chunk.no_data,
             });
+            byte_offset += counts.block_bytes();
         }
-        Ok(TruthPass { terrain, chunks, index_count: counts.indices, triangles: mesh.triangles() })
+        Ok(TruthPass { terrain, chunks, triangles: mesh.triangles() })
     }
 
     /// Surface triangles drawn per frame (all of them: nothing is culled).
@@ -129,7 +140,7 @@ impl TruthPass {
                 skirt_shares: [0; 4],
                 byte_offset: chunk.byte_offset,
                 index_byte_offset: chunk.index_byte_offset,
-                index_count: self.index_count,
+                index_count: chunk.index_count,
                 no_data: chunk.no_data,
                 place,
                 ground: None,

@@ -138,11 +138,11 @@ pub fn sky(model: &CostModel) -> CallStats {
     }
 }
 
-/// The terrain pass: nine state calls, glUseProgram, six frame uniforms, the
+/// The terrain pass: nine state calls, glUseProgram, seven frame uniforms, the
 /// VAO bind, the tile buffer bound as index and as vertex buffer, three
 /// attribute enables; then per depth slice one matrix uniform and the
 /// slice's draws, those with no data last, after a switch to the program that
-/// drops their triangles (glUseProgram, six frame uniforms, the matrix) and
+/// drops their triangles (glUseProgram, seven frame uniforms, the matrix) and
 /// back to the plain one for the next slice; a depth clear between slices;
 /// three attribute disables and the VAO unbind.
 ///
@@ -165,7 +165,7 @@ pub fn terrain(model: &CostModel, list: &DrawList, frame: &FrameUniforms) -> Cal
     let mut stats = CallStats {
         state_changes: 9,
         program_binds: 1,
-        uniform_writes: 6,
+        uniform_writes: 7,
         vertex_array_binds: if windows { 1 } else { 2 * model.vertex_arrays as u64 },
         buffer_binds: if windows { 1 } else { 2 },
         attribute_array_toggles: if windows { 0 } else { 6 },
@@ -178,7 +178,7 @@ pub fn terrain(model: &CostModel, list: &DrawList, frame: &FrameUniforms) -> Cal
     for &slice in slices {
         let switch = |stats: &mut CallStats| {
             stats.program_binds += 1;
-            stats.uniform_writes += 7;
+            stats.uniform_writes += 8;
         };
         if on_plain {
             stats.uniform_writes += 1;

@@ -37,3 +37,8 @@ pub const SKY_ZENITH: [f32; 3] = [0.16, 0.36, 0.68];
 /// Sky colour at the horizon: the bottom of the sky gradient, the colour distant
 /// terrain fades into and the clear colour.
 pub const SKY_HORIZON: [f32; 3] = [0.62, 0.76, 0.90];
+
+/// The "no data" hatching's dark colour (its stripes are twice as bright):
+/// drawn by the sky pass below the horizon wherever no terrain covers the
+/// sky, and by the terrain pass on curtains (`tiles::curtain`).
+pub const NO_DATA_HATCH: [f32; 3] = [0.22, 0.22, 0.24];

@@ -3,23 +3,19 @@
 //! a tile is remade only when its error moves by a step.
 //!
 //! A tile of level `l` is drawn from its level's ring on, `split_l` away
-//! or more, so Ulrich's bound `delta K / D <= tau` holds for it, and for
-//! its morph toward the parent from `split_{l+1} (1 - morph)` on, with
-//! `delta_l = tau (1 - morph) split_l / K` less its map's reference delta.
+//! or more, so Ulrich's bound `delta K / D <= tau` holds for it at
+//! `delta_l = tau split_l / K` less its map's reference delta, and along
+//! its morph toward the parent too: the rings' consistency rule starts
+//! every morph past the band's near end, and the blend's error is linear
+//! in the distance as the bound is (`morphs_start_past_their_band` below).
 //!
-//! The bound alone would allow `tau split_l / K`, 1.4 times coarser: the
-//! rings' consistency rule starts every morph past the band's near end,
-//! and the blend's error is linear in the distance as the bound is
-//! (`morphs_start_past_their_band` below). Extracting there cut the lod
-//! bench's LOD/RTIN-floor ratio at 1280x720 from 4.1 to 2.8 (tau 1) and 6.3
-//! to 3.8 (tau 4), p99.9 within tau. The margin stays for the edges: leaf
-//! tiles of other nodes or sub-levels meet at cracks as deep as their
-//! errors and their targets' (each side morphs toward its own target), and
-//! 1.4 times coarser meshes made their skirts, seen past the data's edges,
-//! err up to 2.6 tau (`tests/render_data_edges.rs` holds 2.1). Keeping it
-//! on levels 0 to 2 alone kept the skirts and gave the whole gain back
-//! (4.10): those levels draw most of the triangles. It can go once leaf
-//! edges are watertight (docs/screen.md).
+//! Until the data's cut face was drawn solid ([`super::curtain`]) the
+//! errors kept a margin of `1 - morph`: the cracks between leaf tiles of
+//! other nodes or sub-levels are as deep as both sides' errors, and seen
+//! from past the data's edge, beneath the cut face, their skirts erred up
+//! to 2.6 tau. With curtains no skirt is seen from below, the margin went,
+//! and the lod bench's LOD/RTIN-floor ratio at 1280x720 fell from 4.1 to
+//! 2.8 (tau 1) and 6.3 to 3.8 (tau 4), p99.9 within tau.
 //! A *leaf* tile (no finer node under it) is drawn however near the camera
 //! comes: nearer than its level's ring it takes *sub-levels*, the ring
 //! halved `k` times and the error with it, each morphing toward the one
@@ -141,7 +137,6 @@ impl MeshErrors {
         self.level.clear();
         self.leaf_ring.clear();
         self.morph_range = morph_range;
-        let keep = 1.0 - morph_range;
         for level in 0..levels {
             let ring = if level == 0 || split(level) <= 0.0 {
                 split(level.saturating_add(1).min(levels - 1)) / 2.0
@@ -149,7 +144,7 @@ impl MeshErrors {
                 split(level)
             };
             // The reference lattice's own error comes on top of the mesh's.
-            let allowed = tau_px * keep * ring / k - maps.reference(level);
+            let allowed = tau_px * ring / k - maps.reference(level);
             let wanted = ErrorStep::at_most(allowed.max(maps.floor(level)));
             self.level.push(wanted);
             self.leaf_ring.push(ring);
@@ -161,13 +156,12 @@ impl MeshErrors {
     /// filled by [`Self::update`] at `tau_px`, whose errors are linear in
     /// tau but for the reference deltas).
     pub fn tau_ceiling(&self, maps: &MapErrors, k: f64, tau_px: f64) -> f64 {
-        let keep = 1.0 - self.morph_range;
         let mut ceiling = tau_px;
         for (level, &ring) in self.leaf_ring.iter().enumerate() {
             let level = level as u8;
             let coarsest = maps.max(level) + maps.reference(level);
             if ring > 0.0 && coarsest > 0.0 {
-                ceiling = ceiling.max(coarsest * k / (keep * ring));
+                ceiling = ceiling.max(coarsest * k / ring);
             }
         }
         ceiling
@@ -233,15 +227,17 @@ mod tests {
         assert_eq!(near.target, errors.level[0].halved(2));
         // A tile with finer data under it never takes a sub-level.
         assert_eq!(errors.for_tile(2, 1.0, false).sub_level, 0);
-        // The bound: the error at the band's near end is tau (1 - morph) D / K at most.
+        // The bound: the error at the band's near end is tau D / K at most,
+        // and within a step of it.
         let (_, end) = errors.sub_level_morph(0, 3);
         assert!((end - 2_500.0).abs() < 1e-9);
-        assert!(near.own.metres() * 1000.0 / 1_250.0 <= 0.7 + 1e-12);
+        let at_near_end = near.own.metres() * 1000.0 / 1_250.0;
+        assert!(at_near_end <= 1.0 + 1e-12 && at_near_end > 2f64.powf(-0.125) - 1e-12);
     }
     /// Every morph starts past its band's near end, so a tile extracted at
-    /// the full error the bound allows there (the margin taken off) would
-    /// keep the bound all along its morph: within tau at the start, where
-    /// it draws its own mesh, and at the end, where it draws its target.
+    /// the full error the bound allows there keeps the bound all along its
+    /// morph: within tau at the start, where it draws its own mesh, and at
+    /// the end, where it draws its target.
     #[test]
     fn morphs_start_past_their_band() {
         use crate::lod::rings::RingInputs;
@@ -262,9 +258,8 @@ mod tests {
             let mut errors = MeshErrors::default();
             let split = |l: u8| rings.split_distance(l);
             errors.update(split, levels, k, tau, morph_range, &MapErrors::default());
-            // The error without the margin, against the bound at `d`.
-            let keep = 1.0 - morph_range;
-            let within = |e: ErrorStep, d: f64| e.metres() / keep * k / d <= tau * (1.0 + 1e-9);
+            // The error against the bound at `d`.
+            let within = |e: ErrorStep, d: f64| e.metres() * k / d <= tau * (1.0 + 1e-9);
             for level in 0..levels - 1 {
                 let near = errors.leaf_ring[level as usize];
                 let (start, end) = rings.morph(level);

@@ -11,6 +11,7 @@
 //! tile is drawn from the ancestor's posts as a regular grid instead.
 
 use super::block::TileVertex;
+use super::curtain::{self, CurtainFinder};
 use super::vertex::{PostReader, TileCoverage, NO_DATA};
 use crate::lod::TileKey;
 use crate::node::{NodeId, NodeLayout, NodeMesh};
@@ -81,6 +82,8 @@ pub struct MeshCutter {
     indices: Vec<u16>,
     /// Per edge (south, east, north, west): position along it and tile vertex.
     edges: [Vec<(u32, u16)>; 4],
+    /// The curtains where the cut's drawn triangles meet dropped ones.
+    curtains: CurtainFinder,
 }
 
 impl Default for MeshCutter {
@@ -92,6 +95,7 @@ impl Default for MeshCutter {
             order: Vec::new(),
             indices: Vec::new(),
             edges: Default::default(),
+            curtains: CurtainFinder::default(),
         }
     }
 }
@@ -156,13 +160,27 @@ impl MeshCutter {
             return None;
         }
         self.gather_edges(mesh, square);
+        self.find_curtains(mesh);
         let skirt_vertices: usize = self.edges.iter().map(Vec::len).sum();
         let skirt_indices: usize = self.edges.iter().map(|e| 6 * e.len().saturating_sub(1)).sum();
+        let curtain_indices = self.curtains.index_count();
         Some(CutSize {
-            vertices: self.order.len() + skirt_vertices,
-            indices: self.indices.len() + skirt_indices,
-            skirt_indices,
+            vertices: self.order.len() + skirt_vertices + self.curtains.feet(),
+            indices: self.indices.len() + skirt_indices + curtain_indices,
+            skirt_indices: skirt_indices + curtain_indices,
         })
+    }
+
+    /// Curtains between the cut's drawn triangles and those a post without
+    /// data drops (none where every vertex has data: nothing to sort).
+    fn find_curtains(&mut self, mesh: &NodeMesh) {
+        let void = |v: u16| mesh.vertices[v as usize].height.is_nan();
+        if !self.order.iter().any(|&v| void(v)) {
+            self.curtains.find(&[], |_| false);
+            return;
+        }
+        let order = &self.order;
+        self.curtains.find(&self.indices, |n| void(order[n as usize]));
     }
 
     fn number_of(&mut self, v: u16) -> u16 {
@@ -255,7 +273,12 @@ impl MeshCutter {
             }
         }
         indices[..self.indices.len()].copy_from_slice(&self.indices);
-        let dropped = self.fill_skirts(inputs, vertices, &mut indices[self.indices.len()..]);
+        let (dropped, skirt_vertices, skirt_indices) =
+            self.fill_skirts(inputs, vertices, &mut indices[self.indices.len()..]);
+        let (first_foot, first_index) =
+            (count + skirt_vertices, self.indices.len() + skirt_indices);
+        let (tops, feet) = vertices.split_at_mut(first_foot);
+        self.curtains.write(|v| tops[v as usize], first_foot, feet, &mut indices[first_index..]);
         match (with_data, without + beyond + dropped) {
             (0, _) => TileCoverage::Empty,
             (_, 0) => TileCoverage::Full,
@@ -264,15 +287,16 @@ impl MeshCutter {
     }
 
     /// Skirt vertices after the cut's, a quad between each two consecutive
-    /// edge vertices, wound to face outward. A skirt vertex where the data
-    /// do not continue across the edge is marked [`NO_DATA`] (its triangles
-    /// dropped), as the grid tiles' are. Returns how many were.
+    /// edge vertices, wound to face outward. Where the data do not continue
+    /// across the edge the vertex is a curtain's foot instead
+    /// ([`curtain::foot`]), as the grid tiles' are. Returns how many were,
+    /// and the vertices and indices written.
     fn fill_skirts(
         &self,
         inputs: &CutInputs<'_>,
         vertices: &mut [TileVertex],
         indices: &mut [u16],
-    ) -> usize {
+    ) -> (usize, usize, usize) {
         let mut next = self.order.len();
         let mut written = 0;
         let mut dropped = 0;
@@ -285,12 +309,7 @@ impl MeshCutter {
                     TileVertex { skirt: e as u16 + 1, ..above }
                 } else {
                     dropped += 1;
-                    TileVertex {
-                        skirt: e as u16 + 1,
-                        height: NO_DATA,
-                        target: above.height,
-                        ..above
-                    }
+                    curtain::foot(above)
                 };
                 next += 1;
             }
@@ -302,7 +321,7 @@ impl MeshCutter {
                 written += 6;
             }
         }
-        dropped
+        (dropped, next - self.order.len(), written)
     }
 
     /// Whether the tile's posts across edge `e` (south, east, north, west),

@@ -8,6 +8,7 @@
 
 pub mod block;
 pub mod cache;
+pub mod curtain;
 pub mod errors;
 pub mod extract;
 pub mod fan;

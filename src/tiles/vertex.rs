@@ -251,10 +251,9 @@ pub fn fill_tile(
 
 /// Copies the edge posts into the skirt vertices. A skirt hides cracks
 /// between two tiles of data; where the post across the edge has no data
-/// (the data end there, or a void begins) there is nothing to meet, and a
-/// skirt would hang as a curtain at the coverage edge: its vertex is marked
-/// [`NO_DATA`] (placed at the edge post's height) so its triangles are
-/// dropped like those of any post without data. Returns how many were.
+/// (the data end there, or a void begins) there is nothing to meet, and the
+/// vertex is a curtain's foot instead ([`super::curtain`]: the cut face
+/// drawn as no data). Returns how many were.
 fn fill_skirts(reader: &PostReader<'_>, grid_size: u32, out: &mut [TileVertex]) -> usize {
     let g = grid_size as i64;
     let posts = ((g + 1) * (g + 1)) as usize;
@@ -266,7 +265,7 @@ fn fill_skirts(reader: &PostReader<'_>, grid_size: u32, out: &mut [TileVertex]) 
         let skirt = out[posts + k].with_surface_of(edge_post);
         out[posts + k] = if across.is_nan() && !is_no_data(edge_post.height) {
             dropped += 1;
-            TileVertex { height: NO_DATA, target: edge_post.height, ..skirt }
+            super::curtain::foot(skirt)
         } else {
             skirt
         };
@@ -357,7 +356,7 @@ mod tests {
         let posts = 9 * 9;
         edge_posts(8)
             .enumerate()
-            .filter(|(k, _)| is_no_data(out[posts + k].height))
+            .filter(|(k, _)| crate::tiles::curtain::is_foot(&out[posts + k]))
             .map(|(_, p)| p)
             .collect()
     }
@@ -428,7 +427,7 @@ mod tests {
     }
 
     #[test]
-    fn skirts_facing_no_data_are_dropped_and_the_rest_kept() {
+    fn skirts_facing_no_data_are_curtains_and_the_rest_skirts() {
         // Data on every side except past the south and west edges (the
         // data's own edge there): only those skirts are dropped.
         let (out, coverage) = tile_ending_at(20);
@@ -436,11 +435,12 @@ mod tests {
         let dropped = dropped_skirts(&out);
         assert!(dropped.iter().all(|&(i, j)| i == 0 || j == 0), "{dropped:?}");
         assert_eq!(dropped.len(), 2 * 9, "every south and west skirt vertex");
-        // A dropped skirt vertex stays at its post's height for the rasteriser.
+        // A curtain's foot hangs under its post, the curtain's depth down.
         let posts = 9 * 9;
-        for (k, (i, j)) in edge_posts(8).enumerate() {
+        let depth = crate::tiles::curtain::CURTAIN_DEPTH_M;
+        for (k, (i, j)) in edge_posts(8).enumerate().filter(|(k, _)| k / 9 == 0 || k / 9 == 3) {
             let own = out[(i + 9 * j) as usize];
-            assert_eq!(out[posts + k].target, own.height, "skirt vertex {k} placed at its post");
+            assert_eq!(out[posts + k].height, own.height - depth, "foot {k} under its post");
             assert_eq!(out[posts + k].post, own.post, "and keeps its position");
         }
     }

@@ -11,12 +11,18 @@
 //! outside the data have no data. Where a layered pyramid has no level-0
 //! node (no data that fine there), the posts are the best data: the
 //! deepest present ancestor's surface sampled at the level-0 posts.
+//!
+//! Where the data end the truth hangs curtains as the tiles do
+//! ([`crate::tiles::curtain`]), from its own exact edges: a skirt vertex
+//! facing a post without data is a curtain's foot, and each chunk appends
+//! feet and curtain triangles where its drawn triangles meet dropped ones.
 
 use crate::lod::select::tiles_at;
 use crate::node::{NodeData, NodeError, NodeId, NodeLayout, NodeSource};
-use crate::tiles::grid::{positions, vertex_count};
+use crate::tiles::curtain::{self, CurtainFinder};
+use crate::tiles::grid::{index_count, positions, vertex_count, TileGrid};
 use crate::tiles::vertex::slope;
-use crate::tiles::{TileVertex, NO_DATA};
+use crate::tiles::{self, TileVertex, NO_DATA};
 
 /// Most posts a truth mesh may hold (4096^2; 961 chunks at most, whose
 /// blocks take 525 MB on the GPU).
@@ -170,8 +176,11 @@ pub struct TruthChunk {
     pub first_post: [u32; 2],
     /// `vertex_count(CHUNK_CELLS)` vertices, their positions in the chunk
     /// set: posts row by row from the south-west, then the skirt's copies
-    /// of the edge posts.
+    /// of the edge posts (curtain feet where they face no data), then the
+    /// feet of the curtains inside the chunk.
     pub vertices: Vec<TileVertex>,
+    /// The curtains' triangles inside the chunk, drawn after the grid's.
+    pub curtains: Vec<u16>,
     /// Some posts have no data ([`crate::tiles::NO_DATA`]).
     pub no_data: bool,
 }
@@ -217,9 +226,11 @@ impl TruthMesh {
         let layout = *source.layout();
         let heights = MarginGrid::load(source, &layout, region, period)?;
         let starts = |posts: u32| (0..posts / CHUNK_CELLS).map(|k| k * CHUNK_CELLS);
+        let grid = TileGrid::new(CHUNK_CELLS);
+        let mut finder = CurtainFinder::default();
         let chunks = starts(region.posts[1])
             .flat_map(|y| starts(region.posts[0]).map(move |x| [x, y]))
-            .map(|first_post| heights.chunk(first_post, layout.spacing_m))
+            .map(|first_post| heights.chunk(first_post, layout.spacing_m, &grid, &mut finder))
             .collect();
         Ok(TruthMesh { region, chunks })
     }
@@ -362,7 +373,13 @@ impl MarginGrid {
         [quantize(-dx * inv), quantize(-dy * inv)]
     }
 
-    fn chunk(&self, first_post: [u32; 2], spacing_m: [f64; 2]) -> TruthChunk {
+    fn chunk(
+        &self,
+        first_post: [u32; 2],
+        spacing_m: [f64; 2],
+        grid: &TileGrid,
+        finder: &mut CurtainFinder,
+    ) -> TruthChunk {
         let g = CHUNK_CELLS;
         let mut vertices: Vec<TileVertex> = positions(g)
             .map(|(post, skirt)| TileVertex { post, skirt, ..TileVertex::default() })
@@ -390,12 +407,32 @@ impl MarginGrid {
         }
         for k in posts..vertices.len() {
             let [i, j] = vertices[k].post.map(usize::from);
-            vertices[k] = vertices[k].with_surface_of(vertices[i + j * (g as usize + 1)]);
+            let top = vertices[i + j * (g as usize + 1)];
+            let skirt = vertices[k].with_surface_of(top);
+            // A chunk edge facing no data is the data's cut face.
+            let [di, dj] = OUTWARD[vertices[k].skirt as usize - 1];
+            let (x, y) = (first_post[0] as i64 + i as i64, first_post[1] as i64 + j as i64);
+            let faces_void =
+                self.at(x + di, y + dj).is_nan() && !tiles::vertex::is_no_data(top.height);
+            vertices[k] = if faces_void { curtain::foot(skirt) } else { skirt };
         }
         debug_assert_eq!(vertices.len(), vertex_count(g));
-        TruthChunk { first_post, vertices, no_data }
+        let mut curtains = Vec::new();
+        if no_data {
+            let surface = &grid.indices[..index_count(g) - 24 * g as usize];
+            finder.find(surface, |v| tiles::vertex::is_no_data(vertices[v as usize].height));
+            let first = vertices.len();
+            vertices.resize(first + finder.feet(), TileVertex::default());
+            curtains.resize(finder.index_count(), 0);
+            let (tops, feet) = vertices.split_at_mut(first);
+            finder.write(|v| tops[v as usize], first, feet, &mut curtains);
+        }
+        TruthChunk { first_post, vertices, curtains, no_data }
     }
 }
+
+/// The step across each skirt edge (south, east, north, west).
+const OUTWARD: [[i64; 2]; 4] = [[0, -1], [1, 0], [0, 1], [-1, 0]];
 
 /// Same rounding as the tiles' normals.
 fn quantize(x: f64) -> i8 {
@@ -458,11 +495,24 @@ mod tests {
                 let expected = [quantize(-dx * inv), quantize(-dy * inv)];
                 assert_eq!(vertex.normal, [expected[0], expected[1], expected[0], expected[1]]);
             }
-            for (skirt, (i, j)) in chunk.vertices[posts..].iter().zip(edge_posts(CHUNK_CELLS)) {
+            let skirts = chunk.vertices[posts..].iter().zip(edge_posts(CHUNK_CELLS));
+            for (k, (skirt, (i, j))) in skirts.enumerate() {
+                let edge = (k / (CHUNK_CELLS as usize + 1) + 1) as u16;
                 let post = chunk.vertices[(i + j * (CHUNK_CELLS + 1)) as usize];
-                assert_eq!(*skirt, TileVertex { skirt: skirt.skirt, ..post });
-                assert!(skirt.skirt > 0);
+                let (x, y) = (chunk.first_post[0] + i, chunk.first_post[1] + j);
+                // The data's own edge (posts 0 and 512) hangs a curtain; the
+                // chunks' shared edges hang skirts of no depth.
+                let cut_face = match edge {
+                    1 => y == 0,
+                    2 => x == 512,
+                    3 => y == 512,
+                    _ => x == 0,
+                };
+                let expected =
+                    if cut_face { curtain::foot(post) } else { TileVertex { skirt: edge, ..post } };
+                assert_eq!(*skirt, expected, "skirt at ({x}, {y}), edge {edge}");
             }
+            assert!(chunk.curtains.is_empty(), "no void inside the data");
         }
         let last = mesh.chunks.last().unwrap();
         assert_eq!(mesh.chunk_first_post(last), [384, 384]);
