@@ -7,15 +7,14 @@
 //! flown along it (`flight::builtin_outline`).
 //!
 //! Issue 25's promises, per view, and what this test holds:
-//! - p99.9 within tau (the bound the view achieved), skirts included: held
-//!   within 2 tau on every view, and the views above tau counted and printed;
-//! - skirt pixels at most 0.05 % of the terrain pixels: held within 1 %;
-//!   none erring by more than 2 tau: held within 2.5 tau;
-//! - the coverage mismatch at most 0.01 % of the pixels: held along the
-//!   Rhine's outline (0.0027 % in its worst view), within 0.05 % past the
-//!   rectangle's edges;
-//! - no hole pixel: held along the outline; past the edges see `limits`
-//!   for what the extracted tiles of issue 22 hold at coarse tau.
+//! - p99.9 within tau (the bound the view achieved), skirts included: held;
+//! - skirt pixels at most 0.05 % of the terrain pixels: held within 0.1 %
+//!   at tau 1 and 1 % at tau 2 to 8 (see `limits`); none erring by more
+//!   than 2 tau: held;
+//! - the coverage mismatch at most 0.01 % of the pixels: held (0.0027 %
+//!   in the Rhine outline's worst view, 0 past the rectangles' edges);
+//! - no hole pixel: held along the outline; one past the Grenoble DSM's
+//!   north edge.
 //!
 //! The outline's mismatch (0.0298 %) and holes (up to 10 a view, 20 under
 //! a budget) were the horizon's: it culled tiles behind a hill the
@@ -23,13 +22,13 @@
 //! horizon culls now only over data without a no-data post
 //! (`TerrainData::gapless`).
 //!
-//! What is left above the strict targets is skirts seen from beneath the
-//! data's cut face, from beyond an edge: between two tiles of one level
-//! cut from different node meshes, each morphing toward its own parent's
-//! mesh, the crack is real and the skirt is as deep as the two sides'
-//! errors (24 m between two morphing level-0 tiles under tau-1 meshes).
-//! Node meshes that share their edges (issues 21 and 22) make those edges
-//! watertight and take the skirt away. `docs/edges.md` has the numbers.
+//! The views above tau (up to 7 of 16 at tau 8, a skirt pixel 2.6 tau)
+//! were skirts seen from beneath the data's cut face, from beyond an edge:
+//! rays below the terrain's cut edge travelled under the surface and met
+//! the skirts hung under tile edges further in, as deep as the two sides'
+//! errors. The cut face is now drawn solid (`tiles::curtain`), in the
+//! display and in the truth: on the code before it this test breaks 74 of
+//! its limits. `docs/edges.md` has the numbers.
 //!
 //! Before skirts hung only as deep as a crack can open this frame, every
 //! edge DEM failed at tau 4 (the Grenoble DSM 46 px p99.9 in its worst
@@ -91,14 +90,16 @@ fn measure(
     measure_accuracy_budgeted(pyramid.clone(), views, tau_px, true, budget)
 }
 
-/// How far the tiles extracted at each frame's error (issue 22) miss
-/// issue 25's limits at coarse tau, measured: at tau 4 and 8 leaf tiles of
-/// neighbouring sub-levels meet at cracks as deep as their errors, and
-/// their skirts show (p99.9 up to 2.06 tau, a skirt pixel 2.51 tau, skirt
-/// pixels 1.85 % of the terrain at tau 8 over the SRTM tile); at tau 2 and
-/// (and at tau 1 under a budget) single hole pixels open at sub-level edges (up to 20 of a view's 36 864). The
-/// limits at tau 1 are issue 25's as it closed; issue 25 stays open for
-/// the rest (`docs/edges.md`).
+/// Issue 25's limits, and what this test holds where it is not met yet:
+/// skirt pixels. Since the cut face is drawn solid (`tiles::curtain`) no
+/// skirt is seen from beneath it, and a skirt pixel is a crack seen from
+/// above, erring less than the two sides do (0.87 tau at worst, measured);
+/// but the cracks between leaf tiles of other node meshes or sub-levels
+/// still show: 0.05-0.06 % of the terrain at tau 1, up to 0.89 % at tau 8
+/// (SRTM tile). At this viewport a crack is a larger share of the picture
+/// than at full size (its area in pixels grows with the width, the
+/// picture's with its square). One hole pixel shows on the Grenoble DSM's
+/// view 7 at every tau (the same before the curtains).
 struct Limits {
     p999_taus: f64,
     skirt_taus: f64,
@@ -107,11 +108,8 @@ struct Limits {
 }
 
 fn limits(tau_px: f64) -> Limits {
-    match tau_px {
-        t if t < 2.0 => Limits { p999_taus: 2.0, skirt_taus: 2.5, skirt_share: 0.01, holes: 24 },
-        t if t < 4.0 => Limits { p999_taus: 2.0, skirt_taus: 2.5, skirt_share: 0.01, holes: 24 },
-        _ => Limits { p999_taus: 2.1, skirt_taus: 2.6, skirt_share: 0.02, holes: 24 },
-    }
+    let skirt_share = if tau_px < 2.0 { 0.001 } else { 0.01 };
+    Limits { p999_taus: 1.0, skirt_taus: 2.0, skirt_share, holes: 1 }
 }
 
 /// Every limit of the module doc, per view; every broken one listed. The
@@ -119,10 +117,13 @@ fn limits(tau_px: f64) -> Limits {
 fn check(name: &str, tau_px: f64, run: &AccuracyRun, coverage: Coverage) -> Vec<String> {
     let mut broken = Vec::new();
     let (mut skirt, mut terrain, mut above_tau, mut triangles) = (0, 0, 0, 0);
+    // Under a budget the share's limit is the raised tau's.
+    let mut raised = tau_px;
     for (k, view) in run.views.iter().enumerate() {
         let e = &view.errors;
         let tau = view.tau_px;
         let limit = limits(tau);
+        raised = raised.max(tau);
         let worst_skirt = view.worst_skirt.as_ref().map_or(0.0, |p| p.error_px as f64);
         println!(
             "  {name} tau {tau_px} view {k}: bound {tau:.2}, p99.9 {:.3} max {:.2} px, skirt pixels {} \
@@ -167,7 +168,7 @@ fn check(name: &str, tau_px: f64, run: &AccuracyRun, coverage: Coverage) -> Vec<
          {triangles} triangles over the views",
         100.0 * skirt as f64 / terrain.max(1) as f64
     );
-    if skirt as f64 > limits(tau_px).skirt_share * terrain as f64 {
+    if skirt as f64 > limits(raised).skirt_share * terrain as f64 {
         broken
             .push(format!("{name} tau {tau_px}: {skirt} skirt pixels of {terrain} terrain pixels"));
     }
@@ -188,8 +189,8 @@ struct Coverage {
     holes: usize,
 }
 
-/// Past the rectangle's edges: the limits of issue 25's first pass.
-const EDGE_COVERAGE: Coverage = Coverage { mismatch: 5e-4, holes: usize::MAX };
+/// Past the rectangle's edges: issue 25's limit; holes as `limits` says.
+const EDGE_COVERAGE: Coverage = Coverage { mismatch: 1e-4, holes: usize::MAX };
 
 /// Along a ragged outline: issue 25's limit, and no hole.
 const OUTLINE_COVERAGE: Coverage = Coverage { mismatch: 1e-4, holes: 0 };

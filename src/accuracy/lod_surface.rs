@@ -270,7 +270,14 @@ impl LodSurface {
         let block = tile.block(staging);
         let (corners, [_, wb, wc]) = self.triangles.at(k, &block, local)?;
         let [a, b, c] = corners.map(|(_, v)| self.vertex_height(&block, tile, v, on_earth));
-        Some(a + wb * (b - a) + wc * (c - a))
+        let along = a + wb * (b - a) + wc * (c - a);
+        match self.earth.as_ref().filter(|_| on_earth && along.is_finite()) {
+            Some(earth) => {
+                let vertices = corners.map(|(_, v)| block.vertex(v).post.map(f32::from));
+                Some(chord_height(earth, tile, vertices, [a, b, c], local).unwrap_or(along))
+            }
+            None => Some(along),
+        }
     }
 
     /// Vertex `v`'s drawn height: the shader's morph
@@ -307,4 +314,32 @@ impl LodSurface {
     pub fn eye(&self) -> DVec2 {
         self.eye
     }
+}
+
+/// The height, along the geodetic up at `local` (tile posts), of the
+/// triangle the GPU draws through vertices at tile posts `vertices` (in
+/// vertex steps) raised to `heights`: a chord, which sags below the
+/// heights interpolated along the ellipsoid between its vertices by up to
+/// a quarter of its mesh's error (`tiles::extract::sag_extent`). `None`
+/// for a triangle seen edge-on from above.
+fn chord_height(
+    earth: &[f32; 8],
+    tile: &TileUniforms,
+    vertices: [[f32; 2]; 3],
+    heights: [f64; 3],
+    local: [f64; 2],
+) -> Option<f64> {
+    let at = |post: [f32; 2], step: f32, height: f32| {
+        let post = [0, 1].map(|k| tile.first_post[k] + post[k] * step);
+        tile.place.vertex(earth, post, height).as_dvec3()
+    };
+    let [a, b, c] = [0, 1, 2].map(|k| at(vertices[k], tile.vertex_step, heights[k] as f32));
+    let ground = [local[0] as f32, local[1] as f32];
+    let surface = at(ground, tile.post_step, 0.0);
+    // Over 10 km, so that the f32 positions' rounding (millimetres at
+    // tens of kilometres) turns the direction by under a microradian.
+    let up = (at(ground, tile.post_step, 10_000.0) - surface) / 10_000.0;
+    let normal = (b - a).cross(c - a);
+    let across = normal.dot(up);
+    (across.abs() > 1e-9 * normal.length() * up.length()).then(|| normal.dot(a - surface) / across)
 }

@@ -19,9 +19,11 @@ use crate::earth::{EarthFrame, GridPlacement};
 use crate::node::cell_surface;
 use crate::render::FrameUniforms;
 
-/// A LOD pixel on a tile edge drawn further than this below the mirrored
+/// A LOD pixel on a tile edge drawn further than this from the mirrored
 /// surface shows a skirt (metres; the mirror agrees to millimetres on
-/// surfaces seen at an angle).
+/// surfaces seen at an angle): below it, the skirt of the tile the mirror
+/// reads there; above it, the skirt of the tile across the edge, seen
+/// through the crack over the lower side.
 pub const SKIRT_TOLERANCE_M: f64 = 0.05;
 
 /// The exact full-resolution height at a local point, metres.
@@ -366,7 +368,7 @@ impl Pixel<'_> {
         let level = self.surface.level_at(ground.x, ground.y).unwrap_or(0);
         let tolerance = SKIRT_TOLERANCE_M + self.geometry.sag_m(level);
         let skirt = mirror.is_some_and(|m| {
-            drawn < m - tolerance && self.surface.on_tile_edge(ground.x, ground.y)
+            (drawn - m).abs() > tolerance && self.surface.on_tile_edge(ground.x, ground.y)
         });
         let shown = match mirror {
             Some(m) if !skirt => m,

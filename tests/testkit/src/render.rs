@@ -236,7 +236,7 @@ pub fn measure_accuracy_budgeted(
         .expect("measured")
 }
 
-/// The hatching's two greys (`sky_pass::NO_DATA`, 0.22 0.22 0.24, and twice
+/// The hatching's two greys (`palette::NO_DATA_HATCH`, 0.22 0.22 0.24, and twice
 /// it), within rounding.
 pub fn is_hatching([r, g, b, _]: [u8; 4]) -> bool {
     let near = |[er, eg, eb]: [f32; 3]| {
