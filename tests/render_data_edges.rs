@@ -99,7 +99,9 @@ fn measure(
 /// (SRTM tile). At this viewport a crack is a larger share of the picture
 /// than at full size (its area in pixels grows with the width, the
 /// picture's with its square). One hole pixel shows on the Grenoble DSM's
-/// view 7 at every tau (the same before the curtains).
+/// view 7 at every tau (the same before the curtains): the truth's point on
+/// a ray grazing the west cut face lands 1.1 m past the first post, where
+/// no LOD tile is (`docs/edges.md`).
 struct Limits {
     p999_taus: f64,
     skirt_taus: f64,
