@@ -234,3 +234,61 @@ fn a_flat_sea_from_ten_km_shows_its_horizon_where_the_earth_does() {
         assert!(worst <= 1.0, "heading {heading}: {worst} px apart");
     }
 }
+
+/// Seen from outside the data and below its edge, a ray meets the data's
+/// cut face (the display's curtain: no data, drawn as hatching), not the
+/// surface: the truth has no terrain there, and a ray that meets the
+/// surface meets it on top. Before, a ray entering the grid below the
+/// edge's surface was a hit at the edge, hundreds of metres under the
+/// surface drawn there, and every such pixel erred by hundreds of pixels
+/// against the earth (the Grenoble DSM from 1 km south of its edge: p50
+/// 218 px).
+#[test]
+fn a_ray_into_the_data_below_its_edge_meets_the_cut_face_not_the_surface() {
+    let hills = Hills::new([5.0, 45.0], 0.002, [401, 401]);
+    let placement = hills.placement();
+    let camera = Camera {
+        position: DVec3::new(20_000.0, -3_000.0, 900.0),
+        heading_deg: 0.0,
+        pitch_deg: -2.0,
+        roll_deg: 0.0,
+        fov_x_deg: 60.0,
+        viewport: [128, 72],
+    };
+    let truth_camera = TrueCamera::new(&camera, &placement);
+    let ground = EarthGround::load(&hills, placement, &[truth_camera.eye], 100_000.0).unwrap();
+    let (mut on_top, mut cut_face) = (0, 0);
+    for row in (0..72).step_by(3) {
+        for col in (0..128).step_by(4) {
+            let pixel = DVec2::new(col as f64 + 0.5, row as f64 + 0.5);
+            let ray = truth_camera.ray(pixel);
+            let Some(hit) = trace_ray(&truth_camera, &ground, pixel, 100_000.0) else {
+                // No hit: sky, or the cut face. The ray's height where it
+                // crosses the south edge tells which.
+                let entry = (0..4000)
+                    .map(|k| truth_camera.eye + ray * (k as f64 * 10.0))
+                    .find(|&p| placement.post_of_ecef(p).0[1] >= 0.0);
+                if let Some(p) = entry {
+                    let (post, height) = placement.post_of_ecef(p);
+                    let edge = ground.height(post[0], 0.0);
+                    if edge.is_some_and(|z| height < z - 5.0) {
+                        cut_face += 1;
+                    }
+                }
+                continue;
+            };
+            let (post, height) = placement.post_of_ecef(hit.point);
+            let surface = ground.height(post[0], post[1]).expect("a hit has data under it");
+            assert!(
+                (height - surface).abs() < 1.0,
+                "pixel ({col}, {row}): hit {:.1} m off the surface at post {post:?}",
+                height - surface
+            );
+            on_top += 1;
+        }
+    }
+    assert!(
+        on_top > 50 && cut_face > 50,
+        "{on_top} rays on the surface, {cut_face} at the cut face"
+    );
+}

@@ -246,6 +246,17 @@ impl Ray<'_> {
     }
 }
 
+/// What a ray meets first.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Meet {
+    /// The surface, at this parameter.
+    Surface(f64),
+    /// The data's cut face: it entered the data below their surface at a
+    /// data edge or a void's rim. The display hangs a curtain of no data
+    /// there; the truth has no terrain at that pixel, and the ray stops.
+    CutFace,
+}
+
 /// Follows one ray; its hit and the steps taken.
 fn march(ground: &EarthGround, eye: DVec3, dir: DVec3, reach_m: f64) -> (Option<EarthHit>, u32) {
     let (bottom, top) = ground.height_range();
@@ -259,6 +270,8 @@ fn march(ground: &EarthGround, eye: DVec3, dir: DVec3, reach_m: f64) -> (Option<
     let ray = Ray { ground, eye, dir };
     let end = leave.min(reach_m);
     let mut s = enter;
+    // The last sample off the grid, while the ray has not reached it since.
+    let mut off_grid = None;
     for step in 1..=MAX_STEPS {
         if s > end {
             return (None, step);
@@ -269,9 +282,19 @@ fn march(ground: &EarthGround, eye: DVec3, dir: DVec3, reach_m: f64) -> (Option<
             return (None, step);
         }
         let Some([u, v]) = ground.on_grid(here.post[0], here.post[1]) else {
+            off_grid = Some(s);
             s += off_grid_step(ground, here.post);
             continue;
         };
+        if let (Some(outside), Some(above)) = (off_grid.take(), here.above) {
+            if above <= 0.0 {
+                // It reached the grid below the surface.
+                return match enter_data(&ray, outside, s) {
+                    Meet::Surface(hit) => (Some(ray.hit(hit)), step),
+                    Meet::CutFace => (None, step),
+                };
+            }
+        }
         // Half a cell, by its narrower side; near a pole, where cells are
         // slivers east-west, at least a sixteenth of their north side (the
         // lattice crossings between are all checked).
@@ -285,8 +308,10 @@ fn march(ground: &EarthGround, eye: DVec3, dir: DVec3, reach_m: f64) -> (Option<
             s += step;
             continue;
         }
-        if let Some(hit) = check_segment(&ray, here, s + length) {
-            return (Some(ray.hit(hit)), step);
+        match check_segment(&ray, here, s + length) {
+            Some(Meet::Surface(hit)) => return (Some(ray.hit(hit)), step),
+            Some(Meet::CutFace) => return (None, step),
+            None => {}
         }
         s += length;
     }
@@ -327,7 +352,7 @@ fn off_grid_step(ground: &EarthGround, post: [f64; 2]) -> f64 {
 
 /// Whether the ray meets the surface between `from` and parameter `to`:
 /// the hit's parameter if it does.
-fn check_segment(ray: &Ray<'_>, from: Sample, to: f64) -> Option<f64> {
+fn check_segment(ray: &Ray<'_>, from: Sample, to: f64) -> Option<Meet> {
     let end = ray.at(to);
     if clear_of_rows(ray.ground, &from, &end) {
         return None;
@@ -404,19 +429,19 @@ fn lattice_crossings(
 /// triangle of the surface, or no surface at an end): bisected to the
 /// hit when `b` is below the surface, halved while neither end is clear
 /// by the curvature's margin.
-fn check_piece(ray: &Ray<'_>, a: Sample, b: Sample, depth: u32) -> Option<f64> {
+fn check_piece(ray: &Ray<'_>, a: Sample, b: Sample, depth: u32) -> Option<Meet> {
     let (Some(fa), Some(fb)) = (a.above, b.above) else {
         // No surface at an end: a data edge or a post without data.
-        return match b.above {
-            Some(fb) if fb <= 0.0 => Some(bisect(ray, a.s, b.s)),
+        return match (a.above, b.above) {
+            (None, Some(fb)) if fb <= 0.0 => Some(enter_data(ray, a.s, b.s)),
             _ => None,
         };
     };
     if fa <= 0.0 {
-        return Some(a.s);
+        return Some(Meet::Surface(a.s));
     }
     if fb <= 0.0 {
-        return Some(bisect(ray, a.s, b.s));
+        return Some(Meet::Surface(bisect(ray, a.s, b.s)));
     }
     let length = b.s - a.s;
     let lat = ray.ground.placement().geodetic_of_post(a.post[0], a.post[1]).0;
@@ -427,6 +452,26 @@ fn check_piece(ray: &Ray<'_>, a: Sample, b: Sample, depth: u32) -> Option<f64> {
     }
     let middle = ray.at(0.5 * (a.s + b.s));
     check_piece(ray, a, middle, depth + 1).or_else(|| check_piece(ray, middle, b, depth + 1))
+}
+
+/// Where a ray without surface at `lo` and below the surface at `hi` meets
+/// the data: it enters them between (to [`HIT_TOLERANCE_M`]); below the
+/// surface there it meets the data's cut face, which the display draws as
+/// a curtain of no data and the truth mesh as the same (`Meet::CutFace`),
+/// else it meets the surface further on.
+fn enter_data(ray: &Ray<'_>, mut lo: f64, below: f64) -> Meet {
+    let mut hi = below;
+    while hi - lo > HIT_TOLERANCE_M {
+        let mid = 0.5 * (lo + hi);
+        match ray.at(mid).above {
+            Some(_) => hi = mid,
+            None => lo = mid,
+        }
+    }
+    match ray.at(hi).above {
+        Some(f) if f > 0.0 => Meet::Surface(bisect(ray, hi, below)),
+        _ => Meet::CutFace,
+    }
 }
 
 /// The ray's first parameter within [`HIT_TOLERANCE_M`] of the surface
