@@ -459,17 +459,12 @@ fn check_piece(ray: &Ray<'_>, a: Sample, b: Sample, depth: u32) -> Option<Meet> 
 /// surface there it meets the data's cut face, which the display draws as
 /// a curtain of no data and the truth mesh as the same (`Meet::CutFace`),
 /// else it meets the surface further on.
-fn enter_data(ray: &Ray<'_>, mut lo: f64, below: f64) -> Meet {
-    let mut hi = below;
-    while hi - lo > HIT_TOLERANCE_M {
-        let mid = 0.5 * (lo + hi);
-        match ray.at(mid).above {
-            Some(_) => hi = mid,
-            None => lo = mid,
-        }
-    }
-    match ray.at(hi).above {
-        Some(f) if f > 0.0 => Meet::Surface(bisect(ray, hi, below)),
+fn enter_data(ray: &Ray<'_>, lo: f64, below: f64) -> Meet {
+    // The shared bisection, with "no surface" on the side it keeps as lo.
+    let outside = |s: f64| ray.at(s).above.is_none().then_some(1.0);
+    let entry = super::ray_truth::bisect(&outside, lo, below);
+    match ray.at(entry).above {
+        Some(f) if f > 0.0 => Meet::Surface(bisect(ray, entry, below)),
         _ => Meet::CutFace,
     }
 }
