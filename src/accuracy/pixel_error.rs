@@ -376,8 +376,8 @@ impl Pixel<'_> {
         };
         let truth = (self.exact)(ground.x, ground.y).map(|h| self.geometry.drawn_truth(ground, h));
         let error_px = truth.map_or(0.0, |h| self.geometry.projected_vertical(p, h - shown));
-        // Skirts hang below the mirror by design (counted apart): the mirror
-        // check is of the surface.
+        // A skirt pixel (counted apart, above or below the mirror) is
+        // measured as drawn: the mirror check is of the surface.
         let mirror_m = match mirror {
             Some(m) if !skirt => (m - drawn).abs() as f32,
             _ => f32::NAN,

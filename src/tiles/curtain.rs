@@ -64,9 +64,7 @@ impl CurtainFinder {
     /// Finds the curtain edges of the triangles `indices` (counter-clockwise
     /// from above), where `dropped(v)` says vertex `v` has no data.
     pub fn find(&mut self, indices: &[u16], dropped: impl Fn(u16) -> bool) {
-        self.sides.clear();
-        self.edges.clear();
-        self.tops.clear();
+        self.clear();
         for tri in indices.chunks_exact(3) {
             let drawn = !tri.iter().any(|&v| dropped(v));
             for k in 0..3 {
@@ -95,6 +93,13 @@ impl CurtainFinder {
         self.tops.extend(self.edges.iter().flatten());
         self.tops.sort_unstable();
         self.tops.dedup();
+    }
+
+    /// Forgets the last mesh's curtains (a mesh that has none).
+    pub fn clear(&mut self) {
+        self.sides.clear();
+        self.edges.clear();
+        self.tops.clear();
     }
 
     /// Curtain feet the last mesh needs (one per top vertex).

@@ -176,7 +176,7 @@ impl MeshCutter {
     fn find_curtains(&mut self, mesh: &NodeMesh) {
         let void = |v: u16| mesh.vertices[v as usize].height.is_nan();
         if !self.order.iter().any(|&v| void(v)) {
-            self.curtains.find(&[], |_| false);
+            self.curtains.clear();
             return;
         }
         let order = &self.order;
