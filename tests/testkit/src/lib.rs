@@ -27,7 +27,6 @@ pub mod dem;
 pub mod flight;
 pub mod gl;
 pub mod live;
-pub mod mesh;
 pub mod pyramid;
 pub mod render;
 pub mod scene;
