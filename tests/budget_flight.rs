@@ -79,10 +79,11 @@ fn fly_over(
 
 #[test]
 fn the_triangle_budget_holds_after_30_frames() {
-    // At 1280x720 node meshes draw 175k to 225k triangles at tau 1 and,
-    // their meshes coarsening with tau, a few thousand at the ceiling;
-    // grids 1.37M and no fewer than 280k.
-    let cases = [(true, [100_000u64, 160_000]), (false, [300_000, 700_000])];
+    // At 1280x720 node meshes draw 130k to 150k triangles at tau 1 (their
+    // errors grow with each vertex's distance) and, their meshes
+    // coarsening with tau, a few thousand at the ceiling; grids 1.37M and
+    // no fewer than 280k.
+    let cases = [(true, [80_000u64, 125_000]), (false, [300_000, 700_000])];
     for ((name, path), (meshes, budgets)) in flights().iter().flat_map(|f| cases.map(|c| (f, c))) {
         let name = format!("{name} ({})", if meshes { "node meshes" } else { "regular grids" });
         for budget in budgets {

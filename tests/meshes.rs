@@ -13,8 +13,9 @@ use ridgeline::meshes::{build_map, build_store, merge_stores, MapFile, MeshOptio
 use ridgeline::node::{NodeData, NodeError, NodeId, NodeLayout, NodeMesh, NodeSource};
 use ridgeline::pyramid::{self, BuildOptions, Pyramid, Silent};
 use ridgeline::scene::PreloadedTerrain;
-use ridgeline::tiles::extract::{forced_step, Extraction, Extractor, PlacedMap, TargetMesh};
+use ridgeline::tiles::extract::{Extraction, Extractor, PlacedMap, TargetMesh};
 use ridgeline::tiles::ResidentNodes;
+use testkit::mesh::{brute, level0};
 
 const OPTIONS: MeshOptions = MeshOptions { depth: 2, tile_cells: 4, finest_view_px: 400.0 };
 
@@ -33,37 +34,6 @@ fn terrain_in(dir: &Path) -> (Arc<Pyramid>, PreloadedTerrain) {
     (pyramid, terrain)
 }
 
-/// Level-0 post of a mesh vertex's post `p` (half steps of the map's lattice).
-fn level0(layout: &NodeLayout, id: NodeId, mesh: &NodeMesh, p: [u16; 2]) -> [f64; 2] {
-    let origin = [id.x, id.y].map(|v| (v as u64 * layout.node_size as u64) << id.level);
-    [0, 1].map(|k| origin[k] as f64 + p[k] as f64 * (1u64 << mesh.post_level) as f64 / 2.0)
-}
-
-/// The mesh's height (or target) at level-0 place `q` by testing every
-/// triangle; `None` outside it.
-fn brute(
-    layout: &NodeLayout,
-    id: NodeId,
-    mesh: &NodeMesh,
-    q: [f64; 2],
-    target: bool,
-) -> Option<f64> {
-    for tri in mesh.indices.chunks_exact(3) {
-        let v = [0, 1, 2].map(|k| mesh.vertices[tri[k] as usize]);
-        let p = v.map(|v| level0(layout, id, mesh, v.post));
-        let area = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| {
-            (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
-        };
-        let w = [area(p[1], p[2], q), area(p[2], p[0], q), area(p[0], p[1], q)];
-        if w.iter().all(|&w| w >= -1e-9) {
-            let sum = w[0] + w[1] + w[2];
-            let h = |k: usize| if target { v[k].target } else { v[k].height } as f64;
-            return Some((0..3).map(|k| w[k] * h(k)).sum::<f64>() / sum);
-        }
-    }
-    None
-}
-
 fn stored(layout: &NodeLayout, level: u8) -> impl Iterator<Item = NodeId> {
     let [nx, ny] = layout.nodes_at(level);
     (0..ny).flat_map(move |y| (0..nx).map(move |x| NodeId::new(level, x, y)))
@@ -75,10 +45,7 @@ fn place<'a>(
     data: &'a NodeData,
     error_m: f64,
 ) -> PlacedMap<'a> {
-    let map = &data.map;
-    let tile = OPTIONS.tile_cells << (id.level - map.post_level);
-    let forced = forced_step(layout, map.post_level, map.cells, tile, error_m);
-    PlacedMap::new(layout, id, data, error_m, forced)
+    testkit::mesh::place(layout, id, data, OPTIONS.tile_cells, error_m)
 }
 
 /// Node `id`'s whole mesh at `error(level)` per level, keeping its

@@ -29,7 +29,8 @@ uniform mat4 u_view_projection;
 // slot 0), selected by the vertex's slot (a_grid.w):
 // [6 slot]:     south-west post numbered from the anchor (xy), level-0 posts
 //               per vertex post (z), skirt shares (w: bits 4(k-1) to 4k-1
-//               for edge k, fifteenths of the skirt depth it hangs, 0 none);
+//               for edge k, fifteenths of the skirt depth it hangs, 0 none;
+//               bits 16 to 23 the skirt slope's code);
 // [6 slot + 1]: morph start, morph end, skirt depth (the deepest), the
 //               node centre's post row from the anchor (ellipsoid);
 // [6 slot + 2]: the node centre's surface point from the camera (xyz,
@@ -146,6 +147,11 @@ void main() {
     // A curtain's foot (5) carries its own depth in its heights.
     bool skirt = a_grid.z > 0.5 && a_grid.z < 4.5;
     float share = skirt ? mod(floor(tile.w / exp2(4.0 * (a_grid.z - 1.0))), 16.0) : 0.0;
+    // Bits 16 to 23: the skirt slope's code (0: none), 128 + 8 log2 of the
+    // metres a skirt may hang per metre of its distance, over 0.5 m
+    // (render::draw_list::skirt_slope, SKIRT_BASE_M).
+    float slope_code = floor(tile.w / 65536.0);
+    float slope = slope_code > 0.5 ? exp2((slope_code - 128.0) / 8.0) : 1.0e30;
     v_curtain = a_grid.z > 4.5 ? 1.0 : 0.0;
     vec2 n;
     vec3 p;
@@ -169,7 +175,8 @@ void main() {
         float distance = length(surface + up * own);
         morph = clamp((distance - ranges.x) / (ranges.y - ranges.x), 0.0, 1.0);
         height = mix(own, a_height.y, morph);
-        p = surface + up * (height - share / 15.0 * ranges.z);
+        float hang = min(share / 15.0 * ranges.z, slope * distance + 0.5);
+        p = surface + up * (height - hang);
         n = mix(a_normal.xy, a_normal.zw, morph);
         // The tile's normal is in its own ENU axes: turned into the camera's.
         v_normal = rotate(q, vec3(n, sqrt(max(1.0 - dot(n, n), 0.0))));
@@ -179,7 +186,8 @@ void main() {
         morph = clamp((distance - ranges.x) / (ranges.y - ranges.x), 0.0, 1.0);
         height = mix(own, a_height.y, morph);
         float drop = dot(position, position) * u_frame.y;
-        float z = height - share / 15.0 * ranges.z - altitude - drop;
+        float hang = min(share / 15.0 * ranges.z, slope * distance + 0.5);
+        float z = height - hang - altitude - drop;
         p = vec3(position, z);
         n = mix(a_normal.xy, a_normal.zw, morph);
         v_normal = vec3(n, sqrt(max(1.0 - dot(n, n), 0.0)));

@@ -173,6 +173,7 @@ mod tests {
             skirt_depth: 0.0,
             skirt_edges: 0,
             skirt_shares: [0; 4],
+            skirt_slope: f32::INFINITY,
             byte_offset: 8,
             index_byte_offset: 8 + counts.vertex_bytes(),
             index_count: counts.indices,

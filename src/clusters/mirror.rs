@@ -54,6 +54,7 @@ pub fn drawn_tiles(list: &DrawList, vertices: &[u8], indices: &[u8]) -> (DrawLis
             tile.first_post = [u[0], u[1]];
             tile.vertex_step = u[2];
             tile.skirt_shares = TileUniforms::unpack_skirt_shares(u[3]);
+            tile.skirt_slope = TileUniforms::unpack_skirt_slope(u[3]);
             tile.skirt_edges =
                 (0..4).filter(|&e| tile.skirt_shares[e] > 0).fold(0, |b, e| b | 1 << e);
             tile.morph = [u[4], u[5]];

@@ -214,6 +214,7 @@ mod tests {
             skirt_depth: 1.0,
             skirt_edges: 0,
             skirt_shares: [0; 4],
+            skirt_slope: f32::INFINITY,
             byte_offset: 0,
             index_byte_offset: 100 * VERTEX_BYTES,
             index_count: 6,

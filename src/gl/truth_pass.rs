@@ -138,6 +138,7 @@ impl TruthPass {
                 skirt_depth: 0.0,
                 skirt_edges: 0,
                 skirt_shares: [0; 4],
+                skirt_slope: f32::INFINITY,
                 byte_offset: chunk.byte_offset,
                 index_byte_offset: chunk.index_byte_offset,
                 index_count: chunk.index_count,

@@ -13,6 +13,7 @@ use crate::camera::Camera;
 use crate::earth::{EarthFrame, NodePlace, PlaceCache};
 use crate::lod::{LevelRings, TileKey};
 use crate::tiles::block::{BLOCK_ALIGNMENT, INDEX_BYTES};
+use crate::tiles::cache::EdgeErrors;
 use crate::tiles::errors::MeshErrors;
 use crate::tiles::{TileBlock, TileCoverage, TileDraw};
 use glam::{DVec2, Mat4, Vec3};
@@ -216,6 +217,10 @@ pub struct TileUniforms {
     /// in [`SKIRT_SHARES`]ths, rounded up; 0 where it hangs none. See
     /// [`skirt_depths`].
     pub skirt_shares: [u8; 4],
+    /// Metres of skirt per metre of a skirt vertex's distance from the
+    /// camera that no skirt of the tile hangs deeper than (plus
+    /// [`SKIRT_BASE_M`]); infinite for none. See [`skirt_slope`].
+    pub skirt_slope: f32,
     /// Where the tile's block (its vertices) starts in the GPU buffer, bytes.
     pub byte_offset: u32,
     /// Where the tile's indices start in the same buffer, bytes.
@@ -291,13 +296,18 @@ impl TileUniforms {
     /// south lowest (an integer below 2^16, exact in any float).
     pub fn packed_skirt_shares(&self) -> f32 {
         let word = self.skirt_shares.iter().rev().fold(0u32, |w, &s| (w << 4) | s as u32);
-        word as f32
+        (word | (slope_code(self.skirt_slope) << 16)) as f32
     }
 
     /// The shares [`Self::packed_skirt_shares`] packed.
     pub fn unpack_skirt_shares(packed: f32) -> [u8; 4] {
         let word = packed as u32;
         std::array::from_fn(|edge| ((word >> (4 * edge)) & 0xf) as u8)
+    }
+
+    /// The skirt slope [`Self::packed_skirt_shares`] packed (quantised up).
+    pub fn unpack_skirt_slope(packed: f32) -> f32 {
+        slope_of_code((packed as u32) >> 16)
     }
 
     /// Triangles the tile's draw call draws, skirts included.
@@ -362,11 +372,9 @@ pub struct DrawnTile {
     pub source_level: u8,
     /// Cut from its source node's mesh (else a regular grid of its posts).
     pub node_mesh: bool,
-    /// How far its surface may lie from the data, metres (NaN: its
-    /// level's table, for a grid), fully morphed.
-    pub error_m: f32,
-    /// The same where it has not morphed.
-    pub own_error_m: f32,
+    /// How far its surface may lie from the data along each edge (NaN:
+    /// its level's table, for a grid).
+    pub errors: EdgeErrors,
     /// Its sub-level: tiles of one node share their edges only at the
     /// same one (the same error and morph target).
     pub sub_level: u8,
@@ -379,8 +387,7 @@ impl DrawnTile {
             key: draw.key,
             source_level: draw.source_level,
             node_mesh: draw.node_mesh,
-            error_m: draw.error_m,
-            own_error_m: draw.own_error_m,
+            errors: draw.errors,
             sub_level: draw.sub_level,
         }
     }
@@ -561,6 +568,8 @@ fn tile_uniforms(
     let reach = MorphReach { frame, ranges: &ranges, grid_size: geometry.grid_size };
     let depths = skirt_depths(draw, drawn, geometry, &reach);
     let (skirt_depth, skirt_shares) = skirt_shares(depths);
+    let hangs = (0..4).filter(|&e| skirt_shares[e] > 0).fold(0, |bits, e| bits | 1 << e);
+    let skirt_slope = skirt_slope(draw, drawn, hangs, geometry);
     let mut tile = TileUniforms {
         key,
         first_post,
@@ -570,6 +579,7 @@ fn tile_uniforms(
         skirt_depth,
         skirt_edges: (0..4).filter(|&e| skirt_shares[e] > 0).fold(0, |bits, e| bits | 1 << e),
         skirt_shares,
+        skirt_slope,
         byte_offset: draw.byte_offset,
         index_byte_offset: draw.index_byte_offset,
         index_count: draw.index_count,
@@ -598,6 +608,67 @@ fn skirt_shares(depths: [f64; 4]) -> (f32, [u8; 4]) {
         }
     });
     (deepest, shares)
+}
+
+/// What a skirt vertex hangs no deeper than beyond its tile's skirt slope
+/// times its distance, metres: rounding ([`SKIRT_MARGIN_M`]) and the least
+/// sag a mesh allows (5 cm a side) ([`skirt_slope`]). `terrain.vert` has it.
+pub const SKIRT_BASE_M: f64 = 0.5;
+
+/// The 8-bit code of a skirt slope above the shares' 16 bits: 0 for none,
+/// else `128 + 8 log2(slope)` rounded up (the slope sent is never less).
+fn slope_code(slope: f32) -> u32 {
+    if !(slope.is_finite() && slope > 0.0) {
+        return 0;
+    }
+    (128.0 + 8.0 * (slope as f64).log2()).ceil().clamp(1.0, 255.0) as u32
+}
+
+/// The slope of [`slope_code`] `code` (infinite for 0).
+fn slope_of_code(code: u32) -> f32 {
+    match code & 0xff {
+        0 => f32::INFINITY,
+        c => ((c as f64 - 128.0) / 8.0).exp2() as f32,
+    }
+}
+
+/// How steeply a tile's skirts may deepen with the distance (metres a
+/// metre, on top of [`SKIRT_BASE_M`]), or infinite where they hang their
+/// edge's depth all along. A tile extracted from its own level's map
+/// errs at a point `D` metres away by at most `tau D / K` (its errors grow
+/// with the distance, `tiles::by_distance`, and morphing keeps that), so a
+/// crack between two such tiles is at most twice that: an edge's depth,
+/// set by its far end, need not hang at its near end, where it would stand
+/// as a wall seen from past the data's edge (issue 25). Level-0 tiles only
+/// (their cells sag within the base), and only where every tile across a
+/// skirted edge is such a tile too.
+pub fn skirt_slope(
+    draw: &TileDraw,
+    drawn: &[DrawnTile],
+    hangs: u8,
+    geometry: &TileGeometry<'_>,
+) -> f32 {
+    let bounded = |tile: &DrawnTile| {
+        let exact = tile.key.level == 0 && tile.source_level == 0 && tile.node_mesh;
+        exact && tile.errors.morphed_m.iter().all(|e| e.is_finite())
+    };
+    let per_m = geometry.mesh_errors.per_m();
+    if !(bounded(&DrawnTile::of(draw)) && per_m.is_finite() && per_m > 0.0) {
+        return f32::INFINITY;
+    }
+    // An edge with nothing drawn across (culled, or hidden by the horizon)
+    // hangs for a neighbour of the same kind: its crack is as bounded.
+    for edge in (0..4).filter(|e| hangs & (1 << e) != 0) {
+        let mut all = true;
+        for_each_across(draw.key, edge, drawn, |other| all &= bounded(other));
+        if !all {
+            return f32::INFINITY;
+        }
+    }
+    // Each side errs by `tau D / K` at most, and its straight edges sag
+    // below the curved earth by a quarter of its least error at most
+    // (`tiles::extract::sag_extent`).
+    (2.5 * per_m) as f32
 }
 
 /// A skirt's depth is sent as a share of its tile's deepest, in this many
@@ -661,7 +732,7 @@ fn same_node(draw: &TileDraw, key: TileKey, node_tiles: u32) -> bool {
 /// morphed: its own extraction's error where known (it includes the mesh it
 /// morphs toward), else its levels' tables.
 pub fn drawn_error_m(tile: &DrawnTile, geometry: &TileGeometry<'_>) -> f64 {
-    surface_error_m(tile, 1.0, geometry)
+    surface_error_m(tile, 1.0, geometry, None)
 }
 
 /// The delta of `level` for a tile made as it was: from `meshes` for a
@@ -705,13 +776,15 @@ pub fn skirt_depths(
         if hangs & (1 << edge) == 0 {
             return 0.0;
         }
-        let crack_side = |tile: &DrawnTile| {
+        // Each side's error along the edge: the tiles across face it with
+        // their opposite edge.
+        let crack_side = |tile: &DrawnTile, side: usize| {
             let morph = reach.along(draw.key, edge, tile.key.level, tile.sub_level);
-            surface_error_m(tile, morph, geometry) + sag_m(tile, geometry)
+            surface_error_m(tile, morph, geometry, Some(side)) + sag_m(tile, geometry)
         };
         let mut across: Option<f64> = None;
         for_each_across(draw.key, edge, drawn, |other| {
-            let side = crack_side(other);
+            let side = crack_side(other, (edge + 2) % 4);
             across = Some(across.map_or(side, |a| a.max(side)));
         });
         // Nothing found across (culled, past the data, or drawn at a level
@@ -719,9 +792,10 @@ pub fn skirt_depths(
         // error, as if its tile were there.
         let unseen = || {
             let coarser = DrawnTile { key: draw.key.parent(), ..own };
-            crack_side(&coarser).max(surface_error_m(&coarser, 1.0, geometry))
+            let morphed = surface_error_m(&coarser, 1.0, geometry, Some(edge));
+            crack_side(&coarser, edge).max(morphed)
         };
-        crack_side(&own) + across.unwrap_or_else(unseen) + SKIRT_MARGIN_M
+        crack_side(&own, edge) + across.unwrap_or_else(unseen) + SKIRT_MARGIN_M
     })
 }
 
@@ -731,14 +805,26 @@ pub fn skirt_depths(
 pub const SKIRT_MARGIN_M: f64 = 0.1;
 
 /// How far `tile`'s surface may lie from the data where its morph factor
-/// is at most `morph`: its source's delta, moved toward the delta of the
-/// level above its own (whose surface it morphs to) by that factor. A tile
-/// extracted from an error map knows its errors unmorphed and fully morphed.
-pub fn surface_error_m(tile: &DrawnTile, morph: f64, geometry: &TileGeometry<'_>) -> f64 {
+/// is at most `morph`, along `edge` (south, east, north, west; `None`:
+/// anywhere): its source's delta, moved toward the delta of the level above
+/// its own (whose surface it morphs to) by that factor. A tile extracted
+/// from an error map knows its errors unmorphed and fully morphed, edge by
+/// edge (they grow with the distance).
+pub fn surface_error_m(
+    tile: &DrawnTile,
+    morph: f64,
+    geometry: &TileGeometry<'_>,
+    edge: Option<usize>,
+) -> f64 {
     let (meshes, grids) = (geometry.delta_per_level, geometry.grid_delta_per_level);
     let at = |level: u8| made_delta(meshes, grids, tile.node_mesh, level);
-    let (own, toward) = if tile.error_m.is_finite() {
-        (tile.own_error_m as f64, tile.error_m as f64)
+    let errors = &tile.errors;
+    let pick = |per_edge: &[f32; 4]| match edge {
+        Some(edge) => per_edge[edge & 3] as f64,
+        None => per_edge.iter().copied().fold(f32::NAN, f32::max) as f64,
+    };
+    let (own, toward) = if errors.morphed_m.iter().all(|e| e.is_finite()) {
+        (pick(&errors.own_m), pick(&errors.morphed_m))
     } else {
         (at(tile.source_level), at(tile.key.level.saturating_add(1)))
     };
@@ -867,6 +953,7 @@ mod tests {
             skirt_depth: 1.0,
             skirt_edges: ALL_EDGES,
             skirt_shares: [15; 4],
+            skirt_slope: f32::INFINITY,
             byte_offset: 0,
             index_byte_offset: 0,
             index_count: 0,
@@ -973,8 +1060,7 @@ mod tests {
             key: TileKey::new(level, x, y),
             source_level,
             node_mesh: true,
-            error_m: f32::NAN,
-            own_error_m: f32::NAN,
+            errors: EdgeErrors::UNKNOWN,
             sub_level: 0,
         }
     }
@@ -997,8 +1083,7 @@ mod tests {
             source_level: 2,
             coverage: crate::tiles::TileCoverage::Full,
             sub_level: 0,
-            error_m: f32::NAN,
-            own_error_m: f32::NAN,
+            errors: EdgeErrors::UNKNOWN,
         };
         let deltas = [0.0, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0];
         let grid_deltas = deltas.map(|d| 10.0 * d);

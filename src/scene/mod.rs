@@ -425,6 +425,8 @@ impl Scene {
             let split = |level| rings.split_distance(level);
             let (tau, morph) = (lod.tau_px, lod.morph_range);
             self.mesh_errors.update(split, levels, view.k, tau, morph, &self.map_errors);
+            let eye = [view.camera.position.x, view.camera.position.y];
+            self.mesh_errors.anchor(eye, Some(&view.camera), |level| rings.morph(level));
             let selection = view.selection(&self.rings, self.config.curvature);
             let selected = self.selector.select(&selection, terrain);
             let errors = &self.mesh_errors;

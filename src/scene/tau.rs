@@ -22,6 +22,11 @@ use super::{SceneStats, TerrainData, TileEstimate, TriangleBand, View};
 /// budget promises, over the in-frame band the estimate aims at.
 const CORRECTION_BAND: f64 = 0.04;
 
+/// Corrections a frame may make: tiles whose errors grow with the distance
+/// (`tiles::by_distance`) are remade at every tau, so a retake's count can
+/// again miss what the estimate foretold; a second one closes it.
+const MAX_CORRECTIONS: u8 = 2;
+
 /// The band a triangle budget holds within each frame: 2 %, under half the
 /// 5 % the budget promises, since the estimate of tiles yet to be remade
 /// at another error is itself off by up to 3 % (measured on the default
@@ -50,6 +55,8 @@ pub(super) struct TauPolicy {
     lod: LodConfig,
     search: Option<BandSearch>,
     retaking: bool,
+    /// Corrections made this frame.
+    corrections: u8,
 }
 
 impl TauPolicy {
@@ -67,6 +74,7 @@ impl TauPolicy {
             lod: requested,
             search: None,
             retaking: false,
+            corrections: 0,
         }
     }
 
@@ -145,6 +153,7 @@ impl TauPolicy {
         };
         self.search = self.band.search(requested.tau_px, self.ceiling);
         self.retaking = false;
+        self.corrections = 0;
         Ok(())
     }
 
@@ -163,15 +172,17 @@ impl TauPolicy {
     /// After the tiles were made, drawing `drawn` triangles: whether to
     /// select once more with that real count (the tiles remade at another
     /// error hold counts the estimate only foretold), making the tiles
-    /// again ([`Self::retaking`]). Once a frame.
+    /// again ([`Self::retaking`]). At most [`MAX_CORRECTIONS`] a frame.
     pub fn correct(&mut self, drawn: f64) -> bool {
-        let Some(search) = self.search.as_mut().filter(|_| !self.retaking) else {
+        let more = self.corrections < MAX_CORRECTIONS;
+        let Some(search) = self.search.as_mut().filter(|_| more) else {
             return false;
         };
         if (drawn / search.target() - 1.0).abs() <= CORRECTION_BAND {
             return false;
         }
         let next = search.correct(drawn, self.lod.tau_px);
+        self.corrections += 1;
         self.retaking = self.reselect(next);
         self.retaking
     }
@@ -261,7 +272,8 @@ pub(super) fn estimates<'a>(
 ) -> impl Iterator<Item = TileEstimate> + 'a {
     selected.iter().map(move |t| {
         let leaf = !terrain.has_finer_data(t.key, grid_size);
-        let wanted = errors.for_tile(t.key.level, t.distance, leaf).own.metres();
+        let sub = errors.for_tile(t.key.level, t.distance, leaf).sub_level;
+        let wanted = errors.allowed_m(t.key.level, sub);
         let resident = cache.resident_parts(t.key).map(|(n, skirts, made)| {
             match map_scale(cache, terrain, t.key, grid_size, made, wanted) {
                 Some(s) => {

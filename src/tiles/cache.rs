@@ -16,7 +16,8 @@
 
 use super::block::TileVertex;
 use super::block::{write_block, MeshCounts, BLOCK_ALIGNMENT};
-use super::errors::{MeshErrors, TileErrors};
+use super::by_distance::DistanceRule;
+use super::errors::{ErrorStep, MeshErrors, TileErrors};
 use super::extract::{forced_step, Extraction, Extractor, PlacedMap, TargetMesh};
 use super::grid::{self, TileGrid};
 use super::mesh_tile::{CutInputs, MeshCutter, TileSquare};
@@ -77,13 +78,31 @@ pub struct TileDraw {
     /// Its sub-level (a leaf tile nearer than its level's ring; see
     /// [`super::errors`]).
     pub sub_level: u8,
-    /// How far the surface it shows may lie from the data, metres: its
-    /// mesh's error and its reference lattice's, or those of the mesh it
-    /// morphs toward, whichever is larger; NaN where unknown (a grid).
-    pub error_m: f32,
-    /// The same where it has not morphed: its own mesh's and reference
-    /// lattice's error (NaN for a grid).
-    pub own_error_m: f32,
+    /// How far the surface it shows may lie from the data along each edge.
+    pub errors: EdgeErrors,
+}
+
+/// How far a tile's surface may lie from the data along each of its edges
+/// (south, east, north, west), metres: its mesh's error and its reference
+/// lattice's; NaN where unknown (a grid: its level's tables apply).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EdgeErrors {
+    /// Where it has not morphed: its own mesh's.
+    pub own_m: [f32; 4],
+    /// Fully morphed: the larger of its own mesh's and the mesh it morphs
+    /// toward's.
+    pub morphed_m: [f32; 4],
+}
+
+impl EdgeErrors {
+    /// Unknown errors (a grid).
+    pub const UNKNOWN: EdgeErrors = EdgeErrors { own_m: [f32::NAN; 4], morphed_m: [f32::NAN; 4] };
+
+    /// The largest fully morphed error along any edge: the tile's (its
+    /// square's farthest points are corners).
+    pub fn largest_m(&self) -> f32 {
+        self.morphed_m.iter().copied().fold(f32::NAN, f32::max)
+    }
 }
 
 /// How a resident tile was made.
@@ -246,10 +265,8 @@ impl TileMaker {
     ) -> Result<(), super::extract::ExtractError> {
         let layout = nodes.layout();
         let grid_size = self.grid.grid_size;
-        let place = |id, data, error_m| place_map(layout, grid_size, id, data, error_m);
+        let place = |id, data, error_m, view| place_map(layout, grid_size, id, data, error_m, view);
         let own_level = spec.source.level == spec.key.level;
-        let mut own = place(spec.source, spec.data, spec.errors.own.metres());
-        own.set_forced(square.width.min(own.forced()));
         // On the stack: tiles are made in frames, which allocate nothing
         // once their scratch has grown.
         let mut chain: ArrayVec<PlacedMap<'_>, { crate::pyramid::MAX_LEVELS as usize }> =
@@ -257,23 +274,33 @@ impl TileMaker {
         let mut id = spec.source;
         while let Some(parent) = id.parent().filter(|p| p.level < layout.levels) {
             if let Some(data) = nodes.resident(parent).filter(|d| !d.map.is_empty()) {
-                chain.push(place(parent, data, level_error(mesh_errors, parent.level)));
+                // As the ancestor's own tiles are made (`band_rule`).
+                let above = parent.parent().is_some_and(|p| nodes.resident(p).is_some());
+                let view = band_rule(mesh_errors, parent.level, 0, above);
+                chain.push(place(parent, data, level_error(mesh_errors, parent.level), view));
             }
             id = parent;
         }
+        let parent_resident = chain.first().is_some_and(|p| Some(p.node()) == spec.source.parent());
+        let sub_level = spec.errors.sub_level;
         // Split at the tile's square like the neighbour of the coarser
         // sub-level is: the shared edge then morphs onto that neighbour's.
-        let coarser = (own_level && spec.errors.sub_level > 0).then(|| {
-            let mut coarser = place(spec.source, spec.data, spec.errors.target.metres());
+        let coarser = (own_level && sub_level > 0).then(|| {
+            let view = band_rule(mesh_errors, spec.key.level, sub_level - 1, parent_resident);
+            let mut coarser = place(spec.source, spec.data, spec.errors.target.metres(), view);
             coarser.set_forced(square.width.min(coarser.forced()));
             coarser
         });
-        let parent_resident = chain.first().is_some_and(|p| Some(p.node()) == spec.source.parent());
         let target = match &coarser {
             Some(c) => TargetMesh::Coarser(c),
             None if own_level && parent_resident => TargetMesh::Parent,
             None => TargetMesh::None,
         };
+        let own_view = own_level
+            .then(|| band_rule(mesh_errors, spec.key.level, sub_level, parent_resident))
+            .flatten();
+        let mut own = place(spec.source, spec.data, spec.errors.own.metres(), own_view);
+        own.set_forced(square.width.min(own.forced()));
         let job = Extraction {
             own: &own,
             ancestors: &chain,
@@ -332,36 +359,114 @@ impl TileMaker {
     }
 }
 
-/// How far a tile's surface may lie from the data, metres: the error it
-/// was extracted at, or of the mesh it morphs toward, plus its reference
-/// lattice's; NaN for a grid (its level's grid delta applies).
-fn tile_error(kind: TileMeshKind, spec: MakeSpec<'_>) -> (f32, f32) {
+/// How far a tile's surface may lie from the data along each edge (south,
+/// east, north, west), metres, unmorphed and fully morphed: the error it
+/// was extracted at (or the mesh it morphs toward's), plus its reference
+/// lattice's; NaN for a grid (its level's grid delta applies). Where its
+/// errors grow with the distance, the largest they reach along the edge:
+/// its skirt fills a crack no deeper.
+fn tile_error(
+    kind: TileMeshKind,
+    spec: MakeSpec<'_>,
+    layout: &NodeLayout,
+    grid_size: u32,
+    errors: &MeshErrors,
+) -> EdgeErrors {
     let own_level = spec.source.level == spec.key.level;
-    match kind {
-        TileMeshKind::Grid => (f32::NAN, f32::NAN),
-        TileMeshKind::NodeMesh(_) => {
-            let morph = if own_level { spec.errors.target.metres() } else { 0.0 };
-            let map = &spec.data.map;
-            let own = spec.errors.own.metres().max(map.floor_m as f64);
-            let reference = map.reference_delta as f64;
-            ((own + reference) as f32, (own.max(morph) + reference) as f32)
-        }
+    if kind == TileMeshKind::Grid {
+        return EdgeErrors::UNKNOWN;
     }
+    let (level, sub) = (spec.key.level, spec.errors.sub_level);
+    let map = &spec.data.map;
+    let reference = map.reference_delta as f64;
+    // Along a level-0 node's boundary the meshes keep their rings' near-end
+    // errors (`super::extract`): the steps.
+    let per_node = (layout.node_size / grid_size).max(1);
+    let on_boundary = |edge: usize| {
+        spec.source.level == 0
+            && match edge {
+                0 => spec.key.y % per_node == 0,
+                1 => (spec.key.x + 1) % per_node == 0,
+                2 => (spec.key.y + 1) % per_node == 0,
+                _ => spec.key.x % per_node == 0,
+            }
+    };
+    let edge = |edge: usize| {
+        let largest = |level: u8, sub: u8, step: ErrorStep| {
+            let grows = own_level && !on_boundary(edge);
+            let rule = errors.rule(level, sub, true).filter(|_| grows);
+            let far = |rule: &DistanceRule| {
+                let anchors = rule.rings.iter().map(|b| b.anchor_m);
+                let far = anchors.map(|a| edge_far_m(spec.key, grid_size, layout, a, edge));
+                far.fold(0.0, f64::max)
+            };
+            rule.map_or(step.metres(), |r| r.largest_within(far(&r)).max(step.metres()))
+        };
+        let own = largest(level, sub, spec.errors.own).max(map.floor_m as f64);
+        let morph = match (own_level, sub) {
+            (false, _) => 0.0,
+            (true, 0) => largest(level + 1, 0, spec.errors.target),
+            (true, k) => largest(level, k - 1, spec.errors.target),
+        };
+        ((own + reference) as f32, (own.max(morph) + reference) as f32)
+    };
+    let edges: [(f32, f32); 4] = std::array::from_fn(edge);
+    EdgeErrors { own_m: edges.map(|e| e.0), morphed_m: edges.map(|e| e.1) }
 }
 
-/// Node `id`'s map placed for meshes of `error_m` split at least to the
-/// squares of its own level's tiles (`grid_size` cells).
+/// The distance from `anchor_m` (chart metres) to the farther end of edge
+/// `edge` (south, east, north, west) of tile `key`'s square, metres.
+fn edge_far_m(
+    key: TileKey,
+    grid_size: u32,
+    layout: &NodeLayout,
+    anchor_m: [f64; 2],
+    edge: usize,
+) -> f64 {
+    let span = ((grid_size as u64) << key.level) as f64;
+    let sw = [key.x as f64 * span, key.y as f64 * span];
+    let ends = match edge {
+        0 => [[0.0, 0.0], [1.0, 0.0]],
+        1 => [[1.0, 0.0], [1.0, 1.0]],
+        2 => [[0.0, 1.0], [1.0, 1.0]],
+        _ => [[0.0, 0.0], [0.0, 1.0]],
+    };
+    let distance = |end: [f64; 2]| {
+        let at = [0, 1].map(|k| (sw[k] + end[k] * span) * layout.spacing_m[k] - anchor_m[k]);
+        at[0].hypot(at[1])
+    };
+    distance(ends[0]).max(distance(ends[1]))
+}
+
+/// Node `id`'s map placed for meshes of `error_m`, or of errors growing
+/// with the distance as `view` says, split at least to the squares of its
+/// own level's tiles (`grid_size` cells).
 fn place_map<'a>(
     layout: &'a NodeLayout,
     grid_size: u32,
     id: NodeId,
     data: &'a NodeData,
     error_m: f64,
+    view: Option<DistanceRule>,
 ) -> PlacedMap<'a> {
     let map = &data.map;
     let tile_posts = grid_size << (id.level - map.post_level.min(id.level));
+    // The curvature caps the widest triangle by the band's least error:
+    // a wider one would sag more than the tile's nearest part allows.
     let forced = forced_step(layout, map.post_level, map.cells, tile_posts, error_m);
-    PlacedMap::new(layout, id, data, error_m, forced)
+    let placed = PlacedMap::new(layout, id, data, error_m, forced);
+    match view {
+        Some(view) => placed.with_view(view),
+        None => placed,
+    }
+}
+
+/// The errors by distance a tile of `level`'s sub-level `sub` is made with
+/// (`None` before the frame set them: one error); `above`: its level's
+/// parent is resident, so past its level's band it keeps only the parent's
+/// vertices.
+fn band_rule(errors: &MeshErrors, level: u8, sub: u8, above: bool) -> Option<DistanceRule> {
+    errors.rule(level, sub, above)
 }
 
 /// The error a level's tiles are extracted at this frame, metres.
@@ -393,10 +498,10 @@ struct Resident {
     /// Whether its parent node was resident when it was made (its mesh
     /// then refines the parent's; made again once it is).
     parent_resident: bool,
-    /// How far its surface may lie from the data, metres: fully morphed,
-    /// and unmorphed.
-    error_m: f32,
-    own_error_m: f32,
+    /// How far its surface may lie from the data along each edge.
+    errors_m: EdgeErrors,
+    /// The error its ring allowed when made, not quantised.
+    allowed_m: f64,
     coverage: TileCoverage,
     /// What its block holds.
     mesh: MeshCounts,
@@ -417,10 +522,10 @@ struct Job {
     errors: TileErrors,
     /// Whether the source's parent is resident.
     parent_resident: bool,
-    /// How far its surface may lie from the data, metres: fully morphed,
-    /// and unmorphed.
-    error_m: f32,
-    own_error_m: f32,
+    /// How far its surface may lie from the data along each edge.
+    errors_m: EdgeErrors,
+    /// The error its ring allowed, not quantised ([`MeshErrors::allowed_m`]).
+    allowed_m: f64,
     /// The mesh it is made as, and its size.
     kind: TileMeshKind,
     mesh: MeshCounts,
@@ -573,7 +678,9 @@ impl TileCache {
         let resident = self.slots.get(slot as usize)?.as_ref()?;
         let error = match resident.kind {
             TileMeshKind::Grid => f64::NAN,
-            TileMeshKind::NodeMesh(_) => resident.errors.own.metres(),
+            // Errors grow with the distance in steps: the ring's allowed
+            // error at its near end moves with tau smoothly.
+            TileMeshKind::NodeMesh(_) => resident.allowed_m,
         };
         let skirts = resident.mesh.skirt_indices as u64 / 3;
         Some((resident.mesh.indices as u64 / 3 - skirts, skirts, error))
@@ -589,7 +696,7 @@ impl TileCache {
         Some(MadeFrom {
             source_level: resident.source_level,
             node_mesh: resident.kind != TileMeshKind::Grid,
-            error_m: resident.error_m,
+            error_m: resident.errors_m.largest_m(),
         })
     }
 
@@ -663,15 +770,16 @@ impl TileCache {
                     format: VertexFormat(0),
                     size: mesh.block_bytes(),
                 });
-                let (own_error_m, error_m) = tile_error(kind, spec);
+                let errors_m = tile_error(kind, spec, &layout, grid_size, mesh_errors);
+                let allowed_m = mesh_errors.allowed_m(tile.key.level, errors.sub_level);
                 self.jobs.push(Job {
                     slot,
                     new,
                     source,
                     errors,
                     parent_resident,
-                    error_m,
-                    own_error_m,
+                    errors_m,
+                    allowed_m,
                     kind,
                     mesh,
                 });
@@ -690,8 +798,8 @@ impl TileCache {
             source_level,
             errors: TileErrors::default(),
             parent_resident: false,
-            error_m: f32::NAN,
-            own_error_m: f32::NAN,
+            errors_m: EdgeErrors::UNKNOWN,
+            allowed_m: f64::NAN,
             coverage: TileCoverage::Full,
             mesh: MeshCounts::default(),
             kind: TileMeshKind::Grid,
@@ -773,8 +881,8 @@ impl TileCache {
                 resident.source_level = job.source.level;
                 resident.errors = job.errors;
                 resident.parent_resident = job.parent_resident;
-                resident.error_m = job.error_m;
-                resident.own_error_m = job.own_error_m;
+                resident.errors_m = job.errors_m;
+                resident.allowed_m = job.allowed_m;
                 bytes_uploaded += block.len() as u64;
             });
             dirty.extend(plan.dirty_ranges().iter().cloned());
@@ -831,8 +939,7 @@ impl TileCache {
                 source_level: resident.source_level,
                 coverage: resident.coverage,
                 sub_level: resident.errors.sub_level,
-                error_m: resident.error_m,
-                own_error_m: resident.own_error_m,
+                errors: resident.errors_m,
             });
         }
         // Memory order keeps the attribute pointer moving forward.

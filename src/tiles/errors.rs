@@ -20,13 +20,61 @@
 //! comes: nearer than its level's ring it takes *sub-levels*, the ring
 //! halved `k` times and the error with it, each morphing toward the one
 //! above over the outer part of its band, as the levels do.
+//!
+//! Within its ring a tile's error grows with each vertex's distance
+//! ([`RingView`], issue 22), from an anchor each ring keeps until the
+//! camera moves past its slack.
+
+use super::by_distance::{DistanceRule, RingView, ViewCone};
+use crate::camera::Camera;
 
 /// Sub-levels a leaf tile may take: the error halves each time, 2^-16 of
 /// its level's at the most.
 pub const MAX_SUB_LEVEL: u8 = 16;
 
+/// Rings a level has: sub-levels 0 to [`MAX_SUB_LEVEL`].
+const SUBS: usize = MAX_SUB_LEVEL as usize + 1;
+
+/// Share of a ring's near end the camera may travel from its anchor before
+/// the ring's tiles are made again ([`RingView::slack_m`]): more remakes
+/// the smaller, more triangles the larger.
+pub const SLACK_SHARE: f64 = 0.1;
+
+/// How far, radians, the view of a near ring is widened each side
+/// ([`RingView::cone`]); the camera may turn half of it before the ring's
+/// tiles are made again.
+pub const TURN_RAD: f64 = 0.26;
+
+/// Whether a ring's vertices out of the camera's view are left out: the
+/// near rings (level 0's, and every leaf tile's sub-levels), whose tiles
+/// reach around and behind the camera. Farther rings keep every direction:
+/// their tiles straddle the frustum less, and a turn would make them all
+/// again.
+fn coned(level: usize, sub: usize) -> bool {
+    level == 0 || sub > 0
+}
+
 /// Quantisation steps a doubling of the error spans.
 const STEPS_PER_OCTAVE: f64 = 8.0;
+
+/// `value` on the lattice of `steps` an octave, rounded by `round` (down
+/// or up); infinite or not positive values as they are.
+fn quantised(value: f64, round: fn(f64) -> f64, steps: f64) -> f64 {
+    if !(value.is_finite() && value > 0.0) {
+        return value;
+    }
+    (round(steps * value.log2()) / steps).exp2()
+}
+
+/// Steps an octave of the bound's error per metre in the rings' errors by
+/// distance: every tile's errors move with it at once, so a step of it
+/// moves a frame's triangles by about its share (2 %), within what a
+/// frame budget holds; the rings' distances move one level at a time and
+/// keep the errors' steps.
+const PER_M_STEPS: f64 = 256.0;
+
+/// Steps an octave of the rings' distances in their errors by distance.
+const RING_STEPS: f64 = 256.0;
 
 /// A quantised error: `2^(step / 4)` metres.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
@@ -71,6 +119,28 @@ pub struct MeshErrors {
     pub leaf_ring: Vec<f64>,
     /// Share of each band its tiles morph over, toward the band above.
     pub morph_range: f64,
+    /// Per ring (level times sub-levels, sub-level fastest): its errors by
+    /// distance and how many times they changed ([`Self::anchor`]).
+    pub ring_views: Vec<RingState>,
+    /// Per level: the ring generations of it and every level above, summed
+    /// (a tile's mesh keeps its ancestors' vertices).
+    chain: Vec<u32>,
+    /// The bound's metres of error per metre, `tau / K`, last updated.
+    per_m: f64,
+    /// Per level: its maps' reference delta, last updated.
+    reference: Vec<f64>,
+    /// Per level: the error its ring allows, not quantised, metres.
+    allowed: Vec<f64>,
+}
+
+/// One ring's errors by distance ([`RingView`]) and its generation: tiles
+/// made with another are made again.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RingState {
+    /// Its errors by distance.
+    pub view: RingView,
+    /// How many times they changed (0: never set).
+    pub generation: u32,
 }
 
 /// What the maps of each level can do: the smallest error their sparse
@@ -119,6 +189,9 @@ pub struct TileErrors {
     /// The error of the mesh it morphs toward: the same node's one
     /// sub-level up, or the parent level's at sub-level 0.
     pub target: ErrorStep,
+    /// The generations of the rings its mesh depends on, summed: its own,
+    /// its target's and its ancestors' ([`MeshErrors::anchor`]).
+    pub views: u32,
 }
 
 impl MeshErrors {
@@ -135,8 +208,11 @@ impl MeshErrors {
         maps: &MapErrors,
     ) {
         self.level.clear();
+        self.allowed.clear();
         self.leaf_ring.clear();
+        self.reference.clear();
         self.morph_range = morph_range;
+        self.per_m = tau_px / k;
         for level in 0..levels {
             let ring = if level == 0 || split(level) <= 0.0 {
                 split(level.saturating_add(1).min(levels - 1)) / 2.0
@@ -146,9 +222,122 @@ impl MeshErrors {
             // The reference lattice's own error comes on top of the mesh's.
             let allowed = tau_px * ring / k - maps.reference(level);
             let wanted = ErrorStep::at_most(allowed.max(maps.floor(level)));
+            self.allowed.push(allowed.max(maps.floor(level)));
             self.level.push(wanted);
             self.leaf_ring.push(ring);
+            self.reference.push(maps.reference(level));
         }
+    }
+
+    /// Sets each ring's errors by distance for a camera over `eye_m`
+    /// (chart metres) and the levels' morphs `morph` (start and end per
+    /// level, metres), after [`Self::update`]; with `camera`, the near
+    /// rings keep nothing of their own out of its view. A ring keeps its
+    /// anchor while the camera stays within its slack and turn and its
+    /// errors do not change; else it takes the camera's place and a new
+    /// generation.
+    pub fn anchor(
+        &mut self,
+        eye_m: [f64; 2],
+        camera: Option<&Camera>,
+        morph: impl Fn(u8) -> (f64, f64),
+    ) {
+        let levels = self.level.len();
+        self.ring_views.resize(levels * SUBS, RingState::default());
+        let seen = |level: usize, sub: usize| camera.filter(|_| coned(level, sub));
+        let cone = camera.and_then(|c| ViewCone::of_camera(c, TURN_RAD));
+        for level in 0..levels {
+            for sub in 0..SUBS {
+                let near = self.leaf_ring[level] / (1u64 << sub) as f64;
+                let (start, end) = match sub {
+                    0 => morph(level as u8),
+                    k => self.sub_level_morph(level as u8, k as u8),
+                };
+                // Quantised as the errors are, each toward the side that
+                // keeps the bound, so that a budget moving tau a little
+                // does not make every tile again.
+                let near = quantised(near, f64::floor, RING_STEPS);
+                let wanted = RingView {
+                    anchor_m: eye_m,
+                    slack_m: SLACK_SHARE * near,
+                    near_m: near,
+                    start_m: quantised(start, f64::floor, RING_STEPS).max(near),
+                    end_m: quantised(end, f64::ceil, RING_STEPS).max(near),
+                    per_m: quantised(self.per_m, f64::floor, PER_M_STEPS),
+                    reference_m: self.reference[level],
+                    own_m: self.level[level].halved(sub as u8).metres(),
+                    cone: cone.filter(|_| coned(level, sub)),
+                };
+                let state = &mut self.ring_views[level * SUBS + sub];
+                let [dx, dy] = [0, 1].map(|k| eye_m[k] - state.view.anchor_m[k]);
+                let moved = dx.hypot(dy) > state.view.slack_m || dx.hypot(dy).is_nan();
+                // The camera turned or climbed out of the cone, or one is
+                // possible where the ring has none.
+                let turned = match (&state.view.cone, seen(level, sub)) {
+                    (Some(held), Some(camera)) => {
+                        let climbed = (camera.position.z - held.eye_m[2]).abs();
+                        !held.holds(camera, TURN_RAD)
+                            || climbed > state.view.slack_m
+                            || climbed.is_nan()
+                    }
+                    (None, Some(_)) => wanted.cone.is_some(),
+                    (Some(_), None) => true,
+                    (None, None) => false,
+                };
+                if state.generation == 0 || moved || turned || !wanted.same_errors(&state.view) {
+                    state.view = wanted;
+                    state.generation = state.generation.wrapping_add(1).max(1);
+                }
+            }
+        }
+        self.chain.clear();
+        self.chain.resize(levels + 1, 0);
+        for level in (0..levels).rev() {
+            let own = self.ring_views[level * SUBS].generation;
+            self.chain[level] = self.chain[level + 1].wrapping_add(own);
+        }
+    }
+
+    /// The errors by distance of `level`'s sub-level `sub` (`None` before
+    /// [`Self::anchor`], or past the table).
+    pub fn ring_view(&self, level: u8, sub: u8) -> Option<RingView> {
+        if sub as usize >= SUBS {
+            return None;
+        }
+        self.ring_views.get(level as usize * SUBS + sub as usize).map(|b| b.view)
+    }
+
+    /// The errors by distance of a mesh of `level`'s sub-level `sub`: its
+    /// ring's, then each coarser sub-level's up to the level's own
+    /// ([`DistanceRule`]); `ends`: past the level's own ring the level above
+    /// shows. `None` before [`Self::anchor`].
+    pub fn rule(&self, level: u8, sub: u8, ends: bool) -> Option<DistanceRule> {
+        let mut rule = DistanceRule { rings: Default::default(), ends };
+        for k in (0..=sub.min(MAX_SUB_LEVEL)).rev() {
+            rule.rings.push(self.ring_view(level, k)?);
+        }
+        Some(rule)
+    }
+
+    /// The bound's metres of error per metre of distance, `tau / K`, last
+    /// updated (not quantised).
+    pub fn per_m(&self) -> f64 {
+        self.per_m
+    }
+
+    /// The error a tile of `level`'s sub-level `sub` is allowed at its
+    /// ring's near end, not quantised (0 past the table): what a frame
+    /// budget's estimates scale by, smoothly in tau, where the tiles' own
+    /// errors move in steps.
+    pub fn allowed_m(&self, level: u8, sub: u8) -> f64 {
+        let allowed = self.allowed.get(level as usize).copied().unwrap_or(0.0);
+        allowed / (1u64 << sub.min(MAX_SUB_LEVEL)) as f64
+    }
+
+    /// The generation of `level`'s sub-level `sub` (0 past the table).
+    fn generation(&self, level: u8, sub: u8) -> u32 {
+        let at = level as usize * SUBS + sub as usize;
+        self.ring_views.get(at).map_or(0, |b| b.generation)
     }
 
     /// The tau past which no level's tiles get any coarser, pixels: every
@@ -175,7 +364,11 @@ impl MeshErrors {
         let parent = self.level.get(l + 1).copied().unwrap_or(own);
         let sub_level = if leaf { self.sub_level(level, distance) } else { 0 };
         let target = if sub_level == 0 { parent } else { own.halved(sub_level - 1) };
-        TileErrors { sub_level, own: own.halved(sub_level), target }
+        // Its rule chains its sub-levels up to its level's own ring.
+        let rings = (0..=sub_level).map(|k| self.generation(level, k));
+        let above = self.chain.get(l + 1).copied().unwrap_or(0);
+        let views = rings.fold(above, u32::wrapping_add);
+        TileErrors { sub_level, own: own.halved(sub_level), target, views }
     }
 
     /// The sub-level of a leaf tile of `level` `distance` metres away: how
@@ -234,6 +427,41 @@ mod tests {
         let at_near_end = near.own.metres() * 1000.0 / 1_250.0;
         assert!(at_near_end <= 1.0 + 1e-12 && at_near_end > 2f64.powf(-0.125) - 1e-12);
     }
+    #[test]
+    fn bands_keep_their_anchor_within_their_slack() {
+        let mut errors = MeshErrors::default();
+        let rings = [0.0, 20_000.0, 40_000.0, 80_000.0];
+        errors.update(|l| rings[l as usize], 4, 1000.0, 1.0, 0.3, &MapErrors::default());
+        let morph = |l: u8| match rings.get(l as usize + 1) {
+            Some(&end) => (end * 0.7, end),
+            None => (f64::INFINITY, f64::INFINITY),
+        };
+        errors.anchor([0.0, 0.0], None, morph);
+        let (tile, leaf) = (errors.for_tile(1, 25_000.0, false), errors.for_tile(0, 3_000.0, true));
+        let ring = errors.ring_view(1, 0).expect("anchored");
+        let slack = SLACK_SHARE * 20_000.0;
+        assert!(ring.slack_m <= slack && ring.slack_m > 0.9 * slack, "{}", ring.slack_m);
+        // Level 1's slack is about 2 km, level 0's 1 km (its near end is 10 km).
+        errors.anchor([1_500.0, 0.0], None, morph);
+        assert_eq!(errors.for_tile(1, 25_000.0, false), tile, "within level 1's slack");
+        assert_ne!(errors.for_tile(0, 3_000.0, true).views, leaf.views, "past level 0's");
+        errors.anchor([1_500.0, 1_800.0], None, morph);
+        assert_ne!(errors.for_tile(1, 25_000.0, false).views, tile.views, "past level 1's");
+        assert_eq!(errors.ring_view(1, 0).expect("anchored").anchor_m, [1_500.0, 1_800.0]);
+        // A new tau moves every ring's errors: all tiles are made again.
+        let now = errors.for_tile(2, 50_000.0, false);
+        errors.update(|l| rings[l as usize], 4, 1000.0, 2.0, 0.3, &MapErrors::default());
+        errors.anchor([1_500.0, 1_800.0], None, morph);
+        assert_ne!(errors.for_tile(2, 50_000.0, false).views, now.views);
+        // A rule chains a leaf tile's sub-levels up to its level's ring.
+        let rule = errors.rule(0, 3, true).expect("anchored");
+        let nears: Vec<f64> = rule.rings.iter().map(|b| b.near_m).collect();
+        for (near, exact) in nears.iter().zip([1_250.0, 2_500.0, 5_000.0, 10_000.0]) {
+            // Quantised down, by less than a step.
+            assert!(*near <= exact && *near > exact * 2f64.powf(-0.125), "{near} for {exact}");
+        }
+    }
+
     /// Every morph starts past its band's near end, so a tile extracted at
     /// the full error the bound allows there keeps the bound all along its
     /// morph: within tau at the start, where it draws its own mesh, and at

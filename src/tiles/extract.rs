@@ -26,6 +26,7 @@
 
 use std::collections::HashMap;
 
+use super::by_distance::{reach_legs, split_leg, DistanceRule};
 use super::fan::{fan_with, FanScratch};
 use super::vertex::{slope, PostReader};
 use crate::lod::TileKey;
@@ -56,6 +57,11 @@ pub struct PlacedMap<'a> {
     stored: (u32, u32),
     /// Metres between the map's posts, east and north.
     spacing_m: [f64; 2],
+    /// Where the mesh's error grows with the distance (`None`: one error,
+    /// `threshold`, everywhere): see [`super::by_distance`].
+    view: Option<DistanceRule>,
+    /// The smallest error the map serves, metres.
+    floor_m: f64,
 }
 
 impl<'a> PlacedMap<'a> {
@@ -89,7 +95,15 @@ impl<'a> PlacedMap<'a> {
             forced: forced.clamp(1, map.cells),
             reader: PostReader::new(layout, key, layout.node_size, node, data),
             spacing_m: [layout.spacing_m[0] * scale, layout.spacing_m[1] * scale],
+            view: None,
+            floor_m: map.floor_m as f64,
         }
+    }
+
+    /// The same map with its error growing with the distance as `view`
+    /// says (the error it was placed with no longer counts).
+    pub fn with_view(self, view: DistanceRule) -> Self {
+        PlacedMap { view: Some(view), ..self }
     }
 
     /// The node whose map this is.
@@ -129,7 +143,37 @@ impl<'a> PlacedMap<'a> {
     /// Whether map post `p` is a vertex of this map's mesh.
     fn is_vertex(&self, p: [u32; 2]) -> bool {
         let on_forced = p[0] % self.forced == 0 && p[1] % self.forced == 0;
-        on_forced || self.data.map.code(p[0], p[1]) > self.threshold
+        on_forced || self.data.map.code(p[0], p[1]) > self.threshold_at(p)
+    }
+
+    /// The code map post `p` must be above to be a vertex (255: never).
+    fn threshold_at(&self, p: [u32; 2]) -> u8 {
+        let Some(view) = &self.view else { return self.threshold };
+        // Metres in the chart: level-0 posts times their spacing.
+        let level0 = [self.spacing_m[0], self.spacing_m[1]].map(|s| s / self.step as f64);
+        let x = self.level0(p);
+        let at = [x[0] as f64 * level0[0], x[1] as f64 * level0[1]];
+        let reach = split_leg(p) * reach_legs() * self.spacing_m[0].max(self.spacing_m[1]);
+        let heights = [self.data.min as f64, self.data.max as f64];
+        let error = view.error_at(at, reach, heights).map(|error_m| {
+            // Along a level-0 node's boundary the mesh keeps its ring's
+            // near-end error: the neighbouring node's map codes its edge
+            // posts apart, so the two meshes meet at cracks as deep as both
+            // errors, which its skirts fill and a viewer sees (issue 25).
+            let legs = split_leg(p) * reach_legs();
+            let cells = self.data.map.cells as f64;
+            // Level 0's: farther levels' cracks span fewer pixels.
+            let near_boundary = self.node.level == 0
+                && p.iter().any(|&c| c as f64 <= legs || c as f64 >= cells - legs);
+            match (near_boundary, view.rings.first()) {
+                (true, Some(ring)) => error_m.min(ring.largest_within(0.0)),
+                _ => error_m,
+            }
+        });
+        match error {
+            Some(error_m) => threshold_code(error_m.max(self.floor_m)),
+            None => u8::MAX,
+        }
     }
 
     /// Whether level-0 post `x` is a vertex of this map's mesh.
@@ -228,6 +272,13 @@ pub enum TargetMesh<'m, 'a> {
     Coarser(&'m PlacedMap<'a>),
 }
 
+impl TargetMesh<'_, '_> {
+    /// Whether there is a mesh to morph toward.
+    pub fn morphs(&self) -> bool {
+        !matches!(self, TargetMesh::None)
+    }
+}
+
 /// What a tile's mesh is extracted with.
 pub struct Extraction<'m, 'a> {
     /// The tile's node's map at the tile's error.
@@ -246,7 +297,10 @@ pub struct Extraction<'m, 'a> {
 impl Extraction<'_, '_> {
     /// Whether level-0 post `x` is a vertex of the tile's mesh.
     fn own_has(&self, x: [u64; 2]) -> bool {
-        self.own.has_vertex(x) || self.ancestors.iter().any(|a| a.has_vertex(x))
+        // The coarser sub-level's vertices too: past its band's morph the
+        // own map keeps none of its own (`super::by_distance`).
+        let coarser = matches!(self.target, TargetMesh::Coarser(c) if c.has_vertex(x));
+        self.own.has_vertex(x) || coarser || self.ancestors.iter().any(|a| a.has_vertex(x))
     }
 
     /// Whether level-0 post `x` is a vertex of the mesh the tile morphs

@@ -7,6 +7,7 @@
 //! changed in one batched transfer per run piece.
 
 pub mod block;
+pub mod by_distance;
 pub mod cache;
 pub mod curtain;
 pub mod errors;

@@ -27,6 +27,7 @@ pub mod dem;
 pub mod flight;
 pub mod gl;
 pub mod live;
+pub mod mesh;
 pub mod pyramid;
 pub mod render;
 pub mod scene;
