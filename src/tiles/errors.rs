@@ -57,6 +57,33 @@ fn coned(level: usize, sub: usize) -> bool {
 /// Quantisation steps a doubling of the error spans.
 const STEPS_PER_OCTAVE: f64 = 8.0;
 
+/// `value` on the lattice of `step` (itself where the step is not a
+/// positive number): within half a step.
+fn snap(value: f64, step: f64) -> f64 {
+    if step.is_finite() && step > 0.0 {
+        (value / step).round() * step
+    } else {
+        value
+    }
+}
+
+/// Steps of a ring's cone's camera angles: rounding each of the three by
+/// half of it turns the camera by at most `sqrt 3 / 4` of it, within the
+/// half of [`TURN_RAD`] a cone allows.
+const ANGLE_STEP_RAD: f64 = TURN_RAD / 4.0;
+
+/// `camera` at `anchor_m` and `slack_m` (its height snapped to the slack's
+/// lattice: within half of it), its angles snapped to [`ANGLE_STEP_RAD`].
+fn snapped(camera: &Camera, anchor_m: [f64; 2], slack_m: f64) -> Camera {
+    let step = ANGLE_STEP_RAD.to_degrees();
+    let mut c = *camera;
+    c.position = glam::DVec3::new(anchor_m[0], anchor_m[1], snap(c.position.z, slack_m));
+    c.heading_deg = snap(c.heading_deg, step);
+    c.pitch_deg = snap(c.pitch_deg, step);
+    c.roll_deg = snap(c.roll_deg, step);
+    c
+}
+
 /// `value` on the lattice of `steps` an octave, rounded by `round` (down
 /// or up); infinite or not positive values as they are.
 fn quantised(value: f64, round: fn(f64) -> f64, steps: f64) -> f64 {
@@ -232,10 +259,11 @@ impl MeshErrors {
     /// Sets each ring's errors by distance for a camera over `eye_m`
     /// (chart metres) and the levels' morphs `morph` (start and end per
     /// level, metres), after [`Self::update`]; with `camera`, the near
-    /// rings keep nothing of their own out of its view. A ring keeps its
-    /// anchor while the camera stays within its slack and turn and its
-    /// errors do not change; else it takes the camera's place and a new
-    /// generation.
+    /// rings keep nothing of their own out of its view. A ring's anchor is
+    /// the camera's place snapped to a lattice of its slack (its cone's
+    /// camera snapped likewise, and its angles to [`ANGLE_STEP_RAD`]), so
+    /// the camera is always within its slack; when that or its errors
+    /// change the ring takes a new generation.
     pub fn anchor(
         &mut self,
         eye_m: [f64; 2],
@@ -244,8 +272,6 @@ impl MeshErrors {
     ) {
         let levels = self.level.len();
         self.ring_views.resize(levels * SUBS, RingState::default());
-        let seen = |level: usize, sub: usize| camera.filter(|_| coned(level, sub));
-        let cone = camera.and_then(|c| ViewCone::of_camera(c, TURN_RAD));
         for level in 0..levels {
             for sub in 0..SUBS {
                 let near = self.leaf_ring[level] / (1u64 << sub) as f64;
@@ -257,34 +283,27 @@ impl MeshErrors {
                 // keeps the bound, so that a budget moving tau a little
                 // does not make every tile again.
                 let near = quantised(near, f64::floor, RING_STEPS);
+                let slack = SLACK_SHARE * near;
+                // The anchor and the cone's camera snap to lattices, so a
+                // ring's errors depend on where the camera is, not on the
+                // way it came: the same place draws the same meshes.
+                let anchor = eye_m.map(|v| snap(v, slack));
+                let cone = camera
+                    .filter(|_| coned(level, sub))
+                    .and_then(|c| ViewCone::of_camera(&snapped(c, anchor, slack), TURN_RAD));
                 let wanted = RingView {
-                    anchor_m: eye_m,
-                    slack_m: SLACK_SHARE * near,
+                    anchor_m: anchor,
+                    slack_m: slack,
                     near_m: near,
                     start_m: quantised(start, f64::floor, RING_STEPS).max(near),
                     end_m: quantised(end, f64::ceil, RING_STEPS).max(near),
                     per_m: quantised(self.per_m, f64::floor, PER_M_STEPS),
                     reference_m: self.reference[level],
                     own_m: self.level[level].halved(sub as u8).metres(),
-                    cone: cone.filter(|_| coned(level, sub)),
+                    cone,
                 };
                 let state = &mut self.ring_views[level * SUBS + sub];
-                let [dx, dy] = [0, 1].map(|k| eye_m[k] - state.view.anchor_m[k]);
-                let moved = dx.hypot(dy) > state.view.slack_m || dx.hypot(dy).is_nan();
-                // The camera turned or climbed out of the cone, or one is
-                // possible where the ring has none.
-                let turned = match (&state.view.cone, seen(level, sub)) {
-                    (Some(held), Some(camera)) => {
-                        let climbed = (camera.position.z - held.eye_m[2]).abs();
-                        !held.holds(camera, TURN_RAD)
-                            || climbed > state.view.slack_m
-                            || climbed.is_nan()
-                    }
-                    (None, Some(_)) => wanted.cone.is_some(),
-                    (Some(_), None) => true,
-                    (None, None) => false,
-                };
-                if state.generation == 0 || moved || turned || !wanted.same_errors(&state.view) {
+                if state.generation == 0 || wanted != state.view {
                     state.view = wanted;
                     state.generation = state.generation.wrapping_add(1).max(1);
                 }
@@ -428,7 +447,7 @@ mod tests {
         assert!(at_near_end <= 1.0 + 1e-12 && at_near_end > 2f64.powf(-0.125) - 1e-12);
     }
     #[test]
-    fn bands_keep_their_anchor_within_their_slack() {
+    fn rings_anchor_on_a_lattice_of_their_slack() {
         let mut errors = MeshErrors::default();
         let rings = [0.0, 20_000.0, 40_000.0, 80_000.0];
         errors.update(|l| rings[l as usize], 4, 1000.0, 1.0, 0.3, &MapErrors::default());
@@ -441,17 +460,24 @@ mod tests {
         let ring = errors.ring_view(1, 0).expect("anchored");
         let slack = SLACK_SHARE * 20_000.0;
         assert!(ring.slack_m <= slack && ring.slack_m > 0.9 * slack, "{}", ring.slack_m);
-        // Level 1's slack is about 2 km, level 0's 1 km (its near end is 10 km).
-        errors.anchor([1_500.0, 0.0], None, morph);
-        assert_eq!(errors.for_tile(1, 25_000.0, false), tile, "within level 1's slack");
+        // Level 1's slack is about 2 km, level 0's 1 km (its near end is
+        // 10 km): a move of 0.4 of level 1's keeps its lattice point and
+        // leaves level 0's.
+        let s1 = ring.slack_m;
+        errors.anchor([0.4 * s1, 0.0], None, morph);
+        assert_eq!(errors.for_tile(1, 25_000.0, false), tile, "within level 1's lattice cell");
         assert_ne!(errors.for_tile(0, 3_000.0, true).views, leaf.views, "past level 0's");
-        errors.anchor([1_500.0, 1_800.0], None, morph);
+        errors.anchor([0.4 * s1, 0.6 * s1], None, morph);
         assert_ne!(errors.for_tile(1, 25_000.0, false).views, tile.views, "past level 1's");
-        assert_eq!(errors.ring_view(1, 0).expect("anchored").anchor_m, [1_500.0, 1_800.0]);
+        assert_eq!(errors.ring_view(1, 0).expect("anchored").anchor_m, [0.0, s1]);
+        // The same place gives the same errors whatever the way there.
+        errors.anchor([0.0, 0.0], None, morph);
+        errors.anchor([0.4 * s1, 0.6 * s1], None, morph);
+        assert_eq!(errors.ring_view(1, 0).expect("anchored").anchor_m, [0.0, s1]);
         // A new tau moves every ring's errors: all tiles are made again.
         let now = errors.for_tile(2, 50_000.0, false);
         errors.update(|l| rings[l as usize], 4, 1000.0, 2.0, 0.3, &MapErrors::default());
-        errors.anchor([1_500.0, 1_800.0], None, morph);
+        errors.anchor([0.4 * s1, 0.6 * s1], None, morph);
         assert_ne!(errors.for_tile(2, 50_000.0, false).views, now.views);
         // A rule chains a leaf tile's sub-levels up to its level's ring.
         let rule = errors.rule(0, 3, true).expect("anchored");

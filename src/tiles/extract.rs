@@ -386,6 +386,16 @@ impl Extractor {
         self.leaves.clear();
         self.mesh.vertices.clear();
         self.mesh.indices.clear();
+        // Room for the finest mesh a square this wide can have (every post
+        // and cell centre, and the splits above it) at once: meshes whose
+        // errors follow the camera differ frame to frame, and a frame
+        // allocates nothing once the widest square has been made.
+        let most = (2 * job.width as usize + 1).pow(2) + 256;
+        self.numbers.reserve(most);
+        self.targets.reserve(most);
+        self.leaves.reserve(4 * most);
+        self.mesh.vertices.reserve(most);
+        self.mesh.indices.reserve(12 * most);
         let map = &job.own.data.map;
         self.mesh.post_level = map.post_level;
         let cells = map.cells;
