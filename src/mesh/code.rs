@@ -60,7 +60,8 @@ pub fn threshold_code(error_m: f64) -> u8 {
     }
     // The largest code whose error is at most `error_m`.
     let mut code = error_code(error_m);
-    while code > 0 && code_error(code) > error_m {
+    let errors = code_errors();
+    while code > 0 && errors[code as usize] > error_m {
         code -= 1;
     }
     code.min(254)

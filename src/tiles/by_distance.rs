@@ -137,7 +137,8 @@ impl ViewCone {
     /// `eye_m[2]`), meets the frustum. The box reaches down by the
     /// earth's curvature at its far corner, as the display lowers it.
     pub fn meets(&self, offset_m: [f64; 2], radius_m: f64, heights: [f64; 2]) -> bool {
-        let far = (offset_m[0].abs() + radius_m).hypot(offset_m[1].abs() + radius_m);
+        let [fx, fy] = [0, 1].map(|k| offset_m[k].abs() + radius_m);
+        let far = (fx * fx + fy * fy).sqrt();
         let low = heights[0] - radius_m - crate::camera::curvature_drop(far) - self.eye_m[2];
         let high = heights[1] + radius_m - self.eye_m[2];
         let min =
@@ -157,7 +158,9 @@ impl RingView {
     /// end, where the ring keeps only the mesh above's vertices.
     /// `heights`: the lowest and highest the data under the split may be.
     pub fn error_at(&self, offset_m: [f64; 2], reach_m: f64, heights: [f64; 2]) -> Option<f64> {
-        let distance_m = offset_m[0].hypot(offset_m[1]);
+        // Not `hypot`: chart metres cannot overflow a square, and this runs
+        // for every post a mesh may keep.
+        let distance_m = (offset_m[0] * offset_m[0] + offset_m[1] * offset_m[1]).sqrt();
         let d = distance_m - reach_m - self.slack_m;
         if d >= self.end_m {
             return None;

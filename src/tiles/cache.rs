@@ -339,12 +339,6 @@ impl TileMaker {
                 self.extract(nodes, spec, square, mesh_errors).expect("planned from the same maps");
                 let mesh = &self.extractor.mesh;
                 let size = self.cutter.cut(mesh, square).expect("planned from the same mesh");
-                // Room for the finest tile a square this wide can make.
-                let most = (2 * square.width as usize + 1).pow(2) + 256;
-                self.vertices.clear();
-                self.indices.clear();
-                self.vertices.reserve(most.max(size.vertices));
-                self.indices.reserve((12 * most).max(size.indices));
                 self.vertices.resize(size.vertices, TileVertex::default());
                 self.indices.resize(size.indices, 0);
                 let span = (layout.node_size as u64) << job.source.level;

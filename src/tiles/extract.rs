@@ -45,6 +45,10 @@ pub struct PlacedMap<'a> {
     origin: [u64; 2],
     /// Splits are made where the code is above this.
     threshold: u8,
+    /// No post's threshold is below this (`threshold` without a view; with
+    /// one, its least error's): posts at or under it are never vertices,
+    /// which spares most posts the distance and the cone.
+    least: u8,
     /// Map posts between the corners of the squares every mesh of this
     /// map splits to (its tiles' squares, and the curvature's).
     forced: u32,
@@ -92,6 +96,7 @@ impl<'a> PlacedMap<'a> {
             inside,
             stored: (layout.stored_side(), layout.border),
             threshold: threshold_code(error_m.max(map.floor_m as f64)),
+            least: threshold_code(error_m.max(map.floor_m as f64)),
             forced: forced.clamp(1, map.cells),
             reader: PostReader::new(layout, key, layout.node_size, node, data),
             spacing_m: [layout.spacing_m[0] * scale, layout.spacing_m[1] * scale],
@@ -103,7 +108,10 @@ impl<'a> PlacedMap<'a> {
     /// The same map with its error growing with the distance as `view`
     /// says (the error it was placed with no longer counts).
     pub fn with_view(self, view: DistanceRule) -> Self {
-        PlacedMap { view: Some(view), ..self }
+        // Every error the rule gives is at least one of its rings' own.
+        let least_m = view.rings.iter().map(|r| r.own_m).fold(f64::INFINITY, f64::min);
+        let least = threshold_code(least_m.max(self.floor_m));
+        PlacedMap { view: Some(view), least, ..self }
     }
 
     /// The node whose map this is.
@@ -143,7 +151,9 @@ impl<'a> PlacedMap<'a> {
     /// Whether map post `p` is a vertex of this map's mesh.
     fn is_vertex(&self, p: [u32; 2]) -> bool {
         let on_forced = p[0] % self.forced == 0 && p[1] % self.forced == 0;
-        on_forced || self.data.map.code(p[0], p[1]) > self.threshold_at(p)
+        let code = self.data.map.code(p[0], p[1]);
+        debug_assert!(self.view.is_some() || self.least == self.threshold);
+        on_forced || (code > self.least && code > self.threshold_at(p))
     }
 
     /// The code map post `p` must be above to be a vertex (255: never).
@@ -386,16 +396,6 @@ impl Extractor {
         self.leaves.clear();
         self.mesh.vertices.clear();
         self.mesh.indices.clear();
-        // Room for the finest mesh a square this wide can have (every post
-        // and cell centre, and the splits above it) at once: meshes whose
-        // errors follow the camera differ frame to frame, and a frame
-        // allocates nothing once the widest square has been made.
-        let most = (2 * job.width as usize + 1).pow(2) + 256;
-        self.numbers.reserve(most);
-        self.targets.reserve(most);
-        self.leaves.reserve(4 * most);
-        self.mesh.vertices.reserve(most);
-        self.mesh.indices.reserve(12 * most);
         let map = &job.own.data.map;
         self.mesh.post_level = map.post_level;
         let cells = map.cells;

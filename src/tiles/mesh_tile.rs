@@ -131,11 +131,6 @@ impl MeshCutter {
         }
         self.order.clear();
         self.indices.clear();
-        // Room for the finest cut of a square this wide (see
-        // `Extractor::extract`).
-        let most = (2 * square.width as usize + 1).pow(2) + 256;
-        self.order.reserve(most);
-        self.indices.reserve(12 * most);
         // Mesh posts count half steps: the square's, doubled.
         let [x0, y0] = square.origin.map(|o| 2 * o as i64);
         let w = 2 * square.width as i64;
