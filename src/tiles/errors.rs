@@ -261,7 +261,7 @@ impl MeshErrors {
     /// level, metres), after [`Self::update`]; with `camera`, the near
     /// rings keep nothing of their own out of its view. A ring's anchor is
     /// the camera's place snapped to a lattice of its slack (its cone's
-    /// camera snapped likewise, and its angles to [`ANGLE_STEP_RAD`]), so
+    /// camera snapped likewise, and its angles to `ANGLE_STEP_RAD`), so
     /// the camera is always within its slack; when that or its errors
     /// change the ring takes a new generation.
     pub fn anchor(
