@@ -274,7 +274,7 @@ impl NodeMesh {
 /// Invariant: `keys` ascend and are below `(cells + 1)^2`; `codes`,
 /// `heights` and `normals` have one entry per key (dense: `codes` one per
 /// post, the rest empty); `above` has 4 x 256 entries, each quadrant's
-/// non-increasing.
+/// non-increasing; `shared_edges` holds the four edge bits alone.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ErrorMap {
     /// The level whose lattice the map's posts are on.
@@ -289,6 +289,12 @@ pub struct ErrorMap {
     /// Half cells are drawn as the hierarchy makes them (a reference
     /// lattice coarser than the data), never along the data's diagonal.
     pub hierarchy_leaves: bool,
+    /// The edges (bits [`ErrorMap::WEST`] to [`ErrorMap::NORTH`]) whose
+    /// posts' codes take the neighbouring node's triangles too: there the
+    /// two maps code every shared post alike, so meshes of one error meet
+    /// without a crack. Other edges' posts see their own node's triangles
+    /// alone (a node built on its own, or on its block's boundary).
+    pub shared_edges: u8,
     /// Dense: a code per post, row-major. Sparse: a code per key.
     pub codes: Vec<u8>,
     /// Sparse: the posts kept, `j * (cells + 1) + i`, ascending.
@@ -312,6 +318,15 @@ pub struct ErrorMap {
 }
 
 impl ErrorMap {
+    /// The west edge's bit in [`Self::shared_edges`] (posts `(0, j)`).
+    pub const WEST: u8 = 1;
+    /// The east edge's (posts `(cells, j)`).
+    pub const EAST: u8 = 2;
+    /// The south edge's (posts `(i, 0)`).
+    pub const SOUTH: u8 = 4;
+    /// The north edge's (posts `(i, cells)`).
+    pub const NORTH: u8 = 8;
+
     /// Whether the map keeps every post of its lattice.
     pub fn is_dense(&self) -> bool {
         self.keys.is_empty() && !self.codes.is_empty()
@@ -419,6 +434,7 @@ impl ErrorMap {
     pub fn debug_check(&self) {
         debug_assert!(self.keys.windows(2).all(|w| w[0] < w[1]), "keys ascend");
         debug_assert!(self.keys.last().is_none_or(|&k| k < self.side() * self.side()));
+        debug_assert!(self.shared_edges <= 15, "four edge bits");
         if !self.keys.is_empty() {
             debug_assert_eq!(self.codes.len(), self.keys.len());
             debug_assert_eq!(self.heights.len(), self.keys.len());

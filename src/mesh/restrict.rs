@@ -172,10 +172,61 @@ impl OwnCodes {
     /// `diagonal` (the block's subtree there): one per post of the square,
     /// row-major, what [`super::Rtin::new`] codes on the square's own grid.
     pub fn restrict(&self, origin: [u32; 2], cells: u32, diagonal: Diagonal) -> Vec<u8> {
+        let side = cells as usize + 1;
+        self.propagate(origin, cells, diagonal, vec![0u8; side * side])
+    }
+
+    /// [`Self::restrict`], but the posts on the square's edges in `shared`
+    /// (bits of [`ErrorMap::shared_edges`]) start from the block's own codes
+    /// `block` ([`Self::restrict`] of the whole block), which take the
+    /// triangles on both sides of the edge: the neighbouring square reads
+    /// the same codes there, so the two squares' meshes of one error keep
+    /// the same posts along their edge (no crack to fill). The square's
+    /// own posts are closed over them as over any child's.
+    ///
+    /// [`ErrorMap::shared_edges`]: crate::node::ErrorMap::shared_edges
+    pub fn restrict_sharing(
+        &self,
+        origin: [u32; 2],
+        cells: u32,
+        diagonal: Diagonal,
+        shared: u8,
+        block: &[u8],
+    ) -> Vec<u8> {
+        use crate::node::ErrorMap;
+        debug_assert_eq!(block.len(), self.side as usize * self.side as usize);
+        let side = cells as usize + 1;
+        let mut codes = vec![0u8; side * side];
+        let block_at =
+            |[x, y]: [u32; 2]| block[((origin[1] + y) * self.side + origin[0] + x) as usize];
+        for i in 0..=cells {
+            for (bit, p) in [
+                (ErrorMap::WEST, [0, i]),
+                (ErrorMap::EAST, [cells, i]),
+                (ErrorMap::SOUTH, [i, 0]),
+                (ErrorMap::NORTH, [i, cells]),
+            ] {
+                if shared & bit != 0 {
+                    codes[p[1] as usize * side + p[0] as usize] = block_at(p);
+                }
+            }
+        }
+        self.propagate(origin, cells, diagonal, codes)
+    }
+
+    /// Closes `codes` (the square's, row-major, each at least what it
+    /// starts from) over the square's hierarchy: each split's code is the
+    /// largest of its own and its children's.
+    fn propagate(
+        &self,
+        origin: [u32; 2],
+        cells: u32,
+        diagonal: Diagonal,
+        mut codes: Vec<u8>,
+    ) -> Vec<u8> {
         debug_assert!(cells.is_power_of_two());
         debug_assert!(origin[0] + cells < self.side && origin[1] + cells < self.side);
         let side = cells + 1;
-        let mut codes = vec![0u8; side as usize * side as usize];
         let block_side = self.side;
         for_each_split(cells, diagonal, [2, cells], &mut |t, slot, mids| {
             let m = t.midpoint();
@@ -220,5 +271,54 @@ mod tests {
                 assert_eq!(codes[(j * side + i) as usize], expected, "({i}, {j})");
             }
         }
+    }
+
+    /// Squares of a block and the block, with a hierarchy closed over
+    /// its children (every split's code at least its children's).
+    fn closed(codes: &[u8], cells: u32, diagonal: Diagonal) -> bool {
+        let side = cells + 1;
+        let mut ok = true;
+        for_each_split(cells, diagonal, [2, cells], &mut |t, _, mids| {
+            let at = |p: [u32; 2]| codes[(p[1] * side + p[0]) as usize];
+            ok &= mids.iter().all(|&m| at(t.midpoint()) >= at(m));
+        });
+        ok
+    }
+
+    #[test]
+    fn shared_edges_code_alike_on_both_sides_and_stay_closed() {
+        use crate::node::ErrorMap;
+        let side = 65u32;
+        let heights: Vec<f32> = (0..side * side)
+            .map(|k| (k.wrapping_mul(2_654_435_761) >> 22) as f32 * 0.05 + (k % side) as f32)
+            .collect();
+        let grid = HeightGrid::new(side, &heights).unwrap();
+        let own = OwnCodes::new(&grid, Diagonal::SouthEast, Metric::Surface);
+        let block = own.restrict([0, 0], 64, Diagonal::SouthEast);
+        let all = ErrorMap::WEST | ErrorMap::EAST | ErrorMap::SOUTH | ErrorMap::NORTH;
+        let square = |q: [u32; 2]| {
+            let diagonal = Diagonal::of_node(q[0], q[1]);
+            let origin = q.map(|v| v * 16);
+            let plain = own.restrict(origin, 16, diagonal);
+            let shared = own.restrict_sharing(origin, 16, diagonal, all, &block);
+            assert!(shared.iter().zip(&plain).all(|(s, p)| s >= p), "never below its own");
+            assert!(closed(&shared, 16, diagonal), "closed at {q:?}");
+            shared
+        };
+        let mut differ = 0;
+        for qy in 0..4 {
+            for qx in 0..3 {
+                let (west, east) = (square([qx, qy]), square([qx + 1, qy]));
+                // The west square's east edge is the east square's west.
+                for j in 0..17usize {
+                    assert_eq!(west[j * 17 + 16], east[j * 17], "({qx}, {qy}) post {j}");
+                }
+                let plain = own.restrict([qx * 16, qy * 16], 16, Diagonal::of_node(qx, qy));
+                let other =
+                    own.restrict([qx * 16 + 16, qy * 16], 16, Diagonal::of_node(qx + 1, qy));
+                differ += (0..17).filter(|j| plain[j * 17 + 16] != other[j * 17]).count();
+            }
+        }
+        assert!(differ > 0, "the squares' own codes differ somewhere along an edge");
     }
 }

@@ -41,6 +41,8 @@ pub struct Block {
     plan: MapPlan,
     reference: ReferenceGrid,
     codes: OwnCodes,
+    /// The block's own map's codes: its members' shared edges read them.
+    block_codes: Vec<u8>,
 }
 
 impl Block {
@@ -64,8 +66,10 @@ impl Block {
         let reference = reference_grid(source, top, plan.post_level)?;
         let grid = HeightGrid::with_voids(reference.side, &reference.heights)
             .map_err(|e| MeshesError::Mesh { id: top, source: e })?;
-        let codes = OwnCodes::new(&grid, Diagonal::of_node(top.x, top.y), Metric::Surface);
-        Ok(Block { top, plan, reference, codes })
+        let diagonal = Diagonal::of_node(top.x, top.y);
+        let codes = OwnCodes::new(&grid, diagonal, Metric::Surface);
+        let block_codes = codes.restrict([0, 0], reference.side - 1, diagonal);
+        Ok(Block { top, plan, reference, codes, block_codes })
     }
 
     /// Node `id`'s map (a stored node under the top, or the top): cut from
@@ -85,9 +89,30 @@ impl Block {
         let up = self.top.level - id.level;
         let posts = layout.node_size << (id.level - plan.post_level);
         let origin = [id.x - (self.top.x << up), id.y - (self.top.y << up)].map(|v| v * posts);
-        let codes = self.codes.restrict(origin, posts, Diagonal::of_node(id.x, id.y));
-        Ok(map_from_codes(layout, id, options, plan, &reference, codes))
+        let shared = shared_edges(origin, posts, self.reference.side - 1);
+        let diagonal = Diagonal::of_node(id.x, id.y);
+        let codes = self.codes.restrict_sharing(origin, posts, diagonal, shared, &self.block_codes);
+        let mut map = map_from_codes(layout, id, options, plan, &reference, codes);
+        map.shared_edges = shared;
+        Ok(map)
     }
+}
+
+/// The edges of the square of `posts` cells at `origin` that lie inside a
+/// block of `cells` cells: there its neighbour is a square of the block too.
+fn shared_edges(origin: [u32; 2], posts: u32, cells: u32) -> u8 {
+    let mut shared = 0;
+    for (inside, bit) in [
+        (origin[0] > 0, ErrorMap::WEST),
+        (origin[0] + posts < cells, ErrorMap::EAST),
+        (origin[1] > 0, ErrorMap::SOUTH),
+        (origin[1] + posts < cells, ErrorMap::NORTH),
+    ] {
+        if inside {
+            shared |= bit;
+        }
+    }
+    shared
 }
 
 /// Members built at a time: a few per core, so that memory holds a few

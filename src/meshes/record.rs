@@ -3,7 +3,9 @@
 //!
 //! ```text
 //! head  kind u8 (0 dense, 1 sparse with its heights, 2 sparse with the
-//!       pyramid's heights), post_level u8, hierarchy_leaves u8, key
+//!       pyramid's heights), post_level u8, edges u8 (bit 0
+//!       hierarchy_leaves, bits 4 to 7 shared_edges: 0 in maps built
+//!       before them, whose edges are all their own), key
 //!       coding u8 (0 gaps, 1 bitmask), cells u32, floor_m f32,
 //!       reference_delta f32, count u32, key_bytes u32, height_base f32,
 //!       height_step f32 (kind 1; else 0)
@@ -59,7 +61,8 @@ pub fn encode(map: &ErrorMap) -> (Vec<u8>, u32) {
     };
     let base = if base.is_finite() { base } else { 0.0 };
     let mut bytes = Vec::with_capacity(RECORD_HEAD + keys.len() + 5 * count + 3);
-    bytes.extend_from_slice(&[kind as u8, map.post_level, map.hierarchy_leaves as u8, coding]);
+    let edges = map.hierarchy_leaves as u8 | map.shared_edges << 4;
+    bytes.extend_from_slice(&[kind as u8, map.post_level, edges, coding]);
     for word in [map.cells, map.floor_m.to_bits(), map.reference_delta.to_bits(), count as u32] {
         bytes.extend_from_slice(&word.to_le_bytes());
     }
@@ -130,7 +133,11 @@ pub fn decode(record: &[u8], out: &mut ErrorMap) -> Result<(), String> {
         return Err(format!("map record of kind {kind} and {cells} cells"));
     }
     out.post_level = record[1];
-    out.hierarchy_leaves = record[2] != 0;
+    if record[2] & 0x0e != 0 {
+        return Err(format!("map record's edge byte {:#04x} sets unknown bits", record[2]));
+    }
+    out.hierarchy_leaves = record[2] & 1 != 0;
+    out.shared_edges = record[2] >> 4;
     out.cells = cells;
     out.floor_m = f32::from_bits(u32_at(8));
     out.reference_delta = f32::from_bits(u32_at(12));
@@ -217,4 +224,34 @@ fn decode_keys(coding: u8, bytes: &[u8], count: usize, posts: u64) -> Result<Vec
         return Err(format!("map record has {} keys, its head says {count}", keys.len()));
     }
     Ok(keys)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dense(shared_edges: u8, hierarchy_leaves: bool) -> ErrorMap {
+        ErrorMap {
+            cells: 2,
+            codes: (0..9).collect(),
+            shared_edges,
+            hierarchy_leaves,
+            ..ErrorMap::default()
+        }
+    }
+
+    #[test]
+    fn the_edge_byte_keeps_both_fields_and_rejects_unknown_bits() {
+        for (shared, leaves) in [(0, false), (ErrorMap::WEST | ErrorMap::NORTH, true), (15, false)]
+        {
+            let (bytes, _) = encode(&dense(shared, leaves));
+            let mut out = ErrorMap::default();
+            decode(&bytes, &mut out).unwrap();
+            assert_eq!((out.shared_edges, out.hierarchy_leaves), (shared, leaves));
+        }
+        let (mut bytes, _) = encode(&dense(0, false));
+        bytes[2] = 2;
+        let err = decode(&bytes, &mut ErrorMap::default()).unwrap_err();
+        assert!(err.contains("edge byte 0x02"), "{err}");
+    }
 }

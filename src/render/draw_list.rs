@@ -15,6 +15,7 @@ use crate::lod::{LevelRings, TileKey};
 use crate::tiles::block::{BLOCK_ALIGNMENT, INDEX_BYTES};
 use crate::tiles::cache::EdgeErrors;
 use crate::tiles::errors::MeshErrors;
+use crate::tiles::seams::Seams;
 use crate::tiles::{TileBlock, TileCoverage, TileDraw};
 use glam::{DVec2, Mat4, Vec3};
 
@@ -378,6 +379,9 @@ pub struct DrawnTile {
     /// Its sub-level: tiles of one node share their edges only at the
     /// same one (the same error and morph target).
     pub sub_level: u8,
+    /// Which of its edges on its node's boundary meet the neighbouring
+    /// node's tile alike.
+    pub seams: Seams,
 }
 
 impl DrawnTile {
@@ -389,6 +393,7 @@ impl DrawnTile {
             node_mesh: draw.node_mesh,
             errors: draw.errors,
             sub_level: draw.sub_level,
+            seams: draw.seams,
         }
     }
 }
@@ -689,9 +694,11 @@ pub const ALL_EDGES: u8 = 0b1111;
 /// data, seen from beyond the data's edge. Edges whose neighbour is not in
 /// the frame (culled, past the data, or split finer) keep their skirt.
 ///
-/// Tiles cut from node meshes share their edge vertices only with tiles cut
-/// from the same node's mesh (`node_tiles` tiles of a level a node side);
-/// across nodes each mesh chose its own edge vertices.
+/// Tiles cut from node meshes share their edge vertices with tiles cut
+/// from the same node's mesh (`node_tiles` tiles of a level a node side),
+/// made with the same ring generations; across nodes, where their maps code
+/// the edge alike ([`Seams::meets`]); elsewhere each mesh chose its own
+/// edge vertices.
 pub fn skirt_edges(draw: &TileDraw, drawn: &[DrawnTile], node_tiles: u32) -> u8 {
     let TileKey { level, x, y } = draw.key;
     let neighbours = [
@@ -711,7 +718,10 @@ pub fn skirt_edges(draw: &TileDraw, drawn: &[DrawnTile], node_tiles: u32) -> u8 
             other.source_level == draw.source_level
                 && other.node_mesh == draw.node_mesh
                 && other.sub_level == draw.sub_level
-                && (!draw.node_mesh || same_node(draw, key, node_tiles))
+                && other.seams.views == draw.seams.views
+                && (!draw.node_mesh
+                    || same_node(draw, key, node_tiles)
+                    || draw.seams.meets(&other.seams, bit))
         });
         if !watertight {
             edges |= 1 << bit;
@@ -1062,6 +1072,7 @@ mod tests {
             node_mesh: true,
             errors: EdgeErrors::UNKNOWN,
             sub_level: 0,
+            seams: Seams::default(),
         }
     }
 
@@ -1084,6 +1095,7 @@ mod tests {
             coverage: crate::tiles::TileCoverage::Full,
             sub_level: 0,
             errors: EdgeErrors::UNKNOWN,
+            seams: Seams::default(),
         };
         let deltas = [0.0, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0];
         let grid_deltas = deltas.map(|d| 10.0 * d);
@@ -1131,5 +1143,37 @@ mod tests {
         let tile = TileUniforms { skirt_depth: deepest, skirt_shares: shares, ..tile(0, [0.0; 2]) };
         assert_eq!(TileUniforms::unpack_skirt_shares(tile.packed_skirt_shares()), shares);
         assert!(tile.edge_skirt_m(2) >= 1.0 && tile.edge_skirt_m(3) >= 2.9);
+    }
+
+    #[test]
+    fn tiles_of_two_nodes_meet_without_a_skirt_where_their_seams_do() {
+        // Two tiles a node side: (0, 3, 5)'s east edge is its node's.
+        let seams = |shared| Seams { shared, views: 7, ancestors: 0b10 };
+        let draw = TileDraw {
+            key: TileKey::new(0, 3, 5),
+            byte_offset: 0,
+            index_byte_offset: 0,
+            index_count: 0,
+            vertex_step: 1.0,
+            node_mesh: true,
+            source_level: 0,
+            coverage: crate::tiles::TileCoverage::Full,
+            sub_level: 0,
+            errors: EdgeErrors::UNKNOWN,
+            seams: seams(0b0010),
+        };
+        let across = |seams| vec![DrawnTile { seams, ..drawn(0, 4, 5, 0) }];
+        let east = 0b0010;
+        assert_eq!(skirt_edges(&draw, &across(seams(0b1000)), 2) & east, 0);
+        // The neighbour's west edge not shared, another generation, other
+        // ancestors: the skirt hangs.
+        assert_ne!(skirt_edges(&draw, &across(seams(0b0010)), 2) & east, 0);
+        let later = Seams { views: 8, ..seams(0b1000) };
+        assert_ne!(skirt_edges(&draw, &across(later), 2) & east, 0);
+        let fewer = Seams { ancestors: 0, ..seams(0b1000) };
+        assert_ne!(skirt_edges(&draw, &across(fewer), 2) & east, 0);
+        // Inside one node the generations must agree as well.
+        let west = [DrawnTile { seams: later, ..drawn(0, 2, 5, 0) }];
+        assert_ne!(skirt_edges(&draw, &west, 2) & 0b1000, 0);
     }
 }

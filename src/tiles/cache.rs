@@ -21,6 +21,7 @@ use super::errors::{ErrorStep, MeshErrors, TileErrors};
 use super::extract::{forced_step, Extraction, Extractor, PlacedMap, TargetMesh};
 use super::grid::{self, TileGrid};
 use super::mesh_tile::{CutInputs, MeshCutter, TileSquare};
+use super::seams::{seams_of, Seams};
 use super::vertex::{fill_tile, tile_node, PostReader, TileCoverage};
 use super::{best_resident, ResidentNodes};
 use crate::allocator::{
@@ -29,7 +30,7 @@ use crate::allocator::{
 };
 use crate::lod::select::{children_node_stored, tiles_at};
 use crate::lod::{SelectedTile, TileKey};
-use crate::node::{NodeData, NodeId, NodeLayout};
+use crate::node::{ErrorMap, NodeData, NodeId, NodeLayout};
 use arrayvec::ArrayVec;
 use std::collections::HashMap;
 use std::ops::Range;
@@ -80,6 +81,8 @@ pub struct TileDraw {
     pub sub_level: u8,
     /// How far the surface it shows may lie from the data along each edge.
     pub errors: EdgeErrors,
+    /// Which of its edges meet the neighbouring node's tile alike.
+    pub seams: Seams,
 }
 
 /// How far a tile's surface may lie from the data along each of its edges
@@ -379,11 +382,13 @@ fn tile_error(
     let (level, sub) = (spec.key.level, spec.errors.sub_level);
     let map = &spec.data.map;
     let reference = map.reference_delta as f64;
-    // Along a level-0 node's boundary the meshes keep their rings' near-end
-    // errors (`super::extract`): the steps.
+    // Along a level-0 node's own (not shared) edges the meshes keep their
+    // rings' near-end errors (`super::extract`): the steps.
     let per_node = (layout.node_size / grid_size).max(1);
+    let map_edge = [ErrorMap::SOUTH, ErrorMap::EAST, ErrorMap::NORTH, ErrorMap::WEST];
     let on_boundary = |edge: usize| {
         spec.source.level == 0
+            && map.shared_edges & map_edge[edge] == 0
             && match edge {
                 0 => spec.key.y % per_node == 0,
                 1 => (spec.key.x + 1) % per_node == 0,
@@ -500,6 +505,8 @@ struct Resident {
     parent_resident: bool,
     /// How far its surface may lie from the data along each edge.
     errors_m: EdgeErrors,
+    /// Which of its edges meet the neighbouring node's tile alike.
+    seams: Seams,
     /// The error its ring allowed when made, not quantised.
     allowed_m: f64,
     coverage: TileCoverage,
@@ -524,6 +531,8 @@ struct Job {
     parent_resident: bool,
     /// How far its surface may lie from the data along each edge.
     errors_m: EdgeErrors,
+    /// Which of its edges meet the neighbouring node's tile alike.
+    seams: Seams,
     /// The error its ring allowed, not quantised ([`MeshErrors::allowed_m`]).
     allowed_m: f64,
     /// The mesh it is made as, and its size.
@@ -771,6 +780,11 @@ impl TileCache {
                     size: mesh.block_bytes(),
                 });
                 let errors_m = tile_error(kind, spec, &layout, grid_size, mesh_errors);
+                let seams = match kind {
+                    TileMeshKind::Grid => Seams::default(),
+                    _ if source.level != tile.key.level => Seams::default(),
+                    _ => seams_of(nodes, tile.key, source, grid_size, errors),
+                };
                 let allowed_m = mesh_errors.allowed_m(tile.key.level, errors.sub_level);
                 self.jobs.push(Job {
                     slot,
@@ -779,6 +793,7 @@ impl TileCache {
                     errors,
                     parent_resident,
                     errors_m,
+                    seams,
                     allowed_m,
                     kind,
                     mesh,
@@ -799,6 +814,7 @@ impl TileCache {
             errors: TileErrors::default(),
             parent_resident: false,
             errors_m: EdgeErrors::UNKNOWN,
+            seams: Seams::default(),
             allowed_m: f64::NAN,
             coverage: TileCoverage::Full,
             mesh: MeshCounts::default(),
@@ -882,6 +898,7 @@ impl TileCache {
                 resident.errors = job.errors;
                 resident.parent_resident = job.parent_resident;
                 resident.errors_m = job.errors_m;
+                resident.seams = job.seams;
                 resident.allowed_m = job.allowed_m;
                 bytes_uploaded += block.len() as u64;
             });
@@ -940,6 +957,7 @@ impl TileCache {
                 coverage: resident.coverage,
                 sub_level: resident.errors.sub_level,
                 errors: resident.errors_m,
+                seams: resident.seams,
             });
         }
         // Memory order keeps the attribute pointer moving forward.

@@ -32,7 +32,7 @@ use super::vertex::{slope, PostReader};
 use crate::lod::TileKey;
 use crate::mesh::code::threshold_code;
 use crate::mesh::rtin::{Diagonal, Triangle};
-use crate::node::{MeshVertex, NodeData, NodeId, NodeLayout, NodeMesh};
+use crate::node::{ErrorMap, MeshVertex, NodeData, NodeId, NodeLayout, NodeMesh};
 
 /// One node's error map placed for a walk: which of its posts are
 /// vertices of its mesh of one error, and the data at them.
@@ -166,15 +166,22 @@ impl<'a> PlacedMap<'a> {
         let reach = split_leg(p) * reach_legs() * self.spacing_m[0].max(self.spacing_m[1]);
         let heights = [self.data.min as f64, self.data.max as f64];
         let error = view.error_at(at, reach, heights).map(|error_m| {
-            // Along a level-0 node's boundary the mesh keeps its ring's
-            // near-end error: the neighbouring node's map codes its edge
+            // Along a level-0 node's own edge the mesh keeps its ring's
+            // near-end error: the neighbouring node's map codes the edge's
             // posts apart, so the two meshes meet at cracks as deep as both
             // errors, which its skirts fill and a viewer sees (issue 25).
+            // Shared edges' posts are coded alike on both sides: no crack.
             let legs = split_leg(p) * reach_legs();
-            let cells = self.data.map.cells as f64;
+            let map = &self.data.map;
+            let near = |c: u32| c as f64 <= legs;
+            let far = |c: u32| c as f64 >= map.cells as f64 - legs;
+            let own = !map.shared_edges;
             // Level 0's: farther levels' cracks span fewer pixels.
             let near_boundary = self.node.level == 0
-                && p.iter().any(|&c| c as f64 <= legs || c as f64 >= cells - legs);
+                && ((near(p[0]) && own & ErrorMap::WEST != 0)
+                    || (far(p[0]) && own & ErrorMap::EAST != 0)
+                    || (near(p[1]) && own & ErrorMap::SOUTH != 0)
+                    || (far(p[1]) && own & ErrorMap::NORTH != 0));
             match (near_boundary, view.rings.first()) {
                 (true, Some(ring)) => error_m.min(ring.largest_within(0.0)),
                 _ => error_m,

@@ -15,6 +15,7 @@ pub mod extract;
 pub mod fan;
 pub mod grid;
 pub mod mesh_tile;
+pub mod seams;
 pub mod vertex;
 
 pub use block::{MeshCounts, TileBlock, TileVertex};
