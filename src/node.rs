@@ -49,7 +49,29 @@ pub struct NodeLayout {
     pub spacing_m: [f64; 2],
 }
 
+/// The level of the squares inside which node edges are shared
+/// ([`ErrorMap::shared_edges`]): every map of a node finer than its square
+/// codes the posts of the edges inside it from the square's own hierarchy.
+/// A fixed level (not the build's blocks), so that every build, whole or
+/// in shards, shares the same edges; shards split no finer
+/// (`pyramid::shard`).
+pub const SHARE_LEVEL: u8 = 3;
+
 impl NodeLayout {
+    /// The level of the squares node edges are shared inside: [`SHARE_LEVEL`],
+    /// or the root's in a smaller pyramid.
+    pub fn share_level(&self) -> u8 {
+        SHARE_LEVEL.min(self.levels.saturating_sub(1))
+    }
+
+    /// The square node `id`'s shared edges lie inside: its ancestor of
+    /// [`Self::share_level`], or `None` at or above that level.
+    pub fn share_square(&self, id: NodeId) -> Option<NodeId> {
+        let level = self.share_level();
+        let up = level.checked_sub(id.level).filter(|&up| up > 0)?;
+        Some(NodeId::new(level, id.x >> up, id.y >> up))
+    }
+
     /// Posts per stored node side, border included.
     pub fn stored_side(&self) -> u32 {
         self.node_size + 1 + 2 * self.border

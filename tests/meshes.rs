@@ -9,7 +9,9 @@ use std::path::Path;
 use std::sync::Arc;
 
 use ridgeline::meshes::file::pyramid_identity;
-use ridgeline::meshes::{build_map, build_store, merge_stores, MapFile, MeshOptions, MeshedSource};
+use ridgeline::meshes::{
+    build_map, build_map_shared, build_store, merge_stores, MapFile, MeshOptions, MeshedSource,
+};
 use ridgeline::node::{NodeData, NodeError, NodeId, NodeLayout, NodeMesh, NodeSource};
 use ridgeline::pyramid::{self, BuildOptions, Pyramid, Silent};
 use ridgeline::scene::PreloadedTerrain;
@@ -204,11 +206,13 @@ fn layered_pyramid_in(dir: &Path) -> Arc<Pyramid> {
 }
 
 /// The block build (one scan per block, each node's map cut from it)
-/// against each node's map built alone: equal for every node, at the
-/// test's depth and at one whose blocks span every level, on one grid and
-/// on two layers (where a stored node's neighbour comes from an ancestor:
-/// a shard builds alone what one process cuts from a block, and both must
-/// write the same bytes).
+/// against each node's map built without it (through its share square's
+/// own block where its edges are shared, else alone): equal for every
+/// node, at the test's depth and at one whose blocks span every level, on
+/// one grid and on two layers (where a stored node's neighbour comes from
+/// an ancestor: a shard builds alone what one process cuts from a block,
+/// and both must write the same bytes). Where no edge is shared the map
+/// is the one built alone; shared edges only raise codes.
 #[test]
 fn every_map_of_the_block_build_is_the_map_built_alone() {
     let dir = testkit::fresh_dir("meshes-blocks");
@@ -222,6 +226,7 @@ fn the_block_build_is_each_map_built_alone(dir: &Path, pyramid: &Arc<Pyramid>) {
     let layout = *pyramid.layout();
     let identity = pyramid_identity(pyramid.path()).expect("identity");
     let nodes = ridgeline::meshes::source::stored_nodes(pyramid.as_ref());
+    let mut shared = 0;
     for depth in [2, 5] {
         let options = MeshOptions { depth, ..OPTIONS };
         let path = dir.join(format!("depth-{depth}.rlm"));
@@ -231,8 +236,24 @@ fn the_block_build_is_each_map_built_alone(dir: &Path, pyramid: &Arc<Pyramid>) {
         for &id in &nodes {
             let mut read = NodeData::default();
             file.read(pyramid.as_ref(), id, &mut read.map).expect("reads");
-            let alone = build_map(pyramid.as_ref(), id, &options).expect("builds alone");
+            let alone = build_map_shared(pyramid.as_ref(), id, &options).expect("builds alone");
             let what = format!("{id:?} at depth {depth}");
+            assert_eq!(read.map.shared_edges, alone.shared_edges, "{what}");
+            let own = build_map(pyramid.as_ref(), id, &options).expect("builds alone");
+            if alone.shared_edges == 0 {
+                // NaN heights compare by bits.
+                let parts = |m: &ridgeline::node::ErrorMap| {
+                    (m.codes.clone(), m.keys.clone(), bits(&m.heights))
+                };
+                assert!(
+                    parts(&alone) == parts(&own),
+                    "{what}: no shared edge, the map built alone"
+                );
+            } else if alone.is_dense() {
+                let raised = alone.codes.iter().zip(&own.codes).all(|(s, o)| s >= o);
+                assert!(raised, "{what}: shared edges only raise codes");
+                shared += 1;
+            }
             assert_eq!(
                 (read.map.post_level, read.map.cells),
                 (alone.post_level, alone.cells),
@@ -247,6 +268,7 @@ fn the_block_build_is_each_map_built_alone(dir: &Path, pyramid: &Arc<Pyramid>) {
             assert_eq!(read.map.floor_m, alone.floor_m, "{what}");
         }
     }
+    assert!(shared > 0, "some level-0 maps share an edge");
 }
 
 #[test]

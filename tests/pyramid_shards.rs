@@ -17,7 +17,9 @@ use testkit::cli::{Ridgeline, Run};
 use testkit::dem::write_ascii;
 use testkit::fresh_dir;
 
-const NODE: &[&str] = &["--node-size", "32"];
+/// Small nodes: shards split no finer than the share level (3), which
+/// then has enough nodes under the fine tiles for four shards.
+const NODE: &[&str] = &["--node-size", "16"];
 
 fn terrain(x: f64, y: f64) -> f64 {
     900.0 + 400.0 * (x / 6100.0).sin() * (y / 8300.0).cos() + 0.004 * x + 30.0 * (x / 700.0).cos()

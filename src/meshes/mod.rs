@@ -33,6 +33,7 @@ pub mod reference;
 pub mod shards;
 pub mod source;
 
+pub use block::build_map_shared;
 pub use build::build_map;
 pub use file::{
     build_store, merge_parts, merge_stores, pyramid_identity, MapFile, StoreInfo, MAP_FILE_NAME,

@@ -7,8 +7,10 @@
 //!   `DIR/shard-K-of-N.rlm`, each renamed into place when complete: a
 //!   killed shard leaves the previous part or none (and a temporary its
 //!   rerun removes), and a rerun writes the same bytes. A node's map looks
-//!   only at the node's own subtree ([`super::build`]), so a shard's maps
-//!   are a single process's.
+//!   only at the node's own subtree ([`super::build`]) and, for its shared
+//!   edges, at its share square's, which the shard holds whole (the split
+//!   is never finer than the share level), so a shard's maps are a single
+//!   process's.
 //! - **Identity.** The map part's header carries, where a whole map file
 //!   carries its pyramid's identity, the CRC-32 of the *inputs key*
 //!   ([`inputs_key`]: the layers' placement and heights, node size and

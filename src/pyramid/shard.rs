@@ -5,7 +5,8 @@
 //!
 //! - **The split.** A *split level* is chosen from the layout and N alone:
 //!   the coarsest level with at least `2 N` nodes, none of them holding
-//!   more than `1 / 2N` of the work (level 0 if none has).
+//!   more than `1 / 2N` of the work (the share level if none has), never
+//!   finer than the share level ([`NodeLayout::share_level`]).
 //!   Its nodes are dealt to the shards in node order (row by row from the
 //!   south), in contiguous runs of about equal work, a node's work being
 //!   the posts of every layer under it at the layer's own level
@@ -130,8 +131,10 @@ impl Split {
 
 /// The split level and its nodes' work: the coarsest level with at least
 /// `2 count` nodes none of which holds more than `1 / (2 count)` of the
-/// work (level 0 if none does), so that runs of whole nodes come within
-/// about half a share of even.
+/// work (the share level if none does), so that runs of whole nodes come
+/// within about half a share of even. Never finer than the share level
+/// ([`NodeLayout::share_level`]): a shard then holds every square whose
+/// inner node edges its maps share, and builds them as one process does.
 fn split_level(layout: &NodeLayout, composite: &Composite, count: u32) -> (u8, Vec<f64>) {
     let wanted = 2 * count as u64;
     let work_at = |level: u8| {
@@ -139,7 +142,8 @@ fn split_level(layout: &NodeLayout, composite: &Composite, count: u32) -> (u8, V
         let ids = (0..nodes_y).flat_map(|y| (0..nodes_x).map(move |x| NodeId::new(level, x, y)));
         ids.map(|id| node_work(layout, composite, id)).collect::<Vec<f64>>()
     };
-    for level in (1..layout.levels).rev() {
+    let finest = layout.share_level();
+    for level in (finest.max(1)..layout.levels).rev() {
         if layout.nodes_at_count(level) < wanted {
             continue;
         }
@@ -149,7 +153,7 @@ fn split_level(layout: &NodeLayout, composite: &Composite, count: u32) -> (u8, V
             return (level, work);
         }
     }
-    (0, work_at(0))
+    (finest, work_at(finest))
 }
 
 /// The work under node `id`: per layer, its posts there at its own level.
