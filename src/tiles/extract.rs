@@ -164,7 +164,14 @@ impl<'a> PlacedMap<'a> {
         let x = self.level0(p);
         let at = [x[0] as f64 * level0[0], x[1] as f64 * level0[1]];
         let reach = split_leg(p) * reach_legs() * self.spacing_m[0].max(self.spacing_m[1]);
-        let heights = [self.data.min as f64, self.data.max as f64];
+        // A split whose reach meets a shared edge is judged against the
+        // view with heights both nodes agree on: with each node's own, one
+        // side kept an edge post the other left out of the cone, a crack
+        // with no skirt under it (`tests/scene_cracks.rs`).
+        let heights = match self.reaches_shared_edge(p) {
+            true => ANY_HEIGHT_M,
+            false => [self.data.min as f64, self.data.max as f64],
+        };
         let error = view.error_at(at, reach, heights).map(|error_m| {
             // Along a level-0 node's own edge the mesh keeps its ring's
             // near-end error: the neighbouring node's map codes the edge's
@@ -193,6 +200,21 @@ impl<'a> PlacedMap<'a> {
         }
     }
 
+    /// Whether map post `p`'s split reaches one of the map's shared edges.
+    fn reaches_shared_edge(&self, p: [u32; 2]) -> bool {
+        let map = &self.data.map;
+        if map.shared_edges == 0 {
+            return false;
+        }
+        let legs = split_leg(p) * reach_legs();
+        let cells = map.cells as f64;
+        let shared = |bit: u8| map.shared_edges & bit != 0;
+        (shared(ErrorMap::WEST) && p[0] as f64 <= legs)
+            || (shared(ErrorMap::EAST) && p[0] as f64 >= cells - legs)
+            || (shared(ErrorMap::SOUTH) && p[1] as f64 <= legs)
+            || (shared(ErrorMap::NORTH) && p[1] as f64 >= cells - legs)
+    }
+
     /// Whether level-0 post `x` is a vertex of this map's mesh.
     fn has_vertex(&self, x: [u64; 2]) -> bool {
         self.local(x).is_some_and(|p| self.is_vertex(p))
@@ -213,6 +235,11 @@ impl<'a> PlacedMap<'a> {
         Some((map.heights[k], map.normals[k]))
     }
 }
+
+/// Heights any terrain lies within, metres (the deepest trench to above
+/// the highest peak): the view cone's vertical extent where two nodes must
+/// judge a split alike.
+const ANY_HEIGHT_M: [f64; 2] = [-11_000.0, 9_000.0];
 
 /// Map posts between the corners of the squares every mesh of a node's
 /// map splits to (a power of two): the tiles' squares (`tile_posts` map
