@@ -315,7 +315,8 @@ pub struct ErrorMap {
     /// posts' codes take the neighbouring node's triangles too: there the
     /// two maps code every shared post alike, so meshes of one error meet
     /// without a crack. Other edges' posts see their own node's triangles
-    /// alone (a node built on its own, or on its block's boundary).
+    /// alone (the edges on its share square's boundary, or every edge of
+    /// a node whose square is not stored on its lattice).
     pub shared_edges: u8,
     /// Dense: a code per post, row-major. Sparse: a code per key.
     pub codes: Vec<u8>,
@@ -348,6 +349,9 @@ impl ErrorMap {
     pub const SOUTH: u8 = 4;
     /// The north edge's (posts `(i, cells)`).
     pub const NORTH: u8 = 8;
+    /// The bits in the order tiles number their edges: south, east, north,
+    /// west.
+    pub const BY_TILE_EDGE: [u8; 4] = [Self::SOUTH, Self::EAST, Self::NORTH, Self::WEST];
 
     /// Whether the map keeps every post of its lattice.
     pub fn is_dense(&self) -> bool {

@@ -177,9 +177,10 @@ impl OwnCodes {
     }
 
     /// [`Self::restrict`], but the posts on the square's edges in `shared`
-    /// (bits of [`ErrorMap::shared_edges`]) start from the block's own codes
-    /// `block` ([`Self::restrict`] of the whole block), which take the
-    /// triangles on both sides of the edge: the neighbouring square reads
+    /// (bits of [`ErrorMap::shared_edges`]) start from `block`, one code per
+    /// post of the block: those of the square's share square's own map,
+    /// which take the triangles on both sides of the edge (`meshes::block`
+    /// restricts each share square so). The neighbouring square reads
     /// the same codes there, so the two squares' meshes of one error keep
     /// the same posts along their edge (no crack to fill). The square's
     /// own posts are closed over them as over any child's. The square's

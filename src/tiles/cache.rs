@@ -385,10 +385,9 @@ fn tile_error(
     // Along a level-0 node's own (not shared) edges the meshes keep their
     // rings' near-end errors (`super::extract`): the steps.
     let per_node = (layout.node_size / grid_size).max(1);
-    let map_edge = [ErrorMap::SOUTH, ErrorMap::EAST, ErrorMap::NORTH, ErrorMap::WEST];
     let on_boundary = |edge: usize| {
         spec.source.level == 0
-            && map.shared_edges & map_edge[edge] == 0
+            && map.shared_edges & ErrorMap::BY_TILE_EDGE[edge] == 0
             && match edge {
                 0 => spec.key.y % per_node == 0,
                 1 => (spec.key.x + 1) % per_node == 0,

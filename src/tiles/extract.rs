@@ -168,7 +168,9 @@ impl<'a> PlacedMap<'a> {
         // view with heights both nodes agree on: with each node's own, one
         // side kept an edge post the other left out of the cone, a crack
         // with no skirt under it (`tests/scene_cracks.rs`).
-        let heights = match self.reaches_shared_edge(p) {
+        let map = &self.data.map;
+        let reached = self.edges_reached(p);
+        let heights = match reached & map.shared_edges != 0 {
             true => ANY_HEIGHT_M,
             false => [self.data.min as f64, self.data.max as f64],
         };
@@ -178,17 +180,8 @@ impl<'a> PlacedMap<'a> {
             // posts apart, so the two meshes meet at cracks as deep as both
             // errors, which its skirts fill and a viewer sees (issue 25).
             // Shared edges' posts are coded alike on both sides: no crack.
-            let legs = split_leg(p) * reach_legs();
-            let map = &self.data.map;
-            let near = |c: u32| c as f64 <= legs;
-            let far = |c: u32| c as f64 >= map.cells as f64 - legs;
-            let own = !map.shared_edges;
             // Level 0's: farther levels' cracks span fewer pixels.
-            let near_boundary = self.node.level == 0
-                && ((near(p[0]) && own & ErrorMap::WEST != 0)
-                    || (far(p[0]) && own & ErrorMap::EAST != 0)
-                    || (near(p[1]) && own & ErrorMap::SOUTH != 0)
-                    || (far(p[1]) && own & ErrorMap::NORTH != 0));
+            let near_boundary = self.node.level == 0 && reached & !map.shared_edges != 0;
             match (near_boundary, view.rings.first()) {
                 (true, Some(ring)) => error_m.min(ring.largest_within(0.0)),
                 _ => error_m,
@@ -200,19 +193,18 @@ impl<'a> PlacedMap<'a> {
         }
     }
 
-    /// Whether map post `p`'s split reaches one of the map's shared edges.
-    fn reaches_shared_edge(&self, p: [u32; 2]) -> bool {
-        let map = &self.data.map;
-        if map.shared_edges == 0 {
-            return false;
-        }
+    /// The node edges (bits of [`ErrorMap::shared_edges`]) map post `p`'s
+    /// split reaches within its reach.
+    fn edges_reached(&self, p: [u32; 2]) -> u8 {
         let legs = split_leg(p) * reach_legs();
-        let cells = map.cells as f64;
-        let shared = |bit: u8| map.shared_edges & bit != 0;
-        (shared(ErrorMap::WEST) && p[0] as f64 <= legs)
-            || (shared(ErrorMap::EAST) && p[0] as f64 >= cells - legs)
-            || (shared(ErrorMap::SOUTH) && p[1] as f64 <= legs)
-            || (shared(ErrorMap::NORTH) && p[1] as f64 >= cells - legs)
+        let cells = self.data.map.cells as f64;
+        let near = |c: u32| c as f64 <= legs;
+        let far = |c: u32| c as f64 >= cells - legs;
+        let bit = |reached: bool, edge: u8| if reached { edge } else { 0 };
+        bit(near(p[0]), ErrorMap::WEST)
+            | bit(far(p[0]), ErrorMap::EAST)
+            | bit(near(p[1]), ErrorMap::SOUTH)
+            | bit(far(p[1]), ErrorMap::NORTH)
     }
 
     /// Whether level-0 post `x` is a vertex of this map's mesh.

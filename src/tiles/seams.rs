@@ -45,9 +45,6 @@ impl Seams {
     }
 }
 
-/// The map bit of tile edge `edge` (south, east, north, west).
-const MAP_EDGE: [u8; 4] = [ErrorMap::SOUTH, ErrorMap::EAST, ErrorMap::NORTH, ErrorMap::WEST];
-
 /// The seams of tile `key` cut from the mesh of `source` (of the tile's
 /// level) with `errors`, `grid_size` cells a side, given the nodes resident
 /// now (the ancestors its mesh keeps, as `super::cache` extracts them).
@@ -98,7 +95,7 @@ fn shared_bits(map: &ErrorMap, id: NodeId, source: NodeId) -> u8 {
         source.x % span == 0,
     ];
     (0..4)
-        .filter(|&e| !on_boundary[e] || map.shared_edges & MAP_EDGE[e] != 0)
+        .filter(|&e| !on_boundary[e] || map.shared_edges & ErrorMap::BY_TILE_EDGE[e] != 0)
         .fold(0, |s, e| s | 1 << e)
 }
 
