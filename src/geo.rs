@@ -10,6 +10,10 @@
 //! - the local frame has x east and y north in metres, with the origin at the
 //!   south-west sample, and heights in metres above mean sea level.
 
+/// Heights any terrain on the earth lies within, metres: the deepest
+/// trench (11 km below sea level) to above the highest summit.
+pub const TERRAIN_RANGE_M: [f64; 2] = [-11_000.0, 9_000.0];
+
 /// The coordinate system of `origin` and `spacing`.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Crs {

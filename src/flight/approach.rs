@@ -33,6 +33,7 @@ use glam::DVec2;
 
 use super::path::{FlightPath, Waypoint};
 use super::pose::{heading_difference, normalize_heading, Pose};
+use crate::geo::TERRAIN_RANGE_M;
 
 /// Seconds to fly the whole ground track, unless [`MAX_GROUND_SPEED`] caps the speed.
 pub const APPROACH_SECONDS: f64 = 75.0;
@@ -61,9 +62,6 @@ const TRACK: [[f64; 2]; 3] = [[0.10, 0.10], [0.18, 0.62], [0.50, 0.50]];
 const TRACK_PIECES: usize = 1024;
 /// Terrain samples per leg between waypoints (a 625 m leg: every 20 m).
 const LEG_SAMPLES: usize = 32;
-/// Terrain heights outside this are treated as these bounds, so an absurd
-/// `height_at` cannot push the path outside the accepted altitudes.
-const TERRAIN_RANGE_M: [f64; 2] = [-11_000.0, 9_000.0];
 /// Extents are clamped into this so positions stay inside the accepted range.
 const MAX_EXTENT_M: f64 = 2e7;
 /// The steepest descent between waypoints, as a multiple of the nominal.
@@ -192,6 +190,7 @@ fn heading_of(direction: DVec2) -> f64 {
 fn altitudes(times: &[f64], positions: &[DVec2], height_at: &dyn Fn(f64, f64) -> f32) -> Vec<f64> {
     let terrain = |p: DVec2| {
         let h = height_at(p.x, p.y) as f64;
+        // Absurd heights cannot push the path outside the accepted altitudes.
         h.is_finite().then(|| h.clamp(TERRAIN_RANGE_M[0], TERRAIN_RANGE_M[1]))
     };
     let leg_highest = highest_terrain_per_leg(positions, &terrain);

@@ -171,7 +171,8 @@ impl<'a> PlacedMap<'a> {
         let map = &self.data.map;
         let reached = self.edges_reached(p);
         let heights = match reached & map.shared_edges != 0 {
-            true => ANY_HEIGHT_M,
+            // The view cone's vertical extent where two nodes must agree.
+            true => crate::geo::TERRAIN_RANGE_M,
             false => [self.data.min as f64, self.data.max as f64],
         };
         let error = view.error_at(at, reach, heights).map(|error_m| {
@@ -227,11 +228,6 @@ impl<'a> PlacedMap<'a> {
         Some((map.heights[k], map.normals[k]))
     }
 }
-
-/// Heights any terrain lies within, metres (the deepest trench to above
-/// the highest peak): the view cone's vertical extent where two nodes must
-/// judge a split alike.
-const ANY_HEIGHT_M: [f64; 2] = [-11_000.0, 9_000.0];
 
 /// Map posts between the corners of the squares every mesh of a node's
 /// map splits to (a power of two): the tiles' squares (`tile_posts` map
