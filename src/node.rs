@@ -255,7 +255,8 @@ pub struct MeshVertex {
 ///
 /// Invariant: every index is below `vertices.len()`, `indices.len()` is a
 /// multiple of 3, triangles are counter-clockwise seen from above, and each
-/// triangle lies inside one square of `tile_cells` node posts.
+/// triangle lies inside one square of `tile_cells` node posts; `bands`
+/// is empty or has one entry per vertex.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct NodeMesh {
     /// The level whose post spacing the vertices' posts count in (the
@@ -265,6 +266,10 @@ pub struct NodeMesh {
     pub vertices: Vec<MeshVertex>,
     /// Three indices a triangle.
     pub indices: Vec<u16>,
+    /// Per vertex, the morph band it follows (`tiles::by_distance`'s
+    /// `DistanceRule::band_at`): 0, the level's own morph, for all where
+    /// empty.
+    pub bands: Vec<u8>,
 }
 
 impl NodeMesh {
@@ -277,6 +282,7 @@ impl NodeMesh {
     pub fn debug_check(&self) {
         debug_assert_eq!(self.indices.len() % 3, 0);
         debug_assert!(self.indices.iter().all(|&i| (i as usize) < self.vertices.len()));
+        debug_assert!(self.bands.is_empty() || self.bands.len() == self.vertices.len());
     }
 }
 

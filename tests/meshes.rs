@@ -74,8 +74,14 @@ fn node_mesh(
         up = parent;
     }
     let target = if chain.is_empty() { TargetMesh::None } else { TargetMesh::Parent };
-    let job =
-        Extraction { own: &own, ancestors: &chain, target, origin: [0, 0], width: data.map.cells };
+    let job = Extraction {
+        own: &own,
+        ancestors: &chain,
+        target,
+        origin: [0, 0],
+        width: data.map.cells,
+        place_parent: false,
+    };
     let mut extractor = Extractor::default();
     extractor.extract(&job).expect("extracts");
     extractor.mesh.clone()

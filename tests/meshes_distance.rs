@@ -49,7 +49,11 @@ fn band(layout: &NodeLayout, anchor: [f64; 2], posts: [f64; 3], least_m: f64) ->
 }
 
 fn rule(rings: &[RingView], ends: bool) -> DistanceRule {
-    DistanceRule { rings: rings.iter().copied().collect(), ends }
+    DistanceRule {
+        rings: rings.iter().copied().collect(),
+        ends,
+        finest: rings.len().saturating_sub(1) as u8,
+    }
 }
 
 fn place<'a>(
@@ -64,7 +68,14 @@ fn place<'a>(
 
 fn extract(own: &PlacedMap<'_>, chain: &[PlacedMap<'_>], cells: u32) -> NodeMesh {
     let target = if chain.is_empty() { TargetMesh::None } else { TargetMesh::Parent };
-    let job = Extraction { own, ancestors: chain, target, origin: [0, 0], width: cells };
+    let job = Extraction {
+        own,
+        ancestors: chain,
+        target,
+        origin: [0, 0],
+        width: cells,
+        place_parent: false,
+    };
     let mut extractor = Extractor::default();
     extractor.extract(&job).expect("extracts");
     extractor.mesh.clone()

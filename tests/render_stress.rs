@@ -226,7 +226,7 @@ fn agreement(
         // The surface's vertices (skirts repeat edge posts), matched by
         // number: the far tile shows what the near one shows.
         let count = near_tile.vertices.len().min(far_tile.vertices.len());
-        let surface = (0..count).filter(|&v| near_tile.vertices[v].skirt == 0);
+        let surface = (0..count).filter(|&v| near_tile.vertices[v].edge() == 0);
         for v in surface {
             let p = shader_position(far_tile, v, far_eye.z);
             let q = shader_position(near_tile, v, near_eye.z);

@@ -61,7 +61,16 @@ fn terrain_morph_matches_its_rust_mirror() {
     let rust =
         std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("src/lod/morph.rs"))
             .unwrap();
-    assert!(code(&vert).contains("clamp((distance - ranges.x) / (ranges.y - ranges.x), 0.0, 1.0)"));
+    assert!(code(&vert)
+        .contains("clamp((distance - morph_band.x) / (morph_band.y - morph_band.x), 0.0, 1.0)"));
+    assert!(
+        code(&vert).contains("float end = sub_end * exp2(1.0 - band);")
+            && code(&vert).contains("return vec2(end * start_share, end);")
+    );
+    assert!(
+        code(&rust).contains("let end = sub_end * (1.0 - band as f32).exp2();")
+            && code(&rust).contains("[end * start_share, end]")
+    );
     assert!(
         code(&vert).contains("length(vec3(position, own - altitude))")
             && code(&vert).contains("float own = no_data ? a_height.y : a_height.x;"),

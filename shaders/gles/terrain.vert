@@ -20,7 +20,7 @@
 // u_morph.x to 1 at u_morph.y with the vertex's distance to the camera,
 // measured with its unmorphed height.
 
-attribute vec4 a_grid;    // post i, post j (in the tile's posts), skirt edge 1..4, curtain foot 5 or 0, member slot
+attribute vec4 a_grid;    // post i, post j (in the tile's posts), skirt edge 1..4 or curtain foot 5 or 0 plus 8 times the morph band, member slot
 attribute vec2 a_height;  // this level's height, the parent level's height
 attribute vec4 a_normal;  // normal xy at this level, at the parent level
 
@@ -38,7 +38,9 @@ uniform mat4 u_view_projection;
 // [6 slot + 3]: the rotation from the centre's ENU axes to the camera's
 //               (a unit quaternion xyzw). Zero in the chart.
 // [6 slot + 4], [6 slot + 5]: a projected grid's node series: the centre's
-//               latitude, then z, z^2, z^3's complex coefficients.
+//               latitude, then z, z^2, z^3's complex coefficients (xyz of
+//               [6 slot + 5]); [6 slot + 5].w: the end of sub-level 1's
+//               morph, which a vertex's band k >= 1 halves k - 1 times.
 uniform vec4 u_members[96];
 uniform vec4 u_posts;     // level-0 post spacing (xy), camera minus anchor post (zw), metres
 uniform vec4 u_frame;     // camera altitude, 1 / (2 R) or 0 for a flat earth, the data's last post numbered from the anchor (zw)
@@ -56,6 +58,20 @@ varying vec3 v_position;     // camera-relative, for the accuracy tool's positio
 varying float v_no_data;     // 1 at a post without data, 0 elsewhere (see NO_DATA in the fragment shaders)
 varying vec2 v_beyond;       // posts past the data's last post, east and north (clipped where above 0)
 varying float v_curtain;     // above 0 on a curtain (the data's cut face, src/tiles/curtain.rs), 0 elsewhere
+
+// The morph range of a vertex of morph band `band` (src/lod/morph.rs
+// band_range, line for line): band 0 the tile's own, `own` (its level's
+// morph toward the level above); band k >= 1 sub-level k's, toward
+// sub-level k - 1: its end the tile's sub-level 1 end, `sub_end`, halved
+// k - 1 times, its start that times `start_share` (every morph's start
+// over its end, the frame's).
+vec2 band_range(vec2 own, float sub_end, float start_share, float band) {
+    if (band < 0.5) {
+        return own;
+    }
+    float end = sub_end * exp2(1.0 - band);
+    return vec2(end * start_share, end);
+}
 
 // sin d and 1 - cos d: by their series below half a radian, so a small
 // angle keeps its digits whatever the GPU's sin does with it.
@@ -145,14 +161,18 @@ void main() {
     // Edge k hangs its skirt its share of the depth: 4-bit field k-1 of
     // tile.w (an integer below 2^16, exact in a highp float), fifteenths.
     // A curtain's foot (5) carries its own depth in its heights.
-    bool skirt = a_grid.z > 0.5 && a_grid.z < 4.5;
-    float share = skirt ? mod(floor(tile.w / exp2(4.0 * (a_grid.z - 1.0))), 16.0) : 0.0;
+    // a_grid.z: the edge code in bits 0 to 2, the morph band above them.
+    float code = mod(a_grid.z, 8.0);
+    vec2 morph_band = band_range(ranges.xy, u_members[6 * slot + 5].w, u_earth[1].w,
+                                 floor(a_grid.z / 8.0));
+    bool skirt = code > 0.5 && code < 4.5;
+    float share = skirt ? mod(floor(tile.w / exp2(4.0 * (code - 1.0))), 16.0) : 0.0;
     // Bits 16 to 23: the skirt slope's code (0: none), 128 + 8 log2 of the
     // metres a skirt may hang per metre of its distance, over 0.5 m
     // (render::draw_list::skirt_slope, SKIRT_BASE_M).
     float slope_code = floor(tile.w / 65536.0);
     float slope = slope_code > 0.5 ? exp2((slope_code - 128.0) / 8.0) : 1.0e30;
-    v_curtain = a_grid.z > 4.5 ? 1.0 : 0.0;
+    v_curtain = code > 4.5 ? 1.0 : 0.0;
     vec2 n;
     vec3 p;
     float morph;
@@ -173,7 +193,7 @@ void main() {
         surface = rotate(q, surface) + place.xyz;
         up = rotate(q, up);
         float distance = length(surface + up * own);
-        morph = clamp((distance - ranges.x) / (ranges.y - ranges.x), 0.0, 1.0);
+        morph = clamp((distance - morph_band.x) / (morph_band.y - morph_band.x), 0.0, 1.0);
         height = mix(own, a_height.y, morph);
         float hang = min(share / 15.0 * ranges.z, slope * distance + 0.5);
         p = surface + up * (height - hang);
@@ -183,7 +203,7 @@ void main() {
     } else {
         vec2 position = post * u_posts.xy - u_posts.zw;
         float distance = length(vec3(position, own - altitude));
-        morph = clamp((distance - ranges.x) / (ranges.y - ranges.x), 0.0, 1.0);
+        morph = clamp((distance - morph_band.x) / (morph_band.y - morph_band.x), 0.0, 1.0);
         height = mix(own, a_height.y, morph);
         float drop = dot(position, position) * u_frame.y;
         float hang = min(share / 15.0 * ranges.z, slope * distance + 0.5);

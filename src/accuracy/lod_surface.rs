@@ -48,6 +48,8 @@ pub struct LodSurface {
     /// The shader's f32 altitude and 1 / (2 R) (0 for a flat earth), widened.
     altitude: f64,
     curvature: f64,
+    /// The frame's morphs' start over their end.
+    start_share: f32,
     /// `u_earth` when drawn on the ellipsoid: [`Self::earth_height_at`]
     /// morphs by the shader's camera-relative points and drops nothing.
     earth: Option<[f32; 8]>,
@@ -92,6 +94,7 @@ impl LodSurface {
             posts,
             last_m,
             altitude,
+            start_share: list.uniforms.map_or(0.0, |f| f.morph_start_share),
             curvature,
             earth,
         }
@@ -301,12 +304,14 @@ impl LodSurface {
                 tile.first_post[1] + j * tile.vertex_step,
             ];
             let distance = tile.place.vertex(earth, post, vertex.height).length() as f64;
-            let factor = morph_factor(distance, tile.morph[0] as f64, tile.morph[1] as f64);
+            let [start, end] = tile.vertex_morph(&vertex, self.start_share);
+            let factor = morph_factor(distance, start as f64, end as f64);
             return morphed_height(vertex.height, vertex.target, factor);
         }
         let [x, y] = tile.vertex_position(&self.posts, i, j).map(f64::from);
         let distance = (x * x + y * y + (vertex.height as f64 - self.altitude).powi(2)).sqrt();
-        let factor = morph_factor(distance, tile.morph[0] as f64, tile.morph[1] as f64);
+        let [start, end] = tile.vertex_morph(&vertex, self.start_share);
+        let factor = morph_factor(distance, start as f64, end as f64);
         morphed_height(vertex.height, vertex.target, factor) - (x * x + y * y) * self.curvature
     }
 

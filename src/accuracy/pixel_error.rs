@@ -435,6 +435,7 @@ mod tests {
             sun_direction: glam::Vec3::Z,
             curvature: false,
             horizon_floor_m: 0.0,
+            morph_start_share: 0.7,
             warning_above_m: 0.0,
             caution_below_m: 0.0,
             viewport: camera.viewport,

@@ -170,6 +170,7 @@ mod tests {
             post_step: 1.0,
             vertex_step: 1.0,
             morph: [0.0; 2],
+            sub_morph_end: 0.0,
             skirt_depth: 0.0,
             skirt_edges: 0,
             skirt_shares: [0; 4],

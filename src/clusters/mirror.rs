@@ -63,8 +63,9 @@ pub fn drawn_tiles(list: &DrawList, vertices: &[u8], indices: &[u8]) -> (DrawLis
                 centre: [u[11], u[7]],
                 offset: [u[8], u[9], u[10]],
                 rotation: [u[12], u[13], u[14], u[15]],
-                expansion: [u[16], u[17], u[18], u[19], u[20], u[21], u[22], u[23]],
+                expansion: [u[16], u[17], u[18], u[19], u[20], u[21], u[22], 0.0],
             };
+            tile.sub_morph_end = u[23];
             tile.byte_offset = offset;
             tile.index_byte_offset = offset + counts.vertex_bytes();
             tile.index_count = counts.indices;

@@ -135,6 +135,7 @@ impl TruthPass {
                 post_step: 1.0,
                 vertex_step: 1.0,
                 morph: NO_MORPH,
+                sub_morph_end: 0.0,
                 skirt_depth: 0.0,
                 skirt_edges: 0,
                 skirt_shares: [0; 4],

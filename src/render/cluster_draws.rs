@@ -57,7 +57,9 @@ impl TileUniforms {
             e[4],
             e[5],
             e[6],
-            e[7],
+            // The expansion's last float is free: the shader's
+            // `u_members[6 slot + 5].w`.
+            self.sub_morph_end,
         ]
     }
 }

@@ -12,6 +12,7 @@
 use crate::camera::Camera;
 use crate::earth::{EarthFrame, NodePlace, PlaceCache};
 use crate::lod::{LevelRings, TileKey};
+use crate::tiles::block::TileVertex;
 use crate::tiles::block::{BLOCK_ALIGNMENT, INDEX_BYTES};
 use crate::tiles::cache::EdgeErrors;
 use crate::tiles::errors::MeshErrors;
@@ -42,6 +43,9 @@ pub struct FrameUniforms {
     /// its sea floor): then a ray between the two horizons passes over all
     /// the terrain there is, and is sky ([`crate::scene::horizon_floor_m`]).
     pub horizon_floor_m: f32,
+    /// Every morph's start over its end (`1 - morph_range`): a band's
+    /// start from its end ([`crate::lod::morph::band_range`]).
+    pub morph_start_share: f32,
     /// Terrain-awareness bands, metres relative to the aircraft: terrain above
     /// `warning_above_m` is red, above `-caution_below_m` amber.
     pub warning_above_m: f32,
@@ -66,9 +70,12 @@ pub struct FrameUniforms {
 }
 
 impl FrameUniforms {
-    /// `u_earth[2]` (zero: the chart).
+    /// `u_earth[2]` (zero: the chart), with [`Self::morph_start_share`]
+    /// in the last float.
     pub fn earth_uniforms(&self) -> [f32; 8] {
-        self.earth.map_or([0.0; 8], |e| e.uniforms())
+        let mut uniforms = self.earth.map_or([0.0; 8], |e| e.uniforms());
+        uniforms[7] = self.morph_start_share;
+        uniforms
     }
 }
 
@@ -207,8 +214,13 @@ pub struct TileUniforms {
     /// this is its place in level-0 posts from `first_post` (`post_step`
     /// for a regular grid, the node mesh's step for a mesh tile).
     pub vertex_step: f32,
-    /// Morph start and end distances (equal and huge for no morph).
+    /// Morph start and end distances (equal and huge for no morph): its
+    /// level's, toward the level above, which its band-0 vertices follow.
     pub morph: [f32; 2],
+    /// The end of sub-level 1's morph, metres: a vertex of band `k >= 1`
+    /// follows it halved `k - 1` times ([`crate::lod::morph::band_range`];
+    /// 0 where no vertex has a band above 0).
+    pub sub_morph_end: f32,
     /// How far the deepest of its skirts hangs below its edge, metres.
     pub skirt_depth: f32,
     /// Which edges hang a skirt: bit 0 south, 1 east, 2 north, 3 west (the
@@ -242,6 +254,13 @@ pub struct TileUniforms {
 }
 
 impl TileUniforms {
+    /// The morph range vertex `vertex` follows, in a frame whose morphs
+    /// start `start_share` of the way to their end
+    /// ([`crate::lod::morph::band_range`]).
+    pub fn vertex_morph(&self, vertex: &TileVertex, start_share: f32) -> [f32; 2] {
+        crate::lod::morph::band_range(self.morph, self.sub_morph_end, start_share, vertex.band())
+    }
+
     /// Camera-relative position of the tile's post `(i, j)`, metres, as
     /// `terrain.vert` computes it.
     pub fn post_position(&self, posts: &PostFrame, i: f32, j: f32) -> [f32; 2] {
@@ -561,11 +580,14 @@ fn tile_uniforms(
     let step = 1i64 << key.level;
     let span = geometry.grid_size as i64 * step;
     let first_post = frame.posts.number([key.x as i64 * span, key.y as i64 * span]);
-    let (start, end) = match draw.sub_level {
-        0 => rings.morph(key.level),
-        k => geometry.mesh_errors.sub_level_morph(key.level, k),
-    };
+    // Every vertex follows its own band's morph: the level's (band 0) or
+    // its sub-level's, whatever the tile's sub-level (`tiles::by_distance`).
+    let (start, end) = rings.morph(key.level);
     let morph = if start.is_finite() { [start as f32, end as f32] } else { [f32::MAX, f32::MAX] };
+    let sub_morph_end = match draw.sub_level {
+        0 => 0.0,
+        _ => geometry.mesh_errors.sub_level_morph(key.level, 1).1 as f32,
+    };
     let ranges = |level: u8, sub_level: u8| match sub_level {
         0 => rings.morph(level),
         k => geometry.mesh_errors.sub_level_morph(level, k),
@@ -581,6 +603,7 @@ fn tile_uniforms(
         post_step: step as f32,
         vertex_step: draw.vertex_step,
         morph,
+        sub_morph_end,
         skirt_depth,
         skirt_edges: (0..4).filter(|&e| skirt_shares[e] > 0).fold(0, |bits, e| bits | 1 << e),
         skirt_shares,
@@ -717,8 +740,8 @@ pub fn skirt_edges(draw: &TileDraw, drawn: &[DrawnTile], node_tiles: u32) -> u8 
             // mesh at one error (sub-level), and with no regular grid.
             other.source_level == draw.source_level
                 && other.node_mesh == draw.node_mesh
-                && other.sub_level == draw.sub_level
-                && other.seams.views == draw.seams.views
+                && (other.sub_level == draw.sub_level || draw.seams.banded)
+                && draw.seams.alike(&other.seams)
                 && (!draw.node_mesh
                     || same_node(draw, key, node_tiles)
                     || draw.seams.meets(&other.seams, bit))
@@ -960,6 +983,7 @@ mod tests {
             post_step: 1.0,
             vertex_step: 1.0,
             morph: [0.0, 1.0],
+            sub_morph_end: 0.0,
             skirt_depth: 1.0,
             skirt_edges: ALL_EDGES,
             skirt_shares: [15; 4],
@@ -980,6 +1004,7 @@ mod tests {
             sun_direction: Vec3::Z,
             curvature: false,
             horizon_floor_m: 0.0,
+            morph_start_share: 0.7,
             warning_above_m: 0.0,
             caution_below_m: 0.0,
             viewport: [1, 1],
@@ -1148,7 +1173,7 @@ mod tests {
     #[test]
     fn tiles_of_two_nodes_meet_without_a_skirt_where_their_seams_do() {
         // Two tiles a node side: (0, 3, 5)'s east edge is its node's.
-        let seams = |shared| Seams { shared, views: 7, ancestors: 0b10 };
+        let seams = |shared| Seams { shared, views: 7, ancestors: 0b10, banded: false };
         let draw = TileDraw {
             key: TileKey::new(0, 3, 5),
             byte_offset: 0,

@@ -155,6 +155,7 @@ impl View {
             sun_direction: palette::sun_direction(),
             curvature: config.curvature,
             horizon_floor_m: horizon_floor_m(config.earth.as_ref(), terrain.height_range().0),
+            morph_start_share: 1.0 - config.lod.morph_range as f32,
             warning_above_m: config.warning_above_m,
             caution_below_m: config.caution_below_m,
             viewport: camera.viewport,

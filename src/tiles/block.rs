@@ -22,9 +22,11 @@ pub struct TileVertex {
     /// tile's post step (`TileUniforms::post_step` level-0 posts): 0 to
     /// `grid_size` each (`a_grid.xy` in the shader).
     pub post: [u16; 2],
-    /// The edge a skirt vertex hangs from, 1 south, 2 east, 3 north, 4 west
-    /// (lowered by the tile's skirt depth when that edge hangs a skirt), or
-    /// 0 for a vertex of the surface (`a_grid.z`).
+    /// Bits 0 to 2: the edge a skirt vertex hangs from, 1 south, 2 east,
+    /// 3 north, 4 west (lowered by the tile's skirt depth when that edge
+    /// hangs a skirt), 5 a curtain's foot, or 0 for a vertex of the
+    /// surface ([`Self::edge`]); bits 3 up: the morph band it follows
+    /// ([`Self::band`]). `a_grid.z` in the shader.
     pub skirt: u16,
     /// 0 in a tile's block; in a cluster's block (`crate::clusters`) the
     /// member slot that selects the tile's uniforms (`a_grid.w`). Aligns the
@@ -41,6 +43,32 @@ pub struct TileVertex {
 }
 
 impl TileVertex {
+    /// The low bits of [`Self::skirt`] that hold the edge code.
+    pub const EDGE_MASK: u16 = 7;
+
+    /// The edge code of [`Self::skirt`] (0 on the surface).
+    pub fn edge(&self) -> u16 {
+        self.skirt & Self::EDGE_MASK
+    }
+
+    /// The morph band it follows: 0 the tile's level's morph toward the
+    /// level above, `k >= 1` sub-level `k`'s toward sub-level `k - 1`
+    /// (`crate::lod::morph::band_range`).
+    pub fn band(&self) -> u8 {
+        (self.skirt >> 3) as u8
+    }
+
+    /// This vertex with edge code `edge`, its band kept.
+    pub fn with_edge(self, edge: u16) -> TileVertex {
+        debug_assert!(edge <= Self::EDGE_MASK);
+        TileVertex { skirt: (self.skirt & !Self::EDGE_MASK) | edge, ..self }
+    }
+
+    /// The `skirt` field of a surface vertex of morph band `band`.
+    pub fn surface_code(band: u8) -> u16 {
+        (band as u16) << 3
+    }
+
     /// This vertex with the surface `height`, `target` and `normal`, its
     /// position kept.
     pub fn with_surface(self, height: f32, target: f32, normal: [i8; 4]) -> TileVertex {
@@ -158,7 +186,7 @@ impl<'a> TileBlock<'a> {
 
     /// Whether triangle `t` is part of a skirt (touches a skirt vertex).
     pub fn is_skirt(&self, t: usize) -> bool {
-        self.triangle(t).iter().any(|&v| self.vertex(v as usize).skirt != 0)
+        self.triangle(t).iter().any(|&v| self.vertex(v as usize).edge() != 0)
     }
 
     /// Triangles of the surface, skirts left out.

@@ -28,7 +28,9 @@
 //!   `start` (the blend's error is linear in the distance as the bound
 //!   is); past `end` it is fully morphed and the tile draws the mesh above,
 //!   whose vertices the tile keeps anyway: the ring's own threshold is
-//!   never met there.
+//!   never met there. Each vertex morphs over the band of the ring its own
+//!   place falls in ([`DistanceRule::band_at`]), so a vertex on an edge
+//!   morphs alike in the tiles on both sides.
 
 use crate::camera::{Camera, Frustum};
 use glam::{DQuat, Mat4, Vec3};
@@ -223,6 +225,9 @@ pub struct DistanceRule {
     pub rings: arrayvec::ArrayVec<RingView, MAX_RINGS>,
     /// Past the last ring's morph the level above shows.
     pub ends: bool,
+    /// The sub-level of the first (finest) ring: ring `i` is sub-level
+    /// `finest - i`, the morph band its vertices take ([`Self::band_at`]).
+    pub finest: u8,
 }
 
 impl DistanceRule {
@@ -231,16 +236,43 @@ impl DistanceRule {
     /// dependants reach `reach_m`; `None`: no vertex of its own there.
     /// `heights`: the lowest and highest the data under the split may be.
     pub fn error_at(&self, east_north_m: [f64; 2], reach_m: f64, heights: [f64; 2]) -> Option<f64> {
+        self.accepting(east_north_m, reach_m, heights).map(|(_, error)| error)
+    }
+
+    /// The ring that gives the vertex its error (its index, finest first;
+    /// the last where it stops growing) and the error; `None` as
+    /// [`Self::error_at`].
+    pub fn accepting(
+        &self,
+        east_north_m: [f64; 2],
+        reach_m: f64,
+        heights: [f64; 2],
+    ) -> Option<(usize, f64)> {
         let offset = |ring: &RingView| [0, 1].map(|k| east_north_m[k] - ring.anchor_m[k]);
-        for ring in &self.rings {
+        for (i, ring) in self.rings.iter().enumerate() {
             if let Some(error) = ring.error_at(offset(ring), reach_m, heights) {
-                return Some(error);
+                return Some((i, error));
             }
         }
         let last = self.rings.last()?;
         match self.ends {
             true => None,
-            false => last.without_end().error_at(offset(last), reach_m, heights),
+            false => last
+                .without_end()
+                .error_at(offset(last), reach_m, heights)
+                .map(|error| (self.rings.len() - 1, error)),
+        }
+    }
+
+    /// The morph band of a vertex the rule gives an error at (see
+    /// [`Self::accepting`]): the sub-level of its ring, whose morph it
+    /// follows; 0 (the level's own morph) where no ring does. Two tiles
+    /// whose rules hold the same rings give a vertex the same band, so
+    /// their shared edges morph alike whatever their sub-levels.
+    pub fn band_at(&self, east_north_m: [f64; 2], reach_m: f64, heights: [f64; 2]) -> u8 {
+        match self.accepting(east_north_m, reach_m, heights) {
+            Some((i, _)) => self.finest.saturating_sub(i as u8),
+            None => 0,
         }
     }
 
@@ -253,6 +285,18 @@ impl DistanceRule {
             }
         }
         self.rings.last().map_or(0.0, |b| b.largest_within(distance_m))
+    }
+
+    /// The largest near-end error of the rings a vertex at most
+    /// `distance_m` from the anchors falls in: what a vertex keeps along a
+    /// node's own edge (`super::extract`).
+    pub fn near_end_within(&self, distance_m: f64) -> f64 {
+        for ring in &self.rings {
+            if distance_m < ring.end_m {
+                return ring.largest_within(0.0);
+            }
+        }
+        self.rings.last().map_or(0.0, |b| b.largest_within(0.0))
     }
 }
 

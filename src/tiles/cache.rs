@@ -289,9 +289,10 @@ impl TileMaker {
         // Split at the tile's square like the neighbour of the coarser
         // sub-level is: the shared edge then morphs onto that neighbour's.
         let coarser = (own_level && sub_level > 0).then(|| {
-            let view = band_rule(mesh_errors, spec.key.level, sub_level - 1, parent_resident);
+            let view = mesh_errors.target_rule(spec.key.level, sub_level, parent_resident);
             let mut coarser = place(spec.source, spec.data, spec.errors.target.metres(), view);
             coarser.set_forced(square.width.min(coarser.forced()));
+            coarser.as_target();
             coarser
         });
         let target = match &coarser {
@@ -310,6 +311,7 @@ impl TileMaker {
             target,
             origin: square.origin,
             width: square.width,
+            place_parent: coarser.is_some() && parent_resident,
         };
         self.extractor.extract(&job)
     }
@@ -383,7 +385,7 @@ fn tile_error(
     let map = &spec.data.map;
     let reference = map.reference_delta as f64;
     // Along a level-0 node's own (not shared) edges the meshes keep their
-    // rings' near-end errors (`super::extract`): the steps.
+    // vertices' rings' near-end errors (`super::extract`).
     let per_node = (layout.node_size / grid_size).max(1);
     let on_boundary = |edge: usize| {
         spec.source.level == 0
@@ -397,14 +399,19 @@ fn tile_error(
     };
     let edge = |edge: usize| {
         let largest = |level: u8, sub: u8, step: ErrorStep| {
-            let grows = own_level && !on_boundary(edge);
-            let rule = errors.rule(level, sub, true).filter(|_| grows);
+            let rule = errors.rule(level, sub, true).filter(|_| own_level);
             let far = |rule: &DistanceRule| {
                 let anchors = rule.rings.iter().map(|b| b.anchor_m);
                 let far = anchors.map(|a| edge_far_m(spec.key, grid_size, layout, a, edge));
                 far.fold(0.0, f64::max)
             };
-            rule.map_or(step.metres(), |r| r.largest_within(far(&r)).max(step.metres()))
+            // Along a boundary each vertex keeps its ring's near-end error
+            // (`super::extract`).
+            let largest = |r: &DistanceRule| match on_boundary(edge) {
+                true => r.near_end_within(far(r)),
+                false => r.largest_within(far(r)),
+            };
+            rule.map_or(step.metres(), |r| largest(&r).max(step.metres()))
         };
         let own = largest(level, sub, spec.errors.own).max(map.floor_m as f64);
         let morph = match (own_level, sub) {
@@ -456,13 +463,23 @@ fn place_map<'a>(
     let map = &data.map;
     let tile_posts = grid_size << (id.level - map.post_level.min(id.level));
     // The curvature caps the widest triangle by the band's least error:
-    // a wider one would sag more than the tile's nearest part allows.
-    let forced = forced_step(layout, map.post_level, map.cells, tile_posts, error_m);
+    // a wider one would sag more than the tile's nearest part allows. With
+    // a view each split checks its own error (`PlacedMap::sags`).
+    let sag_error_m = if view.is_some() { f64::INFINITY } else { error_m };
+    let forced = forced_step(layout, map.post_level, map.cells, tile_posts, sag_error_m);
     let placed = PlacedMap::new(layout, id, data, error_m, forced);
     match view {
         Some(view) => placed.with_view(view),
         None => placed,
     }
+}
+
+/// Tile `key`'s square (`grid_size` cells a side) in chart metres: its
+/// south-west and north-east corners.
+fn tile_rectangle_m(layout: &NodeLayout, grid_size: u32, key: TileKey) -> ([f64; 2], [f64; 2]) {
+    let span = ((grid_size as u64) << key.level.min(63)) as f64;
+    let corner = |k: usize, t: u32| t as f64 * span * layout.spacing_m[k];
+    ([corner(0, key.x), corner(1, key.y)], [corner(0, key.x + 1), corner(1, key.y + 1)])
 }
 
 /// The errors by distance a tile of `level`'s sub-level `sub` is made with
@@ -756,7 +773,11 @@ impl TileCache {
             let (node, _) = tile_node(tile.key, grid_size, layout.node_size);
             let (source, data) = best_resident(nodes, node).ok_or(TileError::NoData(tile.key))?;
             let leaf = !has_finer_data(nodes, tile.key, grid_size);
-            let errors = mesh_errors.for_tile(tile.key.level, tile.distance, leaf);
+            let (lo, hi) = tile_rectangle_m(&layout, grid_size, tile.key);
+            let width_m = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+            let ground = mesh_errors.ground_distance(lo, hi);
+            let distance = MeshErrors::leaf_distance(ground, width_m);
+            let errors = mesh_errors.for_tile(tile.key.level, distance, leaf);
             let parent_resident = source.parent().is_some_and(|p| nodes.resident(p).is_some());
             let (slot, new) = match self.by_key.get(&tile.key) {
                 Some(&slot) => (slot, false),
@@ -784,7 +805,14 @@ impl TileCache {
                     _ if source.level != tile.key.level => Seams::default(),
                     _ => seams_of(nodes, tile.key, source, grid_size, errors),
                 };
-                let allowed_m = mesh_errors.allowed_m(tile.key.level, errors.sub_level);
+                // What the tile's triangles scale with: its own distance's
+                // sub-level (its rule starts finer, for the vertices its
+                // splits reach: see `MeshErrors::leaf_distance`).
+                let physical = match errors.sub_level {
+                    0 => 0,
+                    _ => mesh_errors.sub_level(tile.key.level, tile.distance),
+                };
+                let allowed_m = mesh_errors.allowed_m(tile.key.level, physical);
                 self.jobs.push(Job {
                     slot,
                     new,

@@ -36,16 +36,15 @@ pub const CURTAIN_DEPTH_M: f32 = 25_000.0;
 /// The foot of a curtain hanging from `top`.
 pub fn foot(top: TileVertex) -> TileVertex {
     TileVertex {
-        skirt: CURTAIN,
         height: top.height - CURTAIN_DEPTH_M,
         target: top.target - CURTAIN_DEPTH_M,
-        ..top
+        ..top.with_edge(CURTAIN)
     }
 }
 
 /// Whether `vertex` is a curtain's foot.
 pub fn is_foot(vertex: &TileVertex) -> bool {
-    vertex.skirt == CURTAIN
+    vertex.edge() == CURTAIN
 }
 
 /// Finds a mesh's curtain edges and numbers their feet. Scratch kept

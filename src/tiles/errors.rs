@@ -19,13 +19,18 @@
 //! A *leaf* tile (no finer node under it) is drawn however near the camera
 //! comes: nearer than its level's ring it takes *sub-levels*, the ring
 //! halved `k` times and the error with it, each morphing toward the one
-//! above over the outer part of its band, as the levels do.
+//! above over the outer part of its band, as the levels do. Each vertex
+//! follows the band of the ring its own place falls in (its *morph band*),
+//! and a leaf tile's rule starts fine enough for every vertex it holds
+//! ([`MeshErrors::leaf_distance`]): a vertex's error, band and target do
+//! not depend on the tile it is cut in, so leaf tiles of other sub-levels
+//! share their edges (issue 25).
 //!
 //! Within its ring a tile's error grows with each vertex's distance
 //! ([`RingView`], issue 22), from an anchor each ring keeps until the
 //! camera moves past its slack.
 
-use super::by_distance::{DistanceRule, RingView, ViewCone};
+use super::by_distance::{reach_legs, DistanceRule, RingView, ViewCone};
 use crate::camera::Camera;
 
 /// Sub-levels a leaf tile may take: the error halves each time, 2^-16 of
@@ -158,6 +163,9 @@ pub struct MeshErrors {
     reference: Vec<f64>,
     /// Per level: the error its ring allows, not quantised, metres.
     allowed: Vec<f64>,
+    /// The camera's ground position the rings were last anchored for,
+    /// chart metres.
+    eye_m: [f64; 2],
 }
 
 /// One ring's errors by distance ([`RingView`]) and its generation: tiles
@@ -219,6 +227,11 @@ pub struct TileErrors {
     /// The generations of the rings its mesh depends on, summed: its own,
     /// its target's and its ancestors' ([`MeshErrors::anchor`]).
     pub views: u32,
+    /// A leaf tile: its rule starts at a sub-level no ring finer than
+    /// reaches its vertices ([`MeshErrors::leaf_distance`]), so every
+    /// vertex takes the error and morph band of the rule of all its
+    /// level's sub-levels, as its banded neighbours' do.
+    pub banded: bool,
 }
 
 impl MeshErrors {
@@ -271,6 +284,7 @@ impl MeshErrors {
         morph: impl Fn(u8) -> (f64, f64),
     ) {
         let levels = self.level.len();
+        self.eye_m = eye_m;
         self.ring_views.resize(levels * SUBS, RingState::default());
         for level in 0..levels {
             for sub in 0..SUBS {
@@ -331,9 +345,34 @@ impl MeshErrors {
     /// ([`DistanceRule`]); `ends`: past the level's own ring the level above
     /// shows. `None` before [`Self::anchor`].
     pub fn rule(&self, level: u8, sub: u8, ends: bool) -> Option<DistanceRule> {
-        let mut rule = DistanceRule { rings: Default::default(), ends };
-        for k in (0..=sub.min(MAX_SUB_LEVEL)).rev() {
+        let finest = sub.min(MAX_SUB_LEVEL);
+        let mut rule = DistanceRule { rings: Default::default(), ends, finest };
+        for k in (0..=finest).rev() {
             rule.rings.push(self.ring_view(level, k)?);
+        }
+        Some(rule)
+    }
+
+    /// The errors by distance of the mesh a tile made with
+    /// [`Self::rule`]`(level, sub, ends)` morphs toward, vertex by vertex:
+    /// where sub-level `k >= 1`'s ring gives a vertex its error, the error
+    /// sub-level `k - 1`'s ring has at its near end (where that ring takes
+    /// over, fully morphed); where the level's own ring does, the level
+    /// above's mesh (`ends`), or the tile's own (no level above: no morph).
+    /// Each ring keeps its anchor, slack, end and cone, so a vertex falls
+    /// in the same ring in both rules, and in every tile's: the target of
+    /// a shared edge is the same on both sides. `None` before
+    /// [`Self::anchor`].
+    pub fn target_rule(&self, level: u8, sub: u8, ends: bool) -> Option<DistanceRule> {
+        let finest = sub.min(MAX_SUB_LEVEL);
+        let mut rule = DistanceRule { rings: Default::default(), ends, finest };
+        for k in (1..=finest).rev() {
+            let (ring, coarser) = (self.ring_view(level, k)?, self.ring_view(level, k - 1)?);
+            let near = coarser.near_m;
+            rule.rings.push(RingView { near_m: near, start_m: near, own_m: coarser.own_m, ..ring });
+        }
+        if !ends {
+            rule.rings.push(self.ring_view(level, 0)?);
         }
         Some(rule)
     }
@@ -387,7 +426,29 @@ impl MeshErrors {
         let rings = (0..=sub_level).map(|k| self.generation(level, k));
         let above = self.chain.get(l + 1).copied().unwrap_or(0);
         let views = rings.fold(above, u32::wrapping_add);
-        TileErrors { sub_level, own: own.halved(sub_level), target, views }
+        TileErrors { sub_level, own: own.halved(sub_level), target, views, banded: leaf }
+    }
+
+    /// The ground distance from the camera's place at the last
+    /// [`Self::anchor`] to the rectangle `[lo_m, hi_m]` (chart metres, east
+    /// and north): what the rings measure, unlike a tile's distance in the
+    /// selection (to its box, heights included).
+    pub fn ground_distance(&self, lo_m: [f64; 2], hi_m: [f64; 2]) -> f64 {
+        let gap = |k: usize| (lo_m[k] - self.eye_m[k]).max(self.eye_m[k] - hi_m[k]).max(0.0);
+        gap(0).hypot(gap(1))
+    }
+
+    /// The distance a leaf tile `distance_m` away on the ground
+    /// ([`Self::ground_distance`]), `width_m` wide, takes its sub-level
+    /// at: the nearest any of its vertices' splits reaches
+    /// (a split of the tile's square reaches [`reach_legs`] of its width),
+    /// less both ways the camera may move within a ring's slack. A ring
+    /// finer than that sub-level's takes none of the tile's vertices
+    /// wherever its anchor is, so the tile's rule, starting there, gives
+    /// every vertex the error and band that a rule of all the level's
+    /// sub-levels does: the rule every neighbour's mesh follows too.
+    pub fn leaf_distance(distance_m: f64, width_m: f64) -> f64 {
+        (distance_m - width_m * reach_legs()) / (1.0 + 2.0 * SLACK_SHARE + 0.05)
     }
 
     /// The sub-level of a leaf tile of `level` `distance` metres away: how
@@ -448,14 +509,7 @@ mod tests {
     }
     #[test]
     fn rings_anchor_on_a_lattice_of_their_slack() {
-        let mut errors = MeshErrors::default();
-        let rings = [0.0, 20_000.0, 40_000.0, 80_000.0];
-        errors.update(|l| rings[l as usize], 4, 1000.0, 1.0, 0.3, &MapErrors::default());
-        let morph = |l: u8| match rings.get(l as usize + 1) {
-            Some(&end) => (end * 0.7, end),
-            None => (f64::INFINITY, f64::INFINITY),
-        };
-        errors.anchor([0.0, 0.0], None, morph);
+        let (mut errors, rings, morph) = (anchored(), RINGS, ring_morph);
         let (tile, leaf) = (errors.for_tile(1, 25_000.0, false), errors.for_tile(0, 3_000.0, true));
         let ring = errors.ring_view(1, 0).expect("anchored");
         let slack = SLACK_SHARE * 20_000.0;
@@ -528,6 +582,62 @@ mod tests {
                     assert!(within(tile.target, end), "{level}.{sub}'s target");
                 }
             }
+        }
+    }
+
+    use proptest::prelude::*;
+
+    /// Rings of 20, 40 and 80 km above level 0.
+    const RINGS: [f64; 4] = [0.0, 20_000.0, 40_000.0, 80_000.0];
+
+    /// Their morphs: over the outer 30 % of each band.
+    fn ring_morph(level: u8) -> (f64, f64) {
+        match RINGS.get(level as usize + 1) {
+            Some(&end) => (end * 0.7, end),
+            None => (f64::INFINITY, f64::INFINITY),
+        }
+    }
+
+    /// Errors for [`RINGS`] at tau 1 and K 1000, anchored with the camera
+    /// at the origin (no cone: every direction counts).
+    fn anchored() -> MeshErrors {
+        let mut errors = MeshErrors::default();
+        errors.update(|l| RINGS[l as usize], 4, 1000.0, 1.0, 0.3, &MapErrors::default());
+        errors.anchor([0.0, 0.0], None, ring_morph);
+        errors
+    }
+
+    proptest! {
+        /// A leaf tile's rule, starting at the sub-level its distance less
+        /// its reach gives, gives each of its vertices the error and the
+        /// morph band of the rule of all the level's sub-levels: the model
+        /// every neighbour's mesh follows, whatever its own sub-level.
+        #[test]
+        fn a_leaf_rule_agrees_with_the_rule_of_every_sub_level(
+            tile_m in 0.0f64..30_000.0,
+            width_m in 50.0f64..3_000.0,
+            along in 0.0f64..1.0,
+            across in 0.0f64..1.0,
+            legs in 0.0f64..1.0,
+            ends in any::<bool>(),
+        ) {
+            let errors = anchored();
+            let sub = errors.sub_level(0, MeshErrors::leaf_distance(tile_m, width_m));
+            let rule = errors.rule(0, sub, ends).expect("anchored");
+            let model = errors.rule(0, MAX_SUB_LEVEL, ends).expect("anchored");
+            // A vertex of the tile's square east of the camera, whose
+            // split's dependants reach at most the square's diagonal split.
+            let at = [tile_m + along * width_m, (across - 0.5) * width_m];
+            let reach = legs * width_m * reach_legs();
+            let heights = [0.0, 100.0];
+            prop_assert_eq!(rule.error_at(at, reach, heights), model.error_at(at, reach, heights));
+            prop_assert_eq!(rule.band_at(at, 0.0, heights), model.band_at(at, 0.0, heights));
+            let target = errors.target_rule(0, sub, ends).expect("anchored");
+            let target_model = errors.target_rule(0, MAX_SUB_LEVEL, ends).expect("anchored");
+            prop_assert_eq!(
+                target.error_at(at, reach, heights),
+                target_model.error_at(at, reach, heights)
+            );
         }
     }
 }

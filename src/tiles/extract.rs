@@ -18,9 +18,10 @@
 //!   there: its own height where the target mesh has a vertex, else the
 //!   mean of the targets at the ends of the hypotenuse it splits (the
 //!   target surface is linear along it). The target mesh is the parent
-//!   node's (a tile at its level's ring) or the same map at twice the error
-//!   (a tile of a node no finer node lies under, nearer than its level's
-//!   ring: see `sub_level` in [`crate::tiles::cache`]).
+//!   node's (a tile at its level's ring) or, for a leaf tile nearer than
+//!   its level's ring, the same map at each sub-level's coarser one's
+//!   error ([`crate::tiles::errors::MeshErrors::target_rule`]), its vertices of
+//!   morph band 0 taking the parent's surface ([`Extraction::place_parent`]).
 //! - **Fans.** A cell the mesh draws along the data's diagonal where the
 //!   target folds along the other is split four ways ([`super::fan`]).
 
@@ -66,6 +67,10 @@ pub struct PlacedMap<'a> {
     view: Option<DistanceRule>,
     /// The smallest error the map serves, metres.
     floor_m: f64,
+    /// The forced lattice's posts are vertices only where the view gives
+    /// them an error: a target mesh past its last ring shows the level
+    /// above's mesh, which has its own lattice ([`Self::force_where_viewed`]).
+    forced_where_viewed: bool,
 }
 
 impl<'a> PlacedMap<'a> {
@@ -102,6 +107,7 @@ impl<'a> PlacedMap<'a> {
             spacing_m: [layout.spacing_m[0] * scale, layout.spacing_m[1] * scale],
             view: None,
             floor_m: map.floor_m as f64,
+            forced_where_viewed: false,
         }
     }
 
@@ -129,6 +135,13 @@ impl<'a> PlacedMap<'a> {
         self.forced = forced.clamp(1, self.data.map.cells);
     }
 
+    /// Places the map as a tile's target mesh: the forced lattice only
+    /// where the view gives an error (past its rings the target is the
+    /// level above's mesh, exactly).
+    pub fn as_target(&mut self) {
+        self.forced_where_viewed = self.view.is_some();
+    }
+
     /// The map's post at level-0 post `x`, if it is one of the node's.
     fn local(&self, x: [u64; 2]) -> Option<[u32; 2]> {
         let cells = self.data.map.cells as u64;
@@ -153,12 +166,67 @@ impl<'a> PlacedMap<'a> {
         let on_forced = p[0] % self.forced == 0 && p[1] % self.forced == 0;
         let code = self.data.map.code(p[0], p[1]);
         debug_assert!(self.view.is_some() || self.least == self.threshold);
-        on_forced || (code > self.least && code > self.threshold_at(p))
+        if on_forced && self.forced_where_viewed {
+            return self.threshold_at(p) != u8::MAX;
+        }
+        on_forced || (code > self.least && code > self.threshold_at(p)) || self.sags(p)
+    }
+
+    /// Whether a mesh with a view splits at map post `p` for the earth's
+    /// curvature: the split's legs are longer than [`sag_leg_m`] at the
+    /// vertex's own error (the sag lattice of [`forced_step`], vertex by
+    /// vertex, so that neighbouring tiles of other sub-levels split their
+    /// shared edge alike). A split's dependencies have longer legs and no
+    /// larger errors, so they split too: the mesh stays closed.
+    fn sags(&self, p: [u32; 2]) -> bool {
+        if self.view.is_none() {
+            return false;
+        }
+        let leg_m = split_leg(p) * self.spacing_m[0].max(self.spacing_m[1]);
+        leg_m > sag_leg_m(0.0) && self.error_m_at(p).is_some_and(|e| leg_m > sag_leg_m(e))
     }
 
     /// The code map post `p` must be above to be a vertex (255: never).
     fn threshold_at(&self, p: [u32; 2]) -> u8 {
-        let Some(view) = &self.view else { return self.threshold };
+        if self.view.is_none() {
+            return self.threshold;
+        }
+        match self.error_m_at(p) {
+            Some(error_m) => threshold_code(error_m.max(self.floor_m)),
+            None => u8::MAX,
+        }
+    }
+
+    /// The error the view allows the mesh at map post `p`, metres (`None`:
+    /// no vertex of its own there, or no view).
+    fn error_m_at(&self, p: [u32; 2]) -> Option<f64> {
+        let view = self.view.as_ref()?;
+        let (at, reach, heights) = self.view_inputs(p);
+        view.accepting(at, reach, heights).map(|(ring, error_m)| {
+            // Along a level-0 node's own edge (not shared) the mesh keeps
+            // its vertex's ring's near-end error: the neighbouring node's
+            // map codes the edge's posts apart, so the two meshes meet at
+            // cracks as deep as both errors, which its skirts fill and a
+            // viewer sees (issue 25). Shared edges' posts are coded alike
+            // on both sides: no crack. Level 0's: farther levels' cracks
+            // span fewer pixels (capping levels 1 and 2 too took the SRTM
+            // tile's skirt pixels at 256 px and tau 4 from 0.070 % to
+            // 0.050 %, for 4 % more triangles at 480x272 and tau 4, past
+            // issue 22's floor ratio). The vertex's own ring's, as every
+            // tile's rule gives it: the tile's finest ring's, as it was,
+            // differs between neighbours of other sub-levels.
+            let reached = self.edges_reached(p);
+            let near_boundary = self.node.level == 0 && reached & !self.data.map.shared_edges != 0;
+            match near_boundary {
+                true => error_m.min(view.rings[ring].largest_within(0.0)),
+                false => error_m,
+            }
+        })
+    }
+
+    /// Where map post `p` lies in the chart (metres), how far its split's
+    /// dependants reach (metres), and the heights the view judges it with.
+    fn view_inputs(&self, p: [u32; 2]) -> ([f64; 2], f64, [f64; 2]) {
         // Metres in the chart: level-0 posts times their spacing.
         let level0 = [self.spacing_m[0], self.spacing_m[1]].map(|s| s / self.step as f64);
         let x = self.level0(p);
@@ -168,30 +236,23 @@ impl<'a> PlacedMap<'a> {
         // view with heights both nodes agree on: with each node's own, one
         // side kept an edge post the other left out of the cone, a crack
         // with no skirt under it (`tests/scene_cracks.rs`).
-        let map = &self.data.map;
-        let reached = self.edges_reached(p);
-        let heights = match reached & map.shared_edges != 0 {
+        let heights = match self.edges_reached(p) & self.data.map.shared_edges != 0 {
             // The view cone's vertical extent where two nodes must agree.
             true => crate::geo::TERRAIN_RANGE_M,
             false => [self.data.min as f64, self.data.max as f64],
         };
-        let error = view.error_at(at, reach, heights).map(|error_m| {
-            // Along a level-0 node's own edge the mesh keeps its ring's
-            // near-end error: the neighbouring node's map codes the edge's
-            // posts apart, so the two meshes meet at cracks as deep as both
-            // errors, which its skirts fill and a viewer sees (issue 25).
-            // Shared edges' posts are coded alike on both sides: no crack.
-            // Level 0's: farther levels' cracks span fewer pixels.
-            let near_boundary = self.node.level == 0 && reached & !map.shared_edges != 0;
-            match (near_boundary, view.rings.first()) {
-                (true, Some(ring)) => error_m.min(ring.largest_within(0.0)),
-                _ => error_m,
-            }
-        });
-        match error {
-            Some(error_m) => threshold_code(error_m.max(self.floor_m)),
-            None => u8::MAX,
-        }
+        (at, reach, heights)
+    }
+
+    /// The morph band of the vertex at level-0 post `x` (0 without a view,
+    /// or off the map): see [`DistanceRule::band_at`], by the vertex's own
+    /// place. Not by its dependants' reach, as its error is: a coarse
+    /// split far out reaches near the camera, and in a finer band it would
+    /// never morph onto the level above, which then took over with a pop.
+    fn band_at(&self, x: [u64; 2]) -> u8 {
+        let (Some(view), Some(p)) = (&self.view, self.local(x)) else { return 0 };
+        let (at, _, heights) = self.view_inputs(p);
+        view.band_at(at, 0.0, heights)
     }
 
     /// The node edges (bits of [`ErrorMap::shared_edges`]) map post `p`'s
@@ -245,6 +306,14 @@ pub fn forced_step(
     tile_posts.min(cells / 2).min(sag).max(1)
 }
 
+/// The longest leg, metres, of a right triangle whose chord stays within
+/// the curved earth's drop by a quarter of `error_m` (at least
+/// 5 cm): see [`sag_extent`].
+pub fn sag_leg_m(error_m: f64) -> f64 {
+    let allowed = (error_m / 4.0).max(EXACT_SAG_M);
+    (4.0 * crate::camera::EARTH_RADIUS_M * allowed).sqrt()
+}
+
 /// How far, metres, a mesh's triangles may sag below the curved earth
 /// beyond what the data's own cells do, at least (exact meshes): 5 cm.
 const EXACT_SAG_M: f64 = 0.05;
@@ -257,8 +326,7 @@ const EXACT_SAG_M: f64 = 0.05;
 /// That is under a millimetre over 90 m posts, but over ETOPO5's 9 km
 /// posts a level-0 mesh merging eight cells sagged 100 m, 3.6 px at tau 1.
 pub fn sag_extent(layout: &NodeLayout, post_level: u8, error_m: f64) -> u32 {
-    let allowed = (error_m / 4.0).max(EXACT_SAG_M);
-    let leg_m = (4.0 * crate::camera::EARTH_RADIUS_M * allowed).sqrt();
+    let leg_m = sag_leg_m(error_m);
     let cell_m = layout.spacing_m[0].max(layout.spacing_m[1]) * (1u64 << post_level) as f64;
     let cells = (leg_m / cell_m).floor().clamp(1.0, u32::MAX as f64) as u32;
     1 << cells.ilog2()
@@ -324,9 +392,27 @@ pub struct Extraction<'m, 'a> {
     pub origin: [u32; 2],
     /// The square's width, map posts.
     pub width: u32,
+    /// Vertices of morph band 0 (`PlacedMap::band_at`: where the level's
+    /// own ring takes over) morph onto the parent's surface, whatever the
+    /// target mesh (a leaf tile's target of its sub-levels, whose vertices
+    /// far out but reaching near keep the sub-levels' errors): the level
+    /// above then takes over without a pop.
+    pub place_parent: bool,
 }
 
 impl Extraction<'_, '_> {
+    /// This extraction morphing onto the parent's mesh.
+    fn onto_parent(&self) -> Extraction<'_, '_> {
+        Extraction {
+            own: self.own,
+            ancestors: self.ancestors,
+            target: TargetMesh::Parent,
+            origin: self.origin,
+            width: self.width,
+            place_parent: false,
+        }
+    }
+
     /// Whether level-0 post `x` is a vertex of the tile's mesh.
     fn own_has(&self, x: [u64; 2]) -> bool {
         // The coarser sub-level's vertices too: past its band's morph the
@@ -344,6 +430,15 @@ impl Extraction<'_, '_> {
             TargetMesh::Coarser(c) => {
                 c.has_vertex(x) || self.ancestors.iter().any(|a| a.has_vertex(x))
             }
+        }
+    }
+
+    /// The morph band of the tile's vertex at level-0 post `x`: its own
+    /// map's rule's (0 where the tile does not morph).
+    fn band_at(&self, x: [u64; 2]) -> u8 {
+        match self.morphs() {
+            true => self.own.band_at(x),
+            false => 0,
         }
     }
 
@@ -418,6 +513,7 @@ impl Extractor {
         self.leaves.clear();
         self.mesh.vertices.clear();
         self.mesh.indices.clear();
+        self.mesh.bands.clear();
         let map = &job.own.data.map;
         self.mesh.post_level = map.post_level;
         let cells = map.cells;
@@ -432,10 +528,26 @@ impl Extractor {
             self.walk(job, root, job.morphs())?;
         }
         self.emit(job)?;
-        let parent_at = |x: f64, y: f64| target_at(job, [x / 2.0, y / 2.0]);
+        // A fanned cell's centre takes its south-west corner's band, and
+        // that band's target surface.
+        let onto_parent = job.onto_parent();
+        let parent_at = |x: f64, y: f64| {
+            let p = [x / 2.0, y / 2.0];
+            let corner = job.own.level0([p[0].floor() as u32, p[1].floor() as u32]);
+            match job.place_parent && job.band_at(corner) == 0 {
+                true => target_at(&onto_parent, p),
+                false => target_at(job, p),
+            }
+        };
         if job.morphs() {
             let mesh = &mut self.mesh;
-            fan_with(&mut self.fans, &mut mesh.vertices, &mut mesh.indices, parent_at);
+            fan_with(
+                &mut self.fans,
+                &mut mesh.vertices,
+                &mut mesh.indices,
+                &mut mesh.bands,
+                parent_at,
+            );
         }
         if self.mesh.vertices.len() > 1 << 16 {
             return Err(ExtractError::TooManyVertices);
@@ -530,7 +642,20 @@ impl Extractor {
             return Err(ExtractError::TooManyVertices);
         }
         self.numbers.insert(key(job, p), number as u16);
+        // The walk carries the target mesh's surface down the hierarchy;
+        // a vertex of band 0 takes the parent's instead.
         self.targets.push(target);
+        let band = job.band_at(job.own.level0(p));
+        self.mesh.bands.push(band);
+        let target = match (band, job.place_parent) {
+            (0, true) => {
+                let at = [p[0] as f64, p[1] as f64];
+                let (h, n) = target_at(&job.onto_parent(), at)
+                    .ok_or(ExtractError::Unkept(job.own.level0(p)))?;
+                Target { height: h as f32, normal: n.map(|v| v as f32) }
+            }
+            _ => target,
+        };
         let nt = target.normal.map(|n| n.round().clamp(-127.0, 127.0) as i8);
         self.mesh.vertices.push(MeshVertex {
             post: [2 * p[0] as u16, 2 * p[1] as u16],

@@ -39,7 +39,7 @@ pub fn fan_unnested_cells(
     indices: &mut Vec<u16>,
     parent_at: impl Fn(f64, f64) -> Option<(f64, [f64; 2])>,
 ) -> usize {
-    fan_with(&mut FanScratch::default(), vertices, indices, parent_at)
+    fan_with(&mut FanScratch::default(), vertices, indices, &mut Vec::new(), parent_at)
 }
 
 /// What [`fan_with`] works in, reused from tile to tile (tiles are made in
@@ -52,11 +52,14 @@ pub struct FanScratch {
     kept: Vec<u16>,
 }
 
-/// [`fan_unnested_cells`] in `scratch`.
+/// [`fan_unnested_cells`] in `scratch`; `bands` (the vertices' morph
+/// bands, or empty) gives a cell's centre the band of its south-west
+/// corner.
 pub fn fan_with(
     scratch: &mut FanScratch,
     vertices: &mut Vec<MeshVertex>,
     indices: &mut Vec<u16>,
+    bands: &mut Vec<u8>,
     parent_at: impl Fn(f64, f64) -> Option<(f64, [f64; 2])>,
 ) -> usize {
     half_cell_pairs(vertices, indices, &mut scratch.by_cell);
@@ -85,6 +88,9 @@ pub fn fan_with(
             continue;
         }
         let c = vertices.len() as u16;
+        if !bands.is_empty() {
+            bands.push(bands[corners[0] as usize]);
+        }
         vertices.push(MeshVertex {
             post: centre,
             height: ((a.height as f64 + b.height as f64) / 2.0) as f32,

@@ -263,7 +263,12 @@ impl MeshCutter {
                 let [x, y, _, _] = vertex.normal;
                 (vertex.height, [x, y, x, y])
             };
-            *out = TileVertex { post, skirt: 0, _pad: 0, height: vertex.height, target, normal };
+            let band = match inputs.own_level && vertex.target.is_finite() {
+                true => inputs.mesh.bands.get(v as usize).copied().unwrap_or(0),
+                false => 0,
+            };
+            let skirt = TileVertex::surface_code(band);
+            *out = TileVertex { post, skirt, _pad: 0, height: vertex.height, target, normal };
         }
         let count = self.order.len();
         for out in &mut vertices[..count] {
@@ -306,7 +311,7 @@ impl MeshCutter {
                 let above = vertices[top as usize];
                 let faces_data = self.data_across(inputs, e, along);
                 vertices[next] = if faces_data || above.height == NO_DATA {
-                    TileVertex { skirt: e as u16 + 1, ..above }
+                    above.with_edge(e as u16 + 1)
                 } else {
                     dropped += 1;
                     curtain::foot(above)

@@ -31,6 +31,11 @@ pub struct Seams {
     /// The levels of the resident ancestors whose vertices its mesh keeps,
     /// one bit each.
     pub ancestors: u32,
+    /// Made as a leaf tile ([`TileErrors::banded`]): two such tiles made
+    /// this frame keep the same vertices along a line and morph them alike
+    /// whatever their sub-levels (a frame remakes every tile whose rings
+    /// moved, so both were made with this frame's).
+    pub banded: bool,
 }
 
 impl Seams {
@@ -40,8 +45,17 @@ impl Seams {
         let facing = (edge + 2) % 4;
         self.shared & (1 << edge) != 0
             && other.shared & (1 << facing) != 0
-            && self.views == other.views
+            && self.alike(other)
             && self.ancestors == other.ancestors
+    }
+}
+
+impl Seams {
+    /// Whether two tiles' meshes follow the same errors and bands along a
+    /// line both keep: the same generations of the same rings, or both
+    /// banded.
+    pub fn alike(&self, other: &Seams) -> bool {
+        self.views == other.views || (self.banded && other.banded)
     }
 }
 
@@ -56,7 +70,7 @@ pub fn seams_of(
     errors: TileErrors,
 ) -> Seams {
     let layout: NodeLayout = *nodes.layout();
-    let mut seams = Seams { shared: 0, views: errors.views, ancestors: 0 };
+    let mut seams = Seams { shared: 0, views: errors.views, ancestors: 0, banded: errors.banded };
     let Some(own) = nodes.resident(source).filter(|d| !d.map.is_empty()) else {
         return seams;
     };
@@ -122,8 +136,8 @@ mod tests {
 
     #[test]
     fn seams_meet_only_when_both_sides_share_and_match() {
-        let a = Seams { shared: 0b0010, views: 3, ancestors: 0b110 };
-        let b = Seams { shared: 0b1000, views: 3, ancestors: 0b110 };
+        let a = Seams { shared: 0b0010, views: 3, ancestors: 0b110, banded: false };
+        let b = Seams { shared: 0b1000, views: 3, ancestors: 0b110, banded: false };
         assert!(a.meets(&b, 1) && b.meets(&a, 3));
         assert!(!a.meets(&b, 3), "a's west is not shared");
         assert!(!a.meets(&Seams { views: 4, ..b }, 1), "other generations");

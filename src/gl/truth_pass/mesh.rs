@@ -410,7 +410,7 @@ impl MarginGrid {
             let top = vertices[i + j * (g as usize + 1)];
             let skirt = vertices[k].with_surface_of(top);
             // A chunk edge facing no data is the data's cut face.
-            let [di, dj] = OUTWARD[vertices[k].skirt as usize - 1];
+            let [di, dj] = OUTWARD[vertices[k].edge() as usize - 1];
             let (x, y) = (first_post[0] as i64 + i as i64, first_post[1] as i64 + j as i64);
             let faces_void =
                 self.at(x + di, y + dj).is_nan() && !tiles::vertex::is_no_data(top.height);

@@ -105,7 +105,8 @@ pub fn edge_heights(
     grid: u32,
 ) -> HashMap<(i64, i64), Vec<EdgeHeight>> {
     let mut heights: HashMap<(i64, i64), Vec<EdgeHeight>> = HashMap::new();
-    let posts = list.uniforms.expect("a built list has its frame").posts;
+    let frame = list.uniforms.expect("a built list has its frame");
+    let (posts, share) = (frame.posts, frame.morph_start_share);
     for tile in &list.tiles {
         let block = tile.block(staging);
         let drawn = |v: TileVertex| {
@@ -116,11 +117,8 @@ pub fn edge_heights(
             let [i, j] = v.post.map(f32::from);
             let [x, y] = tile.vertex_position(&posts, i, j).map(f64::from);
             let distance = (x * x + y * y + (v.height as f64 - altitude).powi(2)).sqrt();
-            morphed_height(
-                v.height,
-                v.target,
-                morph_factor(distance, tile.morph[0] as f64, tile.morph[1] as f64),
-            )
+            let [start, end] = tile.vertex_morph(&v, share);
+            morphed_height(v.height, v.target, morph_factor(distance, start as f64, end as f64))
         };
         // Tile sides in half level-0 posts from its south-west corner (a
         // mesh tile's vertices count half its lattice's steps).
