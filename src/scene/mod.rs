@@ -7,6 +7,7 @@
 //! whose tiles are always resident: the picture gets coarser, never a hole.
 
 mod band;
+mod clearance;
 mod clipmap_terrain;
 mod tau;
 mod terrain;
@@ -426,6 +427,10 @@ impl Scene {
             let (tau, morph) = (lod.tau_px, lod.morph_range);
             self.mesh_errors.update(split, levels, view.k, tau, morph, &self.map_errors);
             let eye = [view.camera.position.x, view.camera.position.y];
+            let (lo, hi) = terrain.height_range();
+            let at = view.camera.position.to_array();
+            let clearance = clearance::clearance_m(terrain, at, (lo as f64, hi as f64));
+            self.mesh_errors.set_clearance(clearance);
             self.mesh_errors.anchor(eye, Some(&view.camera), |level| rings.morph(level));
             let selection = view.selection(&self.rings, self.config.curvature);
             let selected = self.selector.select(&selection, terrain);

@@ -166,6 +166,9 @@ pub struct MeshErrors {
     /// The camera's ground position the rings were last anchored for,
     /// chart metres.
     eye_m: [f64; 2],
+    /// How far above the highest terrain the camera is, metres (0 when
+    /// not above it): no point of the terrain is nearer.
+    clearance_m: f64,
 }
 
 /// One ring's errors by distance ([`RingView`]) and its generation: tiles
@@ -420,13 +423,25 @@ impl MeshErrors {
         let l = level as usize;
         let own = self.level.get(l).copied().unwrap_or_default();
         let parent = self.level.get(l + 1).copied().unwrap_or(own);
-        let sub_level = if leaf { self.sub_level(level, distance) } else { 0 };
+        // The clearance is the same for every tile: their rules stay alike.
+        let at = distance.max(self.clearance_m);
+        let sub_level = if leaf { self.sub_level(level, at) } else { 0 };
         let target = if sub_level == 0 { parent } else { own.halved(sub_level - 1) };
         // Its rule chains its sub-levels up to its level's own ring.
         let rings = (0..=sub_level).map(|k| self.generation(level, k));
         let above = self.chain.get(l + 1).copied().unwrap_or(0);
         let views = rings.fold(above, u32::wrapping_add);
         TileErrors { sub_level, own: own.halved(sub_level), target, views, banded: leaf }
+    }
+
+    /// Sets how far above the highest terrain the camera is (metres; 0 or
+    /// less: not above it). No leaf tile's rule starts at a sub-level
+    /// nearer than that ([`Self::for_tile`]): every point is at least that
+    /// far from the eye, so the bound holds there, and a camera high above
+    /// the terrain does not make the tiles under it again whenever its
+    /// finest rings move.
+    pub fn set_clearance(&mut self, clearance_m: f64) {
+        self.clearance_m = if clearance_m.is_finite() { clearance_m.max(0.0) } else { 0.0 };
     }
 
     /// The ground distance from the camera's place at the last

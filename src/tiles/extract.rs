@@ -29,6 +29,7 @@ use std::collections::HashMap;
 
 use super::by_distance::{reach_legs, split_leg, DistanceRule};
 use super::fan::{fan_with, FanScratch};
+use super::kept::{KeptBy, KeptTable};
 use super::vertex::{slope, PostReader};
 use crate::lod::TileKey;
 use crate::mesh::code::threshold_code;
@@ -413,12 +414,23 @@ impl Extraction<'_, '_> {
         }
     }
 
+    /// Which of the extraction's meshes have a vertex at level-0 post `x`.
+    fn kept_by(&self, x: [u64; 2]) -> KeptBy {
+        // The coarser sub-level's vertices are the tile's too: past its
+        // band's morph the own map keeps none of its own
+        // (`super::by_distance`).
+        let coarser = matches!(self.target, TargetMesh::Coarser(c) if c.has_vertex(x));
+        let ancestor = self.ancestors.iter().any(|a| a.has_vertex(x));
+        let own = !coarser && !ancestor && self.own.has_vertex(x);
+        let bit = |kept: bool, bit: u8| if kept { bit } else { 0 };
+        KeptBy::new(
+            bit(own, KeptBy::OWN) | bit(coarser, KeptBy::COARSER) | bit(ancestor, KeptBy::ANCESTOR),
+        )
+    }
+
     /// Whether level-0 post `x` is a vertex of the tile's mesh.
     fn own_has(&self, x: [u64; 2]) -> bool {
-        // The coarser sub-level's vertices too: past its band's morph the
-        // own map keeps none of its own (`super::by_distance`).
-        let coarser = matches!(self.target, TargetMesh::Coarser(c) if c.has_vertex(x));
-        self.own.has_vertex(x) || coarser || self.ancestors.iter().any(|a| a.has_vertex(x))
+        self.kept_by(x).by_tile()
     }
 
     /// Whether level-0 post `x` is a vertex of the mesh the tile morphs
@@ -427,9 +439,7 @@ impl Extraction<'_, '_> {
         match self.target {
             TargetMesh::None => false,
             TargetMesh::Parent => self.ancestors.iter().any(|a| a.has_vertex(x)),
-            TargetMesh::Coarser(c) => {
-                c.has_vertex(x) || self.ancestors.iter().any(|a| a.has_vertex(x))
-            }
+            TargetMesh::Coarser(_) => self.kept_by(x).by_target(),
         }
     }
 
@@ -460,6 +470,11 @@ impl Extraction<'_, '_> {
             _ => None,
         };
         coarser.into_iter().chain(self.ancestors).find_map(|m| m.data_at(x))
+    }
+
+    /// The same for the parent's mesh: the first ancestor keeping it.
+    fn parent_data(&self, x: [u64; 2]) -> Option<(f32, [i8; 2])> {
+        self.ancestors.iter().find_map(|m| m.data_at(x))
     }
 
     /// The map whose drawing rule (half cells along the data's diagonal or
@@ -497,7 +512,13 @@ struct Target {
 pub struct Extractor {
     /// Map post key (`j * side + i`) to vertex number.
     numbers: HashMap<u32, u16>,
+    /// Per vertex: the target mesh's surface, and the parent's (band-0
+    /// vertices of a tile with [`Extraction::place_parent`] take it), both
+    /// carried down the walk.
     targets: Vec<Target>,
+    parents: Vec<Target>,
+    /// Which meshes keep the posts of the tile's square.
+    kept: KeptTable,
     leaves: Vec<Triangle>,
     fans: FanScratch,
     /// The extracted mesh (posts in half steps of the map's lattice, from
@@ -510,6 +531,8 @@ impl Extractor {
     pub fn extract(&mut self, job: &Extraction<'_, '_>) -> Result<(), ExtractError> {
         self.numbers.clear();
         self.targets.clear();
+        self.parents.clear();
+        self.kept.reset(job.origin, job.width);
         self.leaves.clear();
         self.mesh.vertices.clear();
         self.mesh.indices.clear();
@@ -525,7 +548,7 @@ impl Extractor {
             self.corner_vertex(job, corner)?;
         }
         for root in roots {
-            self.walk(job, root, job.morphs())?;
+            self.walk(job, root, job.morphs(), job.place_parent)?;
         }
         self.emit(job)?;
         // A fanned cell's centre takes its south-west corner's band, and
@@ -559,18 +582,28 @@ impl Extractor {
     fn corner_vertex(&mut self, job: &Extraction<'_, '_>, p: [u32; 2]) -> Result<(), ExtractError> {
         let x = job.own.level0(p);
         let (height, normal) = job.own_data(x).ok_or(ExtractError::Unkept(x))?;
+        let own = Target { height, normal: normal.map(f32::from) };
         let target = match job.target_data(x) {
             Some((h, n)) if job.morphs() => Target { height: h, normal: n.map(f32::from) },
-            _ => Target { height, normal: normal.map(f32::from) },
+            _ => own,
         };
-        self.push_vertex(job, p, height, normal, target)
+        let parent = match job.parent_data(x) {
+            Some((h, n)) if job.place_parent => Target { height: h, normal: n.map(f32::from) },
+            _ => target,
+        };
+        self.push_vertex(job, p, height, normal, [target, parent])
     }
 
+    /// Splits `t` where the tile's mesh does, and on down; `target_split`
+    /// and `parent_split`: whether the target's and the parent's meshes
+    /// split every triangle above `t` (below a leaf of theirs, their
+    /// surface is linear: a vertex takes the mean of its hypotenuse's).
     fn walk(
         &mut self,
         job: &Extraction<'_, '_>,
         t: Triangle,
         target_split: bool,
+        parent_split: bool,
     ) -> Result<(), ExtractError> {
         let corners = t.ccw();
         let (lo, hi) = bounds(&corners);
@@ -579,81 +612,88 @@ impl Extractor {
         }
         let m = t.midpoint();
         let x = job.own.level0(m);
-        let split = !t.is_leaf() && (t.extent() > job.width || job.own_has(x));
+        let kept = self.kept.get(m, || job.kept_by(x));
+        let split = !t.is_leaf() && (t.extent() > job.width || kept.by_tile());
         if !split {
             if centred_in_square(&corners, job) {
                 self.leaves.push(t);
             }
             return Ok(());
         }
-        let target_here = target_split && job.target_has(x);
+        let target_here = target_split && kept.by_target();
+        let parent_here = parent_split && kept.by_parent();
         if !self.numbers.contains_key(&key(job, m)) {
-            self.midpoint_vertex(job, &t, target_here)?;
+            self.midpoint_vertex(job, &t, [target_here, parent_here])?;
         }
         for child in t.children() {
-            self.walk(job, child, target_here)?;
+            self.walk(job, child, target_here, parent_here)?;
         }
         Ok(())
     }
 
-    /// Creates the vertex splitting `t`: its target is its own height where
-    /// the target mesh has a vertex there, else the mean of the targets at
-    /// the hypotenuse's ends.
+    /// Creates the vertex splitting `t`. Its target, and its parent's
+    /// surface: the mesh's own height where that mesh has a vertex there
+    /// (`vertex`, target then parent), else the mean at the hypotenuse's
+    /// ends.
     fn midpoint_vertex(
         &mut self,
         job: &Extraction<'_, '_>,
         t: &Triangle,
-        target_vertex: bool,
+        vertex: [bool; 2],
     ) -> Result<(), ExtractError> {
         let m = t.midpoint();
         let x = job.own.level0(m);
         let (height, normal) = job.own_data(x).ok_or(ExtractError::Unkept(x))?;
-        let target = if target_vertex {
-            let (h, n) = job.target_data(x).ok_or(ExtractError::Unkept(x))?;
-            Target { height: h, normal: n.map(f32::from) }
-        } else if job.morphs() {
-            let ends = [t.a, t.b].map(|p| self.numbers.get(&key(job, p)).copied());
-            // The ends were made before the split (the node's corners, or
-            // the splits above): the walk descends from the roots.
-            let [Some(a), Some(b)] = ends else {
-                return Err(ExtractError::Unkept(job.own.level0(t.a)));
-            };
-            let (a, b) = (self.targets[a as usize], self.targets[b as usize]);
-            Target {
-                height: (a.height + b.height) / 2.0,
-                normal: [0, 1].map(|k| (a.normal[k] + b.normal[k]) / 2.0),
-            }
-        } else {
-            Target { height, normal: normal.map(f32::from) }
+        let own = Target { height, normal: normal.map(f32::from) };
+        // The ends were made before the split (the node's corners, or the
+        // splits above): the walk descends from the roots.
+        let ends = [t.a, t.b].map(|p| self.numbers.get(&key(job, p)).copied());
+        let [Some(a), Some(b)] = ends.map(|n| n.map(usize::from)) else {
+            return Err(ExtractError::Unkept(job.own.level0(t.a)));
         };
-        self.push_vertex(job, m, height, normal, target)
+        let mean = |s: &[Target]| Target {
+            height: (s[a].height + s[b].height) / 2.0,
+            normal: [0, 1].map(|k| (s[a].normal[k] + s[b].normal[k]) / 2.0),
+        };
+        let at = |data: Option<(f32, [i8; 2])>| {
+            let (h, n) = data.ok_or(ExtractError::Unkept(x))?;
+            Ok::<_, ExtractError>(Target { height: h, normal: n.map(f32::from) })
+        };
+        let target = match (vertex[0], job.morphs()) {
+            (true, _) => at(job.target_data(x))?,
+            (false, true) => mean(&self.targets),
+            (false, false) => own,
+        };
+        let parent = match (vertex[1], job.place_parent) {
+            (true, _) => at(job.parent_data(x))?,
+            (false, true) => mean(&self.parents),
+            (false, false) => target,
+        };
+        self.push_vertex(job, m, height, normal, [target, parent])
     }
 
+    /// Adds the vertex at map post `p` with its height and normal, and its
+    /// target and parent surfaces (see [`Self::midpoint_vertex`]).
     fn push_vertex(
         &mut self,
         job: &Extraction<'_, '_>,
         p: [u32; 2],
         height: f32,
         normal: [i8; 2],
-        target: Target,
+        [target, parent]: [Target; 2],
     ) -> Result<(), ExtractError> {
         let number = self.mesh.vertices.len();
         if number >= 1 << 16 {
             return Err(ExtractError::TooManyVertices);
         }
         self.numbers.insert(key(job, p), number as u16);
-        // The walk carries the target mesh's surface down the hierarchy;
-        // a vertex of band 0 takes the parent's instead.
         self.targets.push(target);
+        self.parents.push(parent);
+        // A vertex of band 0 morphs onto the parent's surface.
         let band = job.band_at(job.own.level0(p));
         self.mesh.bands.push(band);
         let target = match (band, job.place_parent) {
-            (0, true) => {
-                let at = [p[0] as f64, p[1] as f64];
-                let (h, n) = target_at(&job.onto_parent(), at)
-                    .ok_or(ExtractError::Unkept(job.own.level0(p)))?;
-                Target { height: h as f32, normal: n.map(|v| v as f32) }
-            }
+            (0, true) => parent,
             _ => target,
         };
         let nt = target.normal.map(|n| n.round().clamp(-127.0, 127.0) as i8);

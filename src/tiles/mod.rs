@@ -14,6 +14,7 @@ pub mod errors;
 pub mod extract;
 pub mod fan;
 pub mod grid;
+pub mod kept;
 pub mod mesh_tile;
 pub mod seams;
 pub mod vertex;
