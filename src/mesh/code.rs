@@ -67,9 +67,37 @@ pub fn threshold_code(error_m: f64) -> u8 {
     code.min(254)
 }
 
+/// Whether a mesh of error `error_m` splits where the code is `code`:
+/// `code > threshold_code(error_m)`, from the code's error (one table read,
+/// where the threshold takes a logarithm: extraction asks it per post).
+pub fn splits(code: u8, error_m: f64) -> bool {
+    if code == ALWAYS {
+        return true;
+    }
+    if error_m.is_nan() {
+        return code > 0;
+    }
+    // Codes' errors rise with the code, so the largest at most the error
+    // is the threshold: a code is above it exactly when its error is.
+    code_errors()[code as usize] > error_m.max(0.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_split_is_made_exactly_where_the_code_is_above_the_threshold() {
+        let mut errors: Vec<f64> = (0..256).map(|c| code_error(c as u8)).collect();
+        errors.extend((0..4000).map(|k| 1e-5 * 1.01f64.powi(k)));
+        errors.extend(errors.clone().iter().flat_map(|&e| [e.next_up(), e.next_down()]));
+        errors.extend([0.0, -1.0, f64::NAN, f64::INFINITY, f64::MAX, f64::MIN_POSITIVE]);
+        for e in errors {
+            for code in 0..=255u8 {
+                assert_eq!(splits(code, e), code > threshold_code(e), "code {code} at {e}");
+            }
+        }
+    }
 
     #[test]
     fn codes_bound_their_errors_from_above_and_keep_order() {

@@ -464,7 +464,7 @@ fn place_map<'a>(
     let tile_posts = grid_size << (id.level - map.post_level.min(id.level));
     // The curvature caps the widest triangle by the band's least error:
     // a wider one would sag more than the tile's nearest part allows. With
-    // a view each split checks its own error (`PlacedMap::sags`).
+    // a view each split checks its own error (`PlacedMap::is_vertex`).
     let sag_error_m = if view.is_some() { f64::INFINITY } else { error_m };
     let forced = forced_step(layout, map.post_level, map.cells, tile_posts, sag_error_m);
     let placed = PlacedMap::new(layout, id, data, error_m, forced);

@@ -26,13 +26,14 @@
 //!   target folds along the other is split four ways ([`super::fan`]).
 
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
 
 use super::by_distance::{reach_legs, split_leg, DistanceRule};
 use super::fan::{fan_with, FanScratch};
 use super::kept::{KeptBy, KeptTable};
 use super::vertex::{slope, PostReader};
 use crate::lod::TileKey;
-use crate::mesh::code::threshold_code;
+use crate::mesh::code::{splits, threshold_code};
 use crate::mesh::rtin::{Diagonal, Triangle};
 use crate::node::{ErrorMap, MeshVertex, NodeData, NodeId, NodeLayout, NodeMesh};
 
@@ -162,40 +163,35 @@ impl<'a> PlacedMap<'a> {
         [self.origin[0] + p[0] as u64 * self.step, self.origin[1] + p[1] as u64 * self.step]
     }
 
-    /// Whether map post `p` is a vertex of this map's mesh.
-    fn is_vertex(&self, p: [u32; 2]) -> bool {
+    /// Whether map post `p`, its code given by `code`, is a vertex of this
+    /// map's mesh.
+    fn is_vertex(&self, p: [u32; 2], code: impl Fn() -> u8) -> bool {
         let on_forced = p[0] % self.forced == 0 && p[1] % self.forced == 0;
-        let code = self.data.map.code(p[0], p[1]);
         debug_assert!(self.view.is_some() || self.least == self.threshold);
-        if on_forced && self.forced_where_viewed {
-            return self.threshold_at(p) != u8::MAX;
-        }
-        on_forced || (code > self.least && code > self.threshold_at(p)) || self.sags(p)
-    }
-
-    /// Whether a mesh with a view splits at map post `p` for the earth's
-    /// curvature: the split's legs are longer than [`sag_leg_m`] at the
-    /// vertex's own error (the sag lattice of [`forced_step`], vertex by
-    /// vertex, so that neighbouring tiles of other sub-levels split their
-    /// shared edge alike). A split's dependencies have longer legs and no
-    /// larger errors, so they split too: the mesh stays closed.
-    fn sags(&self, p: [u32; 2]) -> bool {
         if self.view.is_none() {
+            return on_forced || code() > self.threshold;
+        }
+        if on_forced && !self.forced_where_viewed {
+            return true;
+        }
+        let code = code();
+        // The view's error, worked out once and only where it can decide.
+        // The curvature splits where the split's legs are longer than
+        // [`sag_leg_m`] at the vertex's own error (the sag lattice of
+        // [`forced_step`], vertex by vertex, so that neighbouring tiles of
+        // other sub-levels split their shared edge alike); a split's
+        // dependencies have longer legs and no larger errors, so they
+        // split too and the mesh stays closed.
+        let leg_m = split_leg(p) * self.spacing_m[0].max(self.spacing_m[1]);
+        let may_sag = leg_m > sag_leg_m(0.0);
+        if !on_forced && code <= self.least && !may_sag {
             return false;
         }
-        let leg_m = split_leg(p) * self.spacing_m[0].max(self.spacing_m[1]);
-        leg_m > sag_leg_m(0.0) && self.error_m_at(p).is_some_and(|e| leg_m > sag_leg_m(e))
-    }
-
-    /// The code map post `p` must be above to be a vertex (255: never).
-    fn threshold_at(&self, p: [u32; 2]) -> u8 {
-        if self.view.is_none() {
-            return self.threshold;
-        }
-        match self.error_m_at(p) {
-            Some(error_m) => threshold_code(error_m.max(self.floor_m)),
-            None => u8::MAX,
-        }
+        let Some(error_m) = self.error_m_at(p) else { return false };
+        // The forced lattice of a target, only where viewed.
+        on_forced
+            || (code > self.least && splits(code, error_m.max(self.floor_m)))
+            || (may_sag && leg_m > sag_leg_m(error_m))
     }
 
     /// The error the view allows the mesh at map post `p`, metres (`None`:
@@ -272,7 +268,7 @@ impl<'a> PlacedMap<'a> {
 
     /// Whether level-0 post `x` is a vertex of this map's mesh.
     fn has_vertex(&self, x: [u64; 2]) -> bool {
-        self.local(x).is_some_and(|p| self.is_vertex(p))
+        self.local(x).is_some_and(|p| self.is_vertex(p, || self.data.map.code(p[0], p[1])))
     }
 
     /// The height and data normal the map keeps at level-0 post `x`.
@@ -419,9 +415,21 @@ impl Extraction<'_, '_> {
         // The coarser sub-level's vertices are the tile's too: past its
         // band's morph the own map keeps none of its own
         // (`super::by_distance`).
-        let coarser = matches!(self.target, TargetMesh::Coarser(c) if c.has_vertex(x));
         let ancestor = self.ancestors.iter().any(|a| a.has_vertex(x));
-        let own = !coarser && !ancestor && self.own.has_vertex(x);
+        // The coarser sub-level's map is the own one at another error: its
+        // code is read once for both (a sparse map's is a search).
+        let Some(p) = self.own.local(x) else {
+            return KeptBy::new(if ancestor { KeptBy::ANCESTOR } else { 0 });
+        };
+        let map = &self.own.data.map;
+        let read = std::cell::OnceCell::new();
+        let code = || *read.get_or_init(|| map.code(p[0], p[1]));
+        let coarser = match self.target {
+            TargetMesh::Coarser(c) if std::ptr::eq(c.data, self.own.data) => c.is_vertex(p, code),
+            TargetMesh::Coarser(c) => c.has_vertex(x),
+            _ => false,
+        };
+        let own = !coarser && !ancestor && self.own.is_vertex(p, code);
         let bit = |kept: bool, bit: u8| if kept { bit } else { 0 };
         KeptBy::new(
             bit(own, KeptBy::OWN) | bit(coarser, KeptBy::COARSER) | bit(ancestor, KeptBy::ANCESTOR),
@@ -511,7 +519,7 @@ struct Target {
 #[derive(Default)]
 pub struct Extractor {
     /// Map post key (`j * side + i`) to vertex number.
-    numbers: HashMap<u32, u16>,
+    numbers: HashMap<u32, u16, BuildHasherDefault<PostHasher>>,
     /// Per vertex: the target mesh's surface, and the parent's (band-0
     /// vertices of a tile with [`Extraction::place_parent`] take it), both
     /// carried down the walk.
@@ -727,6 +735,32 @@ impl Extractor {
         }
         self.leaves = leaves;
         Ok(())
+    }
+}
+
+/// Hashes map post keys ([`key`]: small distinct integers) with one
+/// multiply, as rustc's Fx hash does: std's SipHash guards against chosen
+/// keys, which posts are not, and cost a twentieth of an extraction.
+#[derive(Default)]
+struct PostHasher(u64);
+
+impl Hasher for PostHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(b as u64);
+        }
+    }
+
+    fn write_u32(&mut self, v: u32) {
+        self.write_u64(v as u64);
+    }
+
+    fn write_u64(&mut self, v: u64) {
+        self.0 = (self.0.rotate_left(5) ^ v).wrapping_mul(0x517c_c1b7_2722_0a95);
     }
 }
 
