@@ -78,8 +78,13 @@ mod tests {
     /// Whether every level-0 sample within `c` of the eye's ground place
     /// lies at least `c` below the eye: the model, post by post.
     fn holds(earth: &ProceduralEarth, eye_m: [f64; 3], c: f64) -> bool {
-        (0..=512i64).all(|j| {
-            (0..=512i64).all(|i| {
+        // Only the posts of the square around the disk can be within it.
+        let posts = |k: usize| {
+            let lo = ((eye_m[k] - c) / 30.0).floor().clamp(0.0, 512.0) as i64;
+            lo..=((eye_m[k] + c) / 30.0).ceil().clamp(0.0, 512.0) as i64
+        };
+        posts(1).all(|j| {
+            posts(0).all(|i| {
                 let (x, y) = (i as f64 * 30.0 - eye_m[0], j as f64 * 30.0 - eye_m[1]);
                 x.hypot(y) > c || earth.sample(i, j) as f64 <= eye_m[2] - c
             })
@@ -108,6 +113,28 @@ mod tests {
             beat_the_peak |= c > (z - hi as f64).max(0.0) + 1.0;
         }
         assert!(beat_the_peak, "over the lowest post the terrain around clears more");
+    }
+
+    #[test]
+    fn every_clearance_the_bounds_vouch_for_holds_post_by_post() {
+        let (earth, terrain) = earth();
+        let (lo, hi) = terrain.height_range();
+        let mut vouched = 0;
+        for (i, j) in [(40, 40), (256, 256), (470, 90), (128, 400), (0, 512)] {
+            let ground = earth.sample(i, j) as f64;
+            for above in [50.0, 300.0, 1_000.0] {
+                let eye = [i as f64 * 30.0, j as f64 * 30.0, ground + above];
+                // A ladder of clearances, a twentieth of an octave apart.
+                let ladder = (0..200).map(|k| 5.0 * 2f64.powf(k as f64 / 20.0));
+                for c in ladder.take_while(|&c| c < eye[2] - lo as f64) {
+                    if clears(&terrain, eye, c) {
+                        vouched += 1;
+                        assert!(holds(&earth, eye, c), "{c} m vouched for at {eye:?}");
+                    }
+                }
+            }
+        }
+        assert!(vouched > 50, "the bounds vouch for clearances: {vouched} (highest {hi} m)");
     }
 
     #[test]
