@@ -46,6 +46,7 @@ pub mod earth;
 pub mod flight;
 pub mod geo;
 pub mod gl;
+pub(crate) mod hash;
 pub mod input;
 pub mod lod;
 pub mod mesh;

@@ -26,7 +26,6 @@
 //!   target folds along the other is split four ways ([`super::fan`]).
 
 use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
 
 use super::by_distance::{reach_legs, split_leg, DistanceRule};
 use super::fan::{fan_with, FanScratch};
@@ -519,7 +518,7 @@ struct Target {
 #[derive(Default)]
 pub struct Extractor {
     /// Map post key (`j * side + i`) to vertex number.
-    numbers: HashMap<u32, u16, BuildHasherDefault<PostHasher>>,
+    numbers: HashMap<u32, u16, crate::hash::BuildIdHasher>,
     /// Per vertex: the target mesh's surface, and the parent's (band-0
     /// vertices of a tile with [`Extraction::place_parent`] take it), both
     /// carried down the walk.
@@ -735,32 +734,6 @@ impl Extractor {
         }
         self.leaves = leaves;
         Ok(())
-    }
-}
-
-/// Hashes map post keys ([`key`]: small distinct integers) with one
-/// multiply, as rustc's Fx hash does: std's SipHash guards against chosen
-/// keys, which posts are not, and cost a twentieth of an extraction.
-#[derive(Default)]
-struct PostHasher(u64);
-
-impl Hasher for PostHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(b as u64);
-        }
-    }
-
-    fn write_u32(&mut self, v: u32) {
-        self.write_u64(v as u64);
-    }
-
-    fn write_u64(&mut self, v: u64) {
-        self.0 = (self.0.rotate_left(5) ^ v).wrapping_mul(0x517c_c1b7_2722_0a95);
     }
 }
 
