@@ -418,6 +418,12 @@ impl Scene {
     /// tile's distance, metres.
     fn select(&mut self, view: &View, terrain: &dyn TerrainData, report: &mut SceneStats) -> f64 {
         let (grid_size, levels) = (self.config.lod.grid_size, terrain.layout().levels);
+        // The camera's clearance depends on the eye and the resident nodes,
+        // not on tau: once a frame, whatever the retargets.
+        let (lo, hi) = terrain.height_range();
+        let at = view.camera.position.to_array();
+        let clearance = clearance::clearance_m(terrain, at, (lo as f64, hi as f64));
+        self.mesh_errors.set_clearance(clearance);
         loop {
             let start = Instant::now();
             let lod = *self.tau.lod();
@@ -427,10 +433,6 @@ impl Scene {
             let (tau, morph) = (lod.tau_px, lod.morph_range);
             self.mesh_errors.update(split, levels, view.k, tau, morph, &self.map_errors);
             let eye = [view.camera.position.x, view.camera.position.y];
-            let (lo, hi) = terrain.height_range();
-            let at = view.camera.position.to_array();
-            let clearance = clearance::clearance_m(terrain, at, (lo as f64, hi as f64));
-            self.mesh_errors.set_clearance(clearance);
             self.mesh_errors.anchor(eye, Some(&view.camera), |level| rings.morph(level));
             let selection = view.selection(&self.rings, self.config.curvature);
             let selected = self.selector.select(&selection, terrain);

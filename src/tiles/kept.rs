@@ -10,7 +10,8 @@
 pub struct KeptBy(u8);
 
 impl KeptBy {
-    /// The tile's own map.
+    /// The tile's own map (asked only where no other map keeps the post:
+    /// any bit makes it a vertex of the tile).
     pub const OWN: u8 = 1;
     /// The coarser sub-level's map (a leaf tile's target).
     pub const COARSER: u8 = 2;
