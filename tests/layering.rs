@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 /// DESIGN.md's layers, lowest first. A module may import modules of its own
 /// layer or of earlier ones.
 const LAYERS: &[&[&str]] = &[
-    &["geo", "earth", "node", "allocator", "camera", "spill"],
+    &["geo", "earth", "node", "allocator", "camera", "spill", "hash"],
     &["mesh", "dem", "pyramid", "procedural"],
     &["clipmap", "lod", "tiles", "meshes", "dataset"],
     &["render", "clusters", "symbology"],
