@@ -55,7 +55,20 @@ pub struct NodeLayout {
 /// A fixed level (not the build's blocks), so that every build, whole or
 /// in shards, shares the same edges; shards split no finer
 /// (`pyramid::shard`).
-pub const SHARE_LEVEL: u8 = 3;
+///
+/// The squares' own edges are not shared: the maps on either side code
+/// their posts apart, and tiles of levels below the square meet there at
+/// cracks their skirts fill and a viewer sees. Level 3 left one level-0
+/// node edge in eight such an edge, and the SRTM tile flown at tau 4
+/// (`tests/render_data_edges.rs`) 0.070 % of its terrain pixels on skirts
+/// along them, over issue 25's 0.05 %. Level 5 is the blocks' depth
+/// (`MeshOptions::depth`: their blocks already hold a square this size, so
+/// the build reads and scans no more), leaves one edge in 32, and took
+/// that flight to 0 %. A coarser square would be built on a coarser
+/// lattice than level 0's maps, which could then share none of its edges;
+/// and shards split no finer than it (`docs/edges.md`, "Share squares of
+/// level 5").
+pub const SHARE_LEVEL: u8 = 5;
 
 impl NodeLayout {
     /// The level of the squares node edges are shared inside: [`SHARE_LEVEL`],

@@ -17,9 +17,10 @@ use testkit::cli::{Ridgeline, Run};
 use testkit::dem::write_ascii;
 use testkit::fresh_dir;
 
-/// Small nodes: shards split no finer than the share level (3), which
-/// then has enough nodes under the fine tiles for four shards.
-const NODE: &[&str] = &["--node-size", "16"];
+/// Small nodes: shards split no finer than the share level (5), whose
+/// nodes of 8 cells span 11.5 km at the fine tiles' 45 m posts, enough of
+/// them under the fine tiles for four shards.
+const NODE: &[&str] = &["--node-size", "8"];
 
 fn terrain(x: f64, y: f64) -> f64 {
     900.0 + 400.0 * (x / 6100.0).sin() * (y / 8300.0).cos() + 0.004 * x + 30.0 * (x / 700.0).cos()
@@ -57,14 +58,14 @@ fn write_grid(
     write_ascii(path, &header, &rows);
 }
 
-/// A coarse grid (720 m) under two adjacent fine tiles (90 m), one with
+/// A coarse grid (720 m) under two adjacent fine tiles (45 m), one with
 /// a small void (filled) and one with a large void (the coarse grid shows
 /// through); `bump` raises one fine post (another source).
 fn write_sources(dir: &Path, bump: f64) -> Vec<PathBuf> {
     let coarse = dir.join("coarse.asc");
     write_grid(&coarse, [0.0, 0.0], 720.0, [100, 100], terrain);
     let west = dir.join("west.asc");
-    write_grid(&west, [18_000.0, 21_600.0], 90.0, [201, 301], |x, y| {
+    write_grid(&west, [18_000.0, 21_600.0], 45.0, [401, 601], |x, y| {
         let small = (31_500.0..31_700.0).contains(&x) && (30_000.0..30_150.0).contains(&y);
         let bumped = x == 20_700.0 && y == 25_200.0;
         if small {
@@ -74,7 +75,7 @@ fn write_sources(dir: &Path, bump: f64) -> Vec<PathBuf> {
         }
     });
     let east = dir.join("east.asc");
-    write_grid(&east, [36_000.0, 21_600.0], 90.0, [201, 301], |x, y| {
+    write_grid(&east, [36_000.0, 21_600.0], 45.0, [401, 601], |x, y| {
         let large = (40_000.0..43_000.0).contains(&x) && (30_000.0..34_000.0).contains(&y);
         if large {
             f64::NAN

@@ -8,9 +8,10 @@
 //!
 //! Issue 25's promises, per view, and what this test holds:
 //! - p99.9 within tau (the bound the view achieved), skirts included: held;
-//! - skirt pixels at most 0.05 % of the terrain pixels: held on every
-//!   flight but the SRTM tile at tau 4 (0.070 %), held within 0.1 % (see
-//!   `LIMITS`); none erring by more than 2 tau: held;
+//! - skirt pixels at most 0.05 % of the terrain pixels: held (0.0004 %
+//!   at most, the Grenoble DSM at tau 8; the SRTM tile at tau 4 held
+//!   0.070 % while node edges were shared only inside level-3 squares);
+//!   none erring by more than 2 tau: held;
 //! - the coverage mismatch at most 0.01 % of the pixels: held (0.0027 %
 //!   in the Rhine outline's worst view, 0 past the rectangles' edges);
 //! - no hole pixel: held along the outline; one past the Grenoble DSM's
@@ -96,10 +97,13 @@ fn measure(
 /// is a crack seen from above, erring less than the two sides do. Since
 /// every vertex of a leaf tile follows its own morph band
 /// (`tiles::by_distance`), leaf tiles of other sub-levels meet without a
-/// crack, and the skirts left hang along the share squares' edges
+/// crack, and the skirts left hung along the share squares' edges
 /// (`docs/edges.md`, "Morph bands"): 0.070 % of the terrain on the SRTM
 /// tile at tau 4, at most 0.02 % on every other flight, where they were
-/// 0.06 % at tau 1 and up to 0.58 % at tau 8 before. One hole pixel shows on the Grenoble DSM's view
+/// 0.06 % at tau 1 and up to 0.58 % at tau 8 before. Since the share
+/// squares are level 5 (`node::SHARE_LEVEL`) none of these DEMs has a
+/// share square's edge inside it, and no flight holds more than 0.0004 %.
+/// One hole pixel shows on the Grenoble DSM's view
 /// 7 at tau 2 to 8 (the same before the curtains): the truth's point on a
 /// ray grazing the west cut face lands 1.1 m past the first post, where no
 /// LOD tile is.
@@ -110,7 +114,7 @@ struct Limits {
     holes: usize,
 }
 
-const LIMITS: Limits = Limits { p999_taus: 1.0, skirt_taus: 2.0, skirt_share: 0.001, holes: 1 };
+const LIMITS: Limits = Limits { p999_taus: 1.0, skirt_taus: 2.0, skirt_share: 0.0005, holes: 1 };
 
 /// Every limit of the module doc, per view; every broken one listed. The
 /// views above the strict targets are counted and printed.

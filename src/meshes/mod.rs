@@ -61,9 +61,17 @@ pub struct MeshOptions {
 
 impl Default for MeshOptions {
     fn default() -> Self {
-        MeshOptions { depth: 5, tile_cells: 8, finest_view_px: FINEST_VIEW_PX }
+        MeshOptions { depth: DEPTH, tile_cells: 8, finest_view_px: FINEST_VIEW_PX }
     }
 }
+
+/// The default [`MeshOptions::depth`]: 2049^2 posts a side with 64-cell
+/// nodes.
+pub const DEPTH: u8 = 5;
+
+// A share square coarser than the depth is built on a coarser lattice than
+// level 0's maps, which then share none of its edges (`block::share_square`).
+const _: () = assert!(crate::node::SHARE_LEVEL <= DEPTH, "share squares within the depth");
 
 /// The K / tau the maps are built for: 2000 pixels (a 1920-pixel display
 /// over 51 degrees at tau 1, or 1280 pixels over 60 degrees at tau 0.55).

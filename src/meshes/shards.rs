@@ -30,7 +30,7 @@ use super::file::{build_store, merge_parts, pyramid_identity, MapFile, MAP_FILE_
 use super::source::stored_nodes;
 use super::{MeshOptions, MeshesError};
 use crate::dem::GridView;
-use crate::node::{NodeData, NodeError, NodeId, NodeSource};
+use crate::node::{NodeData, NodeError, NodeId, NodeSource, SHARE_LEVEL};
 use crate::pyramid::shard::{self, check_count, inputs_key, Shard};
 use crate::pyramid::{sync_dir, Progress, Pyramid, PyramidError, PyramidInfo, StreamError};
 use crate::pyramid::{StreamOptions, FILE_NAME};
@@ -164,10 +164,13 @@ pub fn build_shard(
     })
 }
 
-/// The inputs key of `layers` built with `options` in `count` shards.
+/// The inputs key of `layers` built with `options` in `count` shards. The
+/// share level is in it: parts whose maps share other squares' edges (a
+/// part built before the level changed) must not merge, since two maps
+/// that each say they share an edge hang no skirt there.
 fn key_of(layers: &[GridView], options: &ShardOptions, count: u32, release: &dyn Fn()) -> u32 {
     let build = options.stream.build;
-    let salt = format!("{:?}", options.meshes);
+    let salt = format!("{:?} share level {SHARE_LEVEL}", options.meshes);
     inputs_key(layers, &build, count, salt.as_bytes(), release)
 }
 

@@ -205,10 +205,10 @@ impl<'a> PlacedMap<'a> {
             // cracks as deep as both errors, which its skirts fill and a
             // viewer sees (issue 25). Shared edges' posts are coded alike
             // on both sides: no crack. Level 0's: farther levels' cracks
-            // span fewer pixels (capping levels 1 and 2 too took the SRTM
-            // tile's skirt pixels at 256 px and tau 4 from 0.070 % to
-            // 0.050 %, for 4 % more triangles at 480x272 and tau 4, past
-            // issue 22's floor ratio). The vertex's own ring's, as every
+            // span fewer pixels (capping levels 1 and 2 too cost 4 % more
+            // triangles at 480x272 and tau 4, past issue 22's floor ratio;
+            // larger share squares, `SHARE_LEVEL`, leave fewer such edges
+            // instead). The vertex's own ring's, as every
             // tile's rule gives it: the tile's finest ring's, as it was,
             // differs between neighbours of other sub-levels.
             let reached = self.edges_reached(p);
