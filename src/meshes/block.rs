@@ -125,9 +125,8 @@ impl Block {
             _ => self.codes.restrict_sharing(origin, posts, diagonal, shared, &self.share_codes),
         };
         debug_assert!(shared == 0 || !self.share_codes.is_empty(), "a square the block holds");
-        let mut map = map_from_codes(layout, id, options, plan, &reference, codes);
-        map.shared_edges = shared;
-        Ok(map)
+        // Its quantised heights may leave its edges unshared (`build`).
+        Ok(map_from_codes(layout, id, options, plan, &reference, codes, shared))
     }
 }
 

@@ -68,12 +68,14 @@ pub fn build_map(
     let side = reference.side;
     let codes: Vec<u8> =
         (0..side * side).map(|k| error_code(rtin.error_at(k % side, k / side) as f64)).collect();
-    Ok(map_from_codes(source.layout(), id, options, plan, &reference, codes))
+    Ok(map_from_codes(source.layout(), id, options, plan, &reference, codes, 0))
 }
 
 /// Node `id`'s map from its reference grid and the error code of every
 /// post of it (row-major): dense for a leaf, else the posts above the
-/// floor and those every mesh has.
+/// floor and those every mesh has. `shared_edges` are the edges whose
+/// posts `codes` took from its share square; a map whose stored heights
+/// cannot keep the common lattice (`quantise_heights`) shares none.
 pub fn map_from_codes(
     layout: &NodeLayout,
     id: NodeId,
@@ -81,6 +83,7 @@ pub fn map_from_codes(
     plan: MapPlan,
     reference: &ReferenceGrid,
     codes: Vec<u8>,
+    shared_edges: u8,
 ) -> ErrorMap {
     debug_assert_eq!(codes.len(), reference.heights.len());
     let cells = reference.side - 1;
@@ -90,6 +93,7 @@ pub fn map_from_codes(
         floor_m: 0.0,
         reference_delta: reference.delta,
         hierarchy_leaves: plan.hierarchy_leaves,
+        shared_edges,
         ..ErrorMap::default()
     };
     if plan.leaf {
@@ -121,6 +125,13 @@ pub const HEIGHTS_FROM_PYRAMID_SHIFT: u8 = 2;
 
 /// Steps a stored map's heights span: `u16` codes, the last one NaN.
 const HEIGHT_STEPS: f64 = 65_534.0;
+
+/// The step of the heights every stored map whose range spans at most
+/// 2047 m keeps (a power of two, so a height on it is exact in `f32`
+/// far beyond any terrain's, and at least 8 units in the last place of
+/// heights within +-16 km): maps of neighbouring nodes that share an edge
+/// code its posts to the same heights.
+pub const SHARED_HEIGHT_STEP: f32 = 1.0 / 32.0;
 
 /// Keeps the posts a sparse map needs (codes above the floor's, and the
 /// corners of the squares every mesh of the node splits to) with their
@@ -171,10 +182,24 @@ fn quantise_heights(map: &mut ErrorMap) {
     // At least 2^3 units in the last place of the largest height, so that
     // a stored height codes back to its own step (the file round-trips).
     let ulps = lo.abs().max(hi.abs()) as f64 * (f32::EPSILON as f64) * 8.0;
-    let step = ((hi - lo) as f64 / HEIGHT_STEPS).max(ulps).max(f32::MIN_POSITIVE as f64) as f32;
+    let fitted = ((hi - lo) as f64 / HEIGHT_STEPS).max(ulps).max(f32::MIN_POSITIVE as f64);
+    // On the common lattice where the range fits it (a base on a multiple
+    // of the step, one step spare for it): neighbours then keep a shared
+    // edge's posts at the same heights, to the bit. Else the map's own
+    // step, and its edges are not shared: the two sides' heights differ
+    // by up to a step (`tests/scene_cracks.rs` found 1 cm), which only a
+    // skirt fills.
+    let common = SHARED_HEIGHT_STEP as f64;
+    let (base, step) = match fitted * HEIGHT_STEPS <= common * (HEIGHT_STEPS - 1.0) {
+        true => (((lo as f64 / common).floor() * common) as f32, SHARED_HEIGHT_STEP),
+        false => {
+            map.shared_edges = 0;
+            (lo, fitted as f32)
+        }
+    };
     map.height_step = step;
     for h in map.heights.iter_mut().filter(|h| h.is_finite()) {
-        *h = dequantise(lo, step, quantise(lo, step, *h));
+        *h = dequantise(base, step, quantise(base, step, *h));
     }
     // Half a step, and the f32 rounding of the stepped height.
     let rounding = step as f64 / 2.0 + ulps / 8.0;
@@ -211,4 +236,41 @@ pub fn finest_stored_level(source: &dyn NodeSource, id: NodeId) -> u8 {
         finest = level;
     }
     finest
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn stored(heights: &[f32], shared_edges: u8) -> ErrorMap {
+        ErrorMap { heights: heights.to_vec(), shared_edges, ..ErrorMap::default() }
+    }
+
+    /// Two neighbours over different ranges keep the post on their shared
+    /// edge at the same height, to the bit, and within half a step of it.
+    #[test]
+    fn neighbours_quantise_a_shared_post_alike() {
+        let post = 1234.567_f32;
+        let mut west = stored(&[312.25, post, 1801.9], ErrorMap::EAST);
+        let mut east = stored(&[post, 2044.0, 990.125, f32::NAN], ErrorMap::WEST);
+        quantise_heights(&mut west);
+        quantise_heights(&mut east);
+        assert_eq!(west.heights[1].to_bits(), east.heights[0].to_bits());
+        assert!((west.heights[1] - post).abs() <= SHARED_HEIGHT_STEP / 2.0);
+        assert_eq!((west.shared_edges, east.shared_edges), (ErrorMap::EAST, ErrorMap::WEST));
+        assert!(east.heights[3].is_nan());
+        assert!(east.reference_delta >= SHARED_HEIGHT_STEP / 2.0);
+    }
+
+    /// A range the common lattice cannot span in `u16` steps keeps its own
+    /// step, and shares no edge.
+    #[test]
+    fn a_range_past_the_common_lattice_shares_no_edge() {
+        let mut map = stored(&[-150.0, 1900.0, 2100.5], ErrorMap::NORTH | ErrorMap::EAST);
+        quantise_heights(&mut map);
+        assert!(map.height_step > SHARED_HEIGHT_STEP);
+        assert_eq!(map.shared_edges, 0);
+        let within = |h: f32, q: f32| (h - q).abs() <= map.height_step / 2.0 + 1e-3;
+        assert!([-150.0, 1900.0, 2100.5].iter().zip(&map.heights).all(|(&h, &q)| within(h, q)));
+    }
 }
