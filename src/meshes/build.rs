@@ -75,7 +75,7 @@ pub fn build_map(
 /// post of it (row-major): dense for a leaf, else the posts above the
 /// floor and those every mesh has. `shared_edges` are the edges whose
 /// posts `codes` took from its share square; a map whose stored heights
-/// cannot keep the common lattice (`quantise_heights`) shares none.
+/// cannot keep the height lattice (`quantise_heights`) shares none.
 pub fn map_from_codes(
     layout: &NodeLayout,
     id: NodeId,
@@ -183,7 +183,7 @@ fn quantise_heights(map: &mut ErrorMap) {
     // a stored height codes back to its own step (the file round-trips).
     let ulps = lo.abs().max(hi.abs()) as f64 * (f32::EPSILON as f64) * 8.0;
     let fitted = ((hi - lo) as f64 / HEIGHT_STEPS).max(ulps).max(f32::MIN_POSITIVE as f64);
-    // On the common lattice where the range fits it (a base on a multiple
+    // On the height lattice where the range fits it (a base on a multiple
     // of the step, one step spare for it): neighbours then keep a shared
     // edge's posts at the same heights, to the bit. Else the map's own
     // step, and its edges are not shared: the two sides' heights differ
@@ -262,7 +262,7 @@ mod tests {
         assert!(east.reference_delta >= SHARED_HEIGHT_STEP / 2.0);
     }
 
-    /// A range the common lattice cannot span in `u16` steps keeps its own
+    /// A range the height lattice cannot span in `u16` steps keeps its own
     /// step, and shares no edge.
     #[test]
     fn a_range_past_the_common_lattice_shares_no_edge() {
