@@ -265,7 +265,7 @@ mod tests {
     /// A range the height lattice cannot span in `u16` steps keeps its own
     /// step, and shares no edge.
     #[test]
-    fn a_range_past_the_common_lattice_shares_no_edge() {
+    fn a_range_past_the_height_lattice_shares_no_edge() {
         let mut map = stored(&[-150.0, 1900.0, 2100.5], ErrorMap::NORTH | ErrorMap::EAST);
         quantise_heights(&mut map);
         assert!(map.height_step > SHARED_HEIGHT_STEP);
